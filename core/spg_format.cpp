@@ -1,0 +1,236 @@
+// stipple core — `.spg` validation. The specification is docs/format.md; each
+// check below names the rule it enforces there.
+#include "core/spg_format.h"
+
+namespace stipple {
+namespace {
+
+struct CrcTable {
+  uint32_t v[256];
+};
+// Generated at compile time; lives in read-only data.
+constexpr CrcTable kCrcTable = [] {
+  CrcTable t{};
+  for (uint32_t n = 0; n < 256; ++n) {
+    uint32_t c = n;
+    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    t.v[n] = c;
+  }
+  return t;
+}();
+
+// IEEE-754 binary32 checks with integer code only.
+constexpr bool f32_finite(uint32_t bits) { return (bits & 0x7F800000u) != 0x7F800000u; }
+constexpr bool f32_negative(uint32_t bits) { return (bits & 0x80000000u) != 0 && (bits & 0x7FFFFFFFu) != 0; }
+// Maps float bits to an unsigned key with the same order as the float values.
+constexpr uint32_t f32_order_key(uint32_t bits) {
+  return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
+}
+
+// A bounds-checked cursor over the input: reads fail instead of overrunning.
+struct Cursor {
+  const uint8_t* data;
+  size_t size;
+  size_t pos;
+  size_t remaining() const { return size - pos; }
+};
+
+SpgResult fail(SpgError e, size_t offset) { return SpgResult{e, offset}; }
+
+bool class_field_ok(int width, uint16_t count, bool present) {
+  if (!present) return width == 0 && count == 0;
+  return width >= 1 && count >= 1 && static_cast<uint32_t>(count) <= (1u << width);
+}
+
+}  // namespace
+
+const char* spg_error_text(SpgError e) {
+  switch (e) {
+    case SpgError::kOk: return "ok";
+    case SpgError::kTruncated: return "file is truncated";
+    case SpgError::kBadMagic: return "not a .spg file (bad magic)";
+    case SpgError::kBadVersion: return "unsupported format version";
+    case SpgError::kBadFlags: return "unknown attribute flags";
+    case SpgError::kBadArity: return "tree arity must be 2 or 8";
+    case SpgError::kBadLayout: return "invalid record bit layout";
+    case SpgError::kBadCounts: return "node, leaf or point counts are inconsistent or too large for the file";
+    case SpgError::kBadFloat: return "float field is NaN, infinite or negative";
+    case SpgError::kBadBoundingBox: return "bounding box minimum exceeds maximum";
+    case SpgError::kBadClassCount: return "class table size does not match its index width";
+    case SpgError::kBadTree: return "tree topology is invalid";
+    case SpgError::kBadLeafCount: return "leaf point counts are invalid";
+    case SpgError::kBadDepth: return "tree depth does not match the header";
+    case SpgError::kBadRecord: return "node record has a class index beyond its table or nonzero padding";
+    case SpgError::kBadChecksum: return "CRC-32 mismatch (file corrupted)";
+    case SpgError::kTrailingBytes: return "unexpected bytes after the CRC-32";
+  }
+  return "unknown error";
+}
+
+uint32_t crc32(const uint8_t* data, size_t size) {
+  uint32_t c = 0xFFFFFFFFu;
+  for (size_t i = 0; i < size; ++i) c = kCrcTable.v[(c ^ data[i]) & 0xFFu] ^ (c >> 8);
+  return c ^ 0xFFFFFFFFu;
+}
+
+uint32_t spg_child_count(const SpgView& view, uint32_t node) {
+  if (view.header.tree_arity == 2) return ((view.topology[node >> 3] >> (node & 7)) & 1u) ? 2u : 0u;
+  return (view.topology[node >> 1] >> ((node & 1) * 4)) & 0xFu;
+}
+
+SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
+  Cursor in{data, size, 0};
+  SpgView view;
+  SpgHeader& h = view.header;
+
+  // §1 fixed header.
+  if (size < 4) return fail(SpgError::kTruncated, size);
+  for (int i = 0; i < 4; ++i)
+    if (data[i] != kSpgMagic[i]) return fail(SpgError::kBadMagic, 0);
+  if (size < kSpgFixedHeaderBytes) return fail(SpgError::kTruncated, size);
+  h.version = load_u16le(data + 4);
+  if (h.version != kSpgVersion) return fail(SpgError::kBadVersion, 4);
+  h.flags = load_u16le(data + 6);
+  if ((h.flags & ~kAttrKnownMask) != 0) return fail(SpgError::kBadFlags, 6);
+  h.tree_arity = data[8];
+  if (h.tree_arity != 2 && h.tree_arity != 8) return fail(SpgError::kBadArity, 8);
+  if (data[9] != kFieldCount) return fail(SpgError::kBadLayout, 9);
+  for (int f = 0; f < kFieldCount; ++f) {
+    h.layout.bits[f] = data[10 + f];
+    if (h.layout.bits[f] > kMaxFieldBits) return fail(SpgError::kBadLayout, 10 + static_cast<size_t>(f));
+  }
+  const bool normals = h.has_normals();
+  const bool color = h.has_color();
+  for (int f = 0; f < kFieldCount; ++f) {
+    const bool normal_field = f >= static_cast<int>(Field::kFnTheta) && f <= static_cast<int>(Field::kSigmaN);
+    const bool color_field = f >= static_cast<int>(Field::kColorR);
+    const bool present = normal_field ? normals : color_field ? color : true;
+    if (present != (h.layout.bits[f] != 0)) return fail(SpgError::kBadLayout, 10 + static_cast<size_t>(f));
+  }
+  if (h.layout.record_bytes() > kMaxRecordBytes) return fail(SpgError::kBadLayout, 10);
+  h.node_count = load_u32le(data + 28);
+  h.leaf_count = load_u32le(data + 32);
+  h.point_count = load_u32le(data + 36);
+  h.depth = load_u16le(data + 40);
+  if (h.node_count == 0) return fail(SpgError::kBadCounts, 28);
+  if (h.leaf_count == 0 || h.leaf_count > h.node_count) return fail(SpgError::kBadCounts, 32);
+  if (h.point_count < h.leaf_count) return fail(SpgError::kBadCounts, 36);
+  if (load_u16le(data + 42) != 0) return fail(SpgError::kBadLayout, 42);
+  // Every node needs a record and every leaf at least one LEB128 byte: bound
+  // the counts by the file size before anything is sized from them.
+  const uint64_t min_body = static_cast<uint64_t>(h.node_count) * h.layout.record_bytes() + h.leaf_count + 4;
+  if (min_body > size - kSpgFixedHeaderBytes) return fail(SpgError::kBadCounts, 28);
+  for (int i = 0; i < 6; ++i) {
+    h.bbox_bits[i] = load_u32le(data + 44 + 4 * i);
+    if (!f32_finite(h.bbox_bits[i])) return fail(SpgError::kBadFloat, 44 + 4 * static_cast<size_t>(i));
+  }
+  for (int a = 0; a < 3; ++a)
+    if (f32_order_key(h.bbox_bits[a]) > f32_order_key(h.bbox_bits[3 + a]))
+      return fail(SpgError::kBadBoundingBox, 44 + 4 * static_cast<size_t>(a));
+  for (int c = 0; c < 3; ++c) h.class_count[c] = load_u16le(data + 68 + 2 * c);
+  if (!class_field_ok(h.layout.width(Field::kSigmaP), h.class_count[0], true)) return fail(SpgError::kBadClassCount, 68);
+  if (!class_field_ok(h.layout.width(Field::kSigmaN), h.class_count[1], normals)) return fail(SpgError::kBadClassCount, 70);
+  if (!class_field_ok(h.layout.width(Field::kSigmaC), h.class_count[2], color)) return fail(SpgError::kBadClassCount, 72);
+  if (load_u16le(data + 74) != 0) return fail(SpgError::kBadLayout, 74);
+  in.pos = kSpgFixedHeaderBytes;
+
+  // §2 class tables: non-negative finite float32.
+  const size_t table_floats = 3u * h.class_count[0] + 2u * h.class_count[1] + 3u * h.class_count[2];
+  if (in.remaining() < table_floats * 4) return fail(SpgError::kTruncated, size);
+  view.sigma_p = data + in.pos;
+  view.sigma_n = view.sigma_p + 12u * h.class_count[0];
+  view.sigma_c = view.sigma_n + 8u * h.class_count[1];
+  for (size_t i = 0; i < table_floats; ++i) {
+    const uint32_t bits = load_u32le(data + in.pos);
+    if (!f32_finite(bits) || f32_negative(bits)) return fail(SpgError::kBadFloat, in.pos);
+    in.pos += 4;
+  }
+
+  // §3 topology: BFS order, siblings adjacent, children after their parent.
+  const uint32_t bits_per_node = h.tree_arity == 2 ? 1u : 4u;
+  view.topology_bytes = (static_cast<uint64_t>(h.node_count) * bits_per_node + 7) / 8;
+  if (in.remaining() < view.topology_bytes) return fail(SpgError::kTruncated, size);
+  view.topology = data + in.pos;
+  {
+    uint32_t next_child = 1, leaves = 0, level_end = 1, depth = 0;
+    for (uint32_t i = 0; i < h.node_count; ++i) {
+      const size_t at = in.pos + (static_cast<uint64_t>(i) * bits_per_node) / 8;
+      if (i > 0 && i >= next_child) return fail(SpgError::kBadTree, at);  // orphan node
+      if (i == level_end) {
+        level_end = next_child;
+        ++depth;
+      }
+      uint32_t c;
+      if (h.tree_arity == 2) {
+        c = ((view.topology[i >> 3] >> (i & 7)) & 1u) ? 2u : 0u;
+      } else {
+        c = (view.topology[i >> 1] >> ((i & 1) * 4)) & 0xFu;
+        if (c > 8) return fail(SpgError::kBadTree, at);
+      }
+      if (c == 0) ++leaves;
+      if (c > h.node_count - next_child) return fail(SpgError::kBadTree, at);
+      next_child += c;
+    }
+    if (next_child != h.node_count) return fail(SpgError::kBadTree, in.pos);
+    const uint64_t used_bits = static_cast<uint64_t>(h.node_count) * bits_per_node;
+    if (used_bits % 8 != 0 && (view.topology[view.topology_bytes - 1] >> (used_bits % 8)) != 0)
+      return fail(SpgError::kBadTree, in.pos + view.topology_bytes - 1);
+    if (leaves != h.leaf_count) return fail(SpgError::kBadCounts, 32);
+    if (depth != h.depth) return fail(SpgError::kBadDepth, 40);
+  }
+  in.pos += view.topology_bytes;
+
+  // §4 leaf point counts: canonical LEB128, each in [1, 2^32), summing to point_count.
+  view.leaf_counts = data + in.pos;
+  {
+    uint64_t sum = 0;
+    for (uint32_t leaf = 0; leaf < h.leaf_count; ++leaf) {
+      const size_t start = in.pos;
+      uint64_t value = 0;
+      for (int shift = 0;; shift += 7) {
+        if (in.remaining() == 0) return fail(SpgError::kTruncated, size);
+        if (shift > 28) return fail(SpgError::kBadLeafCount, start);
+        const uint8_t byte = data[in.pos++];
+        value |= static_cast<uint64_t>(byte & 0x7Fu) << shift;
+        if ((byte & 0x80u) == 0) {
+          if (byte == 0 && shift > 0) return fail(SpgError::kBadLeafCount, start);  // overlong
+          break;
+        }
+      }
+      if (value == 0 || value > 0xFFFFFFFFu) return fail(SpgError::kBadLeafCount, start);
+      sum += value;
+      if (sum > h.point_count) return fail(SpgError::kBadLeafCount, start);
+    }
+    if (sum != h.point_count) return fail(SpgError::kBadLeafCount, in.pos);
+  }
+  view.leaf_counts_bytes = static_cast<size_t>(in.pos - static_cast<size_t>(view.leaf_counts - data));
+
+  // §5 records: class indices inside their tables, padding bits zero.
+  view.record_bytes = static_cast<size_t>(h.layout.record_bytes());
+  const uint64_t records_size = static_cast<uint64_t>(h.node_count) * view.record_bytes;
+  if (in.remaining() < records_size) return fail(SpgError::kTruncated, size);
+  view.records = data + in.pos;
+  {
+    const int pad_bits = static_cast<int>(view.record_bytes * 8) - h.layout.total_bits();
+    for (uint32_t i = 0; i < h.node_count; ++i) {
+      const uint8_t* rec = view.records + static_cast<size_t>(i) * view.record_bytes;
+      const NodeFields f = unpack_record(h.layout, rec);
+      if (f[Field::kSigmaP] >= h.class_count[0] || (normals && f[Field::kSigmaN] >= h.class_count[1]) ||
+          (color && f[Field::kSigmaC] >= h.class_count[2]))
+        return fail(SpgError::kBadRecord, in.pos + static_cast<size_t>(i) * view.record_bytes);
+      if (pad_bits > 0 && (rec[view.record_bytes - 1] >> (8 - pad_bits)) != 0)
+        return fail(SpgError::kBadRecord, in.pos + static_cast<size_t>(i) * view.record_bytes);
+    }
+  }
+  in.pos += static_cast<size_t>(records_size);
+
+  // §6 CRC-32 of everything before it, then end of file.
+  if (in.remaining() < 4) return fail(SpgError::kTruncated, size);
+  if (in.remaining() > 4) return fail(SpgError::kTrailingBytes, in.pos + 4);
+  if (load_u32le(data + in.pos) != crc32(data, in.pos)) return fail(SpgError::kBadChecksum, in.pos);
+
+  *out = view;
+  return SpgResult{};
+}
+
+}  // namespace stipple

@@ -1,0 +1,101 @@
+// stipple core — the `.spg` container: startup header, class tables, tree
+// topology, leaf point counts, packed node records, CRC-32 trailer.
+// The byte-level specification, with every check listed here, is docs/format.md.
+//
+// `spg_parse` validates a whole file held in memory and returns views into it.
+// It is safe on untrusted input: every length is checked against the bytes
+// that remain before it is used, no read goes past `size`, nothing is
+// allocated, nothing is thrown, and no floating point is used (float32 fields
+// are returned as raw IEEE-754 bit patterns and checked for finiteness with
+// integer code). On failure it reports an error code and the byte offset of
+// the offending field; the host builds a message from `spg_error_text`.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "core/node_format.h"
+
+namespace stipple {
+
+inline constexpr uint8_t kSpgMagic[4] = {'S', 'T', 'P', 'G'};
+inline constexpr uint16_t kSpgVersion = 1;
+inline constexpr size_t kSpgFixedHeaderBytes = 76;
+
+enum class SpgError : uint8_t {
+  kOk = 0,
+  kTruncated,          // the file ends inside a section
+  kBadMagic,           // not "STPG"
+  kBadVersion,         // a version this reader does not know
+  kBadFlags,           // unknown attribute bits
+  kBadArity,           // tree arity not 2 or 8
+  kBadLayout,          // a field width out of range or inconsistent with flags
+  kBadCounts,          // node/leaf/point counts inconsistent or too large for the file
+  kBadFloat,           // a float32 field is NaN, infinite or negative where it must not be
+  kBadBoundingBox,     // min > max on some axis
+  kBadClassCount,      // a class table larger than its index width allows, or empty
+  kBadTree,            // a child count out of range or the children do not fit
+  kBadLeafCount,       // a leaf point count of 0, over 32 bits or not summing to point_count
+  kBadDepth,           // the tree's depth differs from the header's
+  kBadRecord,          // a record's class index is beyond its class table
+  kBadChecksum,        // CRC-32 mismatch
+  kTrailingBytes,      // bytes after the CRC-32
+};
+
+// A short, static, English description of an error code (no allocation).
+const char* spg_error_text(SpgError e);
+
+struct SpgHeader {
+  uint16_t version = 0;
+  uint16_t flags = 0;        // kAttrNormals | kAttrColor
+  uint8_t tree_arity = 0;    // 2: binary 2-means tree, 8: octree
+  RecordLayout layout;
+  uint32_t node_count = 0;
+  uint32_t leaf_count = 0;
+  uint32_t point_count = 0;  // original points the tree was built from
+  uint16_t depth = 0;        // deepest level; the root is level 0
+  uint32_t bbox_bits[6] = {};  // float32 bit patterns: min x y z, max x y z
+  uint16_t class_count[3] = {};  // sigma_p, sigma_n, sigma_c
+
+  bool has_normals() const { return (flags & kAttrNormals) != 0; }
+  bool has_color() const { return (flags & kAttrColor) != 0; }
+};
+
+// Views into a validated file. Pointers refer to the caller's buffer.
+struct SpgView {
+  SpgHeader header;
+  const uint8_t* sigma_p = nullptr;  // class_count[0] x 3 float32 LE (sigma1 >= sigma2 >= sigma3)
+  const uint8_t* sigma_n = nullptr;  // class_count[1] x 2 float32 LE
+  const uint8_t* sigma_c = nullptr;  // class_count[2] x 3 float32 LE
+  const uint8_t* topology = nullptr; // child counts, BFS order (1 bit/node for arity 2, 4 bits for 8)
+  size_t topology_bytes = 0;
+  const uint8_t* leaf_counts = nullptr;  // LEB128 point count per leaf, BFS order
+  size_t leaf_counts_bytes = 0;
+  const uint8_t* records = nullptr;  // node_count x record_bytes
+  size_t record_bytes = 0;
+};
+
+struct SpgResult {
+  SpgError error = SpgError::kOk;
+  size_t offset = 0;  // byte offset of the offending field (valid when error != kOk)
+  bool ok() const { return error == SpgError::kOk; }
+};
+
+// Validates `data[0 .. size)` as a complete `.spg` file and fills `out`.
+// Checks every rule of docs/format.md, including the class index of every record.
+[[nodiscard]] SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out);
+
+// Children of node `i` of a validated view: number of children.
+uint32_t spg_child_count(const SpgView& view, uint32_t node);
+
+// Little-endian readers shared by the parser and its users.
+inline uint16_t load_u16le(const uint8_t* p) { return static_cast<uint16_t>(p[0] | (p[1] << 8)); }
+inline uint32_t load_u32le(const uint8_t* p) {
+  return static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) |
+         (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
+}
+
+// CRC-32 (ISO-HDLC, the zlib/PNG polynomial 0xEDB88320), table-free.
+uint32_t crc32(const uint8_t* data, size_t size);
+
+}  // namespace stipple

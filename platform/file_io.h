@@ -1,0 +1,19 @@
+// stipple platform — whole-file reads and atomic writes with readable errors.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace stipple {
+
+// Reads `path` into `out`. On failure returns false and sets `error` to
+// "<path>: <reason>". Refuses files larger than `max_bytes`.
+bool read_file(const std::string& path, std::vector<uint8_t>& out, std::string& error,
+               uint64_t max_bytes = uint64_t{1} << 34);
+
+// Writes `data` to `path` through a temporary file in the same folder and a
+// rename, so a failed or interrupted write never leaves a partial file.
+bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data, std::string& error);
+
+}  // namespace stipple

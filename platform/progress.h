@@ -1,0 +1,38 @@
+// stipple platform — a terminal progress bar for long host work.
+//
+// Draws `label [#####.....]  45%  detail` on stderr, redrawn in place, only
+// when stderr is a terminal (pipes and CI logs stay clean). Redraws are
+// rate-limited to ~10 per second, so callers may report progress per item.
+// Not thread-safe: report from one thread.
+#pragma once
+
+#include <chrono>
+#include <string>
+
+namespace stipple {
+
+class ProgressBar {
+ public:
+  explicit ProgressBar(std::string label, bool enabled = true);
+  ~ProgressBar();
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
+
+  // `fraction` in [0, 1]; `detail` is shown after the percentage.
+  void update(double fraction, const std::string& detail = {});
+  // Clears the line; called by the destructor.
+  void finish();
+
+ private:
+  std::string label_;
+  bool active_;
+  bool drawn_ = false;
+  std::chrono::steady_clock::time_point last_;
+};
+
+// Monotonic seconds since an arbitrary origin.
+double monotonic_seconds();
+// Peak resident set size of this process so far, in bytes (0 if unknown).
+size_t peak_rss_bytes();
+
+}  // namespace stipple

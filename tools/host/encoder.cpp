@@ -1,0 +1,198 @@
+// stipple host — encoder pipeline and `.spg` writer (docs/format.md).
+#include "tools/host/encoder.h"
+
+#include <cmath>
+#include <cstring>
+
+#include "core/spg_format.h"
+#include "tools/host/classify.h"
+#include "tools/host/normals.h"
+#include "tools/host/quantize.h"
+
+namespace stipple {
+namespace {
+
+void put_u16(std::vector<uint8_t>& out, uint16_t v) {
+  out.push_back(static_cast<uint8_t>(v));
+  out.push_back(static_cast<uint8_t>(v >> 8));
+}
+void put_u32(std::vector<uint8_t>& out, uint32_t v) {
+  for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
+}
+void put_f32(std::vector<uint8_t>& out, float f) {
+  uint32_t bits;
+  std::memcpy(&bits, &f, 4);
+  put_u32(out, bits);
+}
+
+}  // namespace
+
+void stored_bounding_box(const std::vector<Vec3>& points, float min[3], float max[3]) {
+  const Box3 box = bounding_box(points);
+  for (int a = 0; a < 3; ++a) {
+    float lo = static_cast<float>(box.min[a]), hi = static_cast<float>(box.max[a]);
+    if (static_cast<double>(lo) > box.min[a]) lo = std::nextafter(lo, -INFINITY);
+    if (static_cast<double>(hi) < box.max[a]) hi = std::nextafter(hi, INFINITY);
+    min[a] = lo;
+    max[a] = hi;
+  }
+}
+
+bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t>& spg, EncodeReport& report,
+                  std::string& error, ProgressBar* progress) {
+  if (o.classes_p < 1 || o.classes_p > 4096) return error = "--classes: sigma_p classes must be 1..4096", false;
+  if (o.classes_n < 1 || o.classes_n > 4096) return error = "--classes: sigma_n classes must be 1..4096", false;
+  if (o.classes_c < 1 || o.classes_c > 64) return error = "--classes: sigma_c classes must be 1..64", false;
+  if (o.tree.leaf_size < 2) return error = "--leaf-size must be at least 2", false;
+  if (!(o.tree.balance >= 0 && o.tree.balance <= 0.5)) return error = "--balance must be in [0, 0.5]", false;
+  if (cloud.size() == 0) return error = "the scan has no points", false;
+  if (cloud.size() > 0xFFFFFFFFu) return error = "the scan has more than 2^32-1 points", false;
+
+  report = EncodeReport{};
+  report.points = cloud.size();
+  const bool normals = o.normals;
+  const bool colors = o.colors && cloud.has_colors();
+  report.colors = colors;
+  report.normals_source = !normals ? "none" : cloud.has_normals() ? "file" : !cloud.triangles.empty() ? "faces" : "k-NN";
+  if (normals && !cloud.has_normals()) estimate_normals(cloud, o.normal_neighbours, progress);
+  if (!normals) cloud.normals.clear();
+  if (!colors) cloud.colors.clear();
+
+  float bmin[3], bmax[3];
+  stored_bounding_box(cloud.positions, bmin, bmax);
+  double diag = 0;
+  for (int a = 0; a < 3; ++a) diag += (double(bmax[a]) - bmin[a]) * (double(bmax[a]) - bmin[a]);
+  diag = std::sqrt(diag);
+
+  TreeOptions tree_options = o.tree;
+  tree_options.stats.normals = normals;
+  tree_options.stats.colors = colors;
+  tree_options.stats.sigma_floor = 1e-15 * std::max(diag, 1e-30);
+  const Tree tree = build_tree(cloud, tree_options, [&](double f) {
+    if (progress) progress->update(0.1 + 0.7 * f, "building hierarchy");
+  });
+  report.nodes = tree.nodes.size();
+  report.leaves = tree.leaf_count();
+  report.depth = tree.depth;
+  report.ratios = partition_ratios(tree);
+  report.tree = tree.report;
+
+  // Classes.
+  if (progress) progress->update(0.85, "classifying sigmas");
+  const size_t n = tree.nodes.size();
+  std::vector<Vec3> sp(n), sn(normals ? n : 0), sc(colors ? n : 0);
+  for (size_t i = 0; i < n; ++i) {
+    const NodeStats& s = tree.nodes[i].stats;
+    sp[i] = s.position.sigma;
+    if (normals) sn[i] = Vec3(s.sigma_n[0], s.sigma_n[1], 0);
+    if (colors) sc[i] = s.color.sigma;
+  }
+  const int threads = o.tree.threads;
+  const Classification cp = classify_sigmas(sp, 3, o.classes_p, 20, threads);
+  Classification cn, cc;
+  if (normals) cn = classify_sigmas(sn, 2, o.classes_n, 20, threads);
+  if (colors) cc = classify_sigmas(sc, 3, o.classes_c, 20, threads);
+  report.classes[0] = static_cast<int>(cp.centers.size());
+  report.classes[1] = static_cast<int>(cn.centers.size());
+  report.classes[2] = static_cast<int>(cc.centers.size());
+  report.class_rms_log_error[0] = cp.rms_log_error;
+  report.class_rms_log_error[1] = cn.rms_log_error;
+  report.class_rms_log_error[2] = cc.rms_log_error;
+
+  // Layout: the thinnest axis gets 10 position bits.
+  int thin = 0;
+  for (int a = 1; a < 3; ++a)
+    if (double(bmax[a]) - bmin[a] < double(bmax[thin]) - bmin[thin]) thin = a;
+  const RecordLayout layout = paper_layout(normals, colors, thin);
+  const uint16_t flags = static_cast<uint16_t>((normals ? kAttrNormals : 0) | (colors ? kAttrColor : 0));
+
+  if (progress) progress->update(0.95, "writing");
+  spg.clear();
+  spg.insert(spg.end(), kSpgMagic, kSpgMagic + 4);
+  put_u16(spg, kSpgVersion);
+  put_u16(spg, flags);
+  spg.push_back(tree.octree ? 8 : 2);
+  spg.push_back(kFieldCount);
+  spg.insert(spg.end(), layout.bits, layout.bits + kFieldCount);
+  put_u32(spg, static_cast<uint32_t>(n));
+  put_u32(spg, static_cast<uint32_t>(report.leaves));
+  put_u32(spg, static_cast<uint32_t>(cloud.size()));
+  put_u16(spg, static_cast<uint16_t>(tree.depth));
+  put_u16(spg, 0);
+  for (float v : bmin) put_f32(spg, v);
+  for (float v : bmax) put_f32(spg, v);
+  put_u16(spg, static_cast<uint16_t>(cp.centers.size()));
+  put_u16(spg, static_cast<uint16_t>(cn.centers.size()));
+  put_u16(spg, static_cast<uint16_t>(cc.centers.size()));
+  put_u16(spg, 0);
+  for (const Vec3& c : cp.centers)
+    for (int d = 0; d < 3; ++d) put_f32(spg, static_cast<float>(c[d]));
+  for (const Vec3& c : cn.centers)
+    for (int d = 0; d < 2; ++d) put_f32(spg, static_cast<float>(c[d]));
+  for (const Vec3& c : cc.centers)
+    for (int d = 0; d < 3; ++d) put_f32(spg, static_cast<float>(c[d]));
+
+  // Topology: child counts in BFS order.
+  const int bits_per_node = tree.octree ? 4 : 1;
+  std::vector<uint8_t> topology((n * static_cast<size_t>(bits_per_node) + 7) / 8, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t c = tree.nodes[i].child_count;
+    if (tree.octree) topology[i >> 1] = static_cast<uint8_t>(topology[i >> 1] | (c << ((i & 1) * 4)));
+    else if (c) topology[i >> 3] = static_cast<uint8_t>(topology[i >> 3] | (1u << (i & 7)));
+  }
+  spg.insert(spg.end(), topology.begin(), topology.end());
+  for (const TreeNode& node : tree.nodes) {
+    if (!node.leaf()) continue;
+    uint32_t v = node.count();
+    do {
+      const uint8_t byte = v & 0x7F;
+      v >>= 7;
+      spg.push_back(static_cast<uint8_t>(byte | (v ? 0x80 : 0)));
+    } while (v);
+  }
+
+  // Records.
+  const AngleBits fp_bits = frame_bits(layout, Field::kFpTheta, false);
+  const AngleBits fn_bits = frame_bits(layout, Field::kFnTheta, false);
+  const AngleBits fc_bits = frame_bits(layout, Field::kFcTheta, true);
+  const size_t record_bytes = static_cast<size_t>(layout.record_bytes());
+  const size_t records_at = spg.size();
+  spg.resize(records_at + n * record_bytes);
+  for (size_t i = 0; i < n; ++i) {
+    const NodeStats& s = tree.nodes[i].stats;
+    NodeFields f;
+    for (int a = 0; a < 3; ++a) f.v[a] = quantize_cell(s.position.mean[a], bmin[a], bmax[a], layout.bits[a]);
+    const FrameCode fp = encode_frame(s.position.frame, fp_bits);
+    f[Field::kFpTheta] = fp.theta;
+    f[Field::kFpPhi] = fp.phi;
+    f[Field::kFpPsi] = fp.psi;
+    f[Field::kSigmaP] = cp.index[i];
+    if (normals) {
+      const FrameCode fn = encode_frame(s.normal_frame, fn_bits);
+      f[Field::kFnTheta] = fn.theta;
+      f[Field::kFnPhi] = fn.phi;
+      f[Field::kFnPsi] = fn.psi;
+      f[Field::kSigmaN] = cn.index[i];
+    }
+    if (colors) {
+      f[Field::kColorR] = quantize_unit(s.color.mean[0], layout.width(Field::kColorR));
+      f[Field::kColorG] = quantize_unit(s.color.mean[1], layout.width(Field::kColorG));
+      f[Field::kColorB] = quantize_unit(s.color.mean[2], layout.width(Field::kColorB));
+      const FrameCode fc = encode_frame(s.color.frame, fc_bits);
+      f[Field::kFcTheta] = fc.theta;
+      f[Field::kFcPhi] = fc.phi;
+      f[Field::kFcPsi] = fc.psi;
+      f[Field::kSigmaC] = cc.index[i];
+    }
+    pack_record(layout, f, spg.data() + records_at + i * record_bytes);
+  }
+  put_u32(spg, crc32(spg.data(), spg.size()));
+
+  report.bytes = spg.size();
+  report.record_bytes = record_bytes;
+  report.bits_per_point = 8.0 * static_cast<double>(spg.size()) / static_cast<double>(cloud.size());
+  if (progress) progress->update(1.0, "done");
+  return true;
+}
+
+}  // namespace stipple

@@ -1,0 +1,21 @@
+// stipple host — normals for scans that have none.
+//
+// Meshes: area-weighted average of incident face normals (a face's cross
+// product is twice its area times its normal, so summing cross products
+// weights by area). Vertices on no face, and bare point clouds: PCA of the k
+// nearest neighbours (smallest-variance axis), oriented consistently by
+// propagation along a minimum spanning tree of the k-NN graph with edge cost
+// 1 - |n_i . n_j| (Hoppe et al., "Surface reconstruction from unorganized
+// points", SIGGRAPH 1992); each connected component starts at its highest
+// point with its normal pointing up (+z). Deterministic for a given input.
+#pragma once
+
+#include "platform/progress.h"
+#include "tools/host/point_cloud.h"
+
+namespace stipple {
+
+// Fills `cloud.normals` if empty. `k` is the neighbourhood size (3..64).
+void estimate_normals(PointCloud& cloud, int k = 12, ProgressBar* progress = nullptr);
+
+}  // namespace stipple
