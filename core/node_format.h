@@ -3,7 +3,7 @@
 // A node record is a little-endian bit string of quantized fields, packed
 // LSB-first in the fixed order of `Field` below. The width of every field comes
 // from the `.spg` startup header (`RecordLayout`), so the encoder, the fixed-point
-// client and the double-precision reference decoder share one definition.
+// client and the host reference decoder share one definition.
 // The paper's budget (`kPaperLayout`) is 13 bytes without colour, 17 with:
 //
 //   mu_p        32  (10-11-11; the thinnest bounding-box axis gets 10)

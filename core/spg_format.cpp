@@ -22,7 +22,7 @@ constexpr CrcTable kCrcTable = [] {
 // IEEE-754 binary32 checks with integer code only.
 constexpr bool f32_finite(uint32_t bits) { return (bits & 0x7F800000u) != 0x7F800000u; }
 constexpr bool f32_negative(uint32_t bits) { return (bits & 0x80000000u) != 0 && (bits & 0x7FFFFFFFu) != 0; }
-// Maps float bits to an unsigned key with the same order as the float values.
+// Maps binary32 bits to an unsigned key ordered like the values they encode.
 constexpr uint32_t f32_order_key(uint32_t bits) {
   return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
 }
@@ -54,7 +54,7 @@ const char* spg_error_text(SpgError e) {
     case SpgError::kBadArity: return "tree arity must be 2 or 8";
     case SpgError::kBadLayout: return "invalid record bit layout";
     case SpgError::kBadCounts: return "node, leaf or point counts are inconsistent or too large for the file";
-    case SpgError::kBadFloat: return "float field is NaN, infinite or negative";
+    case SpgError::kBadFloat: return "float32 field is NaN, infinite or negative";
     case SpgError::kBadBoundingBox: return "bounding box minimum exceeds maximum";
     case SpgError::kBadClassCount: return "class table size does not match its index width";
     case SpgError::kBadTree: return "tree topology is invalid";

@@ -1,6 +1,7 @@
 // stipple host — encoder pipeline and `.spg` writer (docs/format.md).
 #include "tools/host/encoder.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -40,9 +41,9 @@ void stored_bounding_box(const std::vector<Vec3>& points, float min[3], float ma
 
 bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t>& spg, EncodeReport& report,
                   std::string& error, ProgressBar* progress) {
-  if (o.classes_p < 1 || o.classes_p > 4096) return error = "--classes: sigma_p classes must be 1..4096", false;
-  if (o.classes_n < 1 || o.classes_n > 4096) return error = "--classes: sigma_n classes must be 1..4096", false;
-  if (o.classes_c < 1 || o.classes_c > 64) return error = "--classes: sigma_c classes must be 1..64", false;
+  if (o.classes_p < 0 || o.classes_p > 4096) return error = "--classes: sigma_p classes must be 1..4096", false;
+  if (o.classes_n < 0 || o.classes_n > 4096) return error = "--classes: sigma_n classes must be 1..4096", false;
+  if (o.classes_c < 0 || o.classes_c > 64) return error = "--classes: sigma_c classes must be 1..64", false;
   if (o.tree.leaf_size < 2) return error = "--leaf-size must be at least 2", false;
   if (!(o.tree.balance >= 0 && o.tree.balance <= 0.5)) return error = "--balance must be in [0, 0.5]", false;
   if (cloud.size() == 0) return error = "the scan has no points", false;
@@ -88,10 +89,14 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
     if (colors) sc[i] = s.color.sigma;
   }
   const int threads = o.tree.threads;
-  const Classification cp = classify_sigmas(sp, 3, o.classes_p, 20, threads);
+  const int auto_classes = static_cast<int>(std::clamp<size_t>(n / 16, 64, 4096));
+  const int classes_p = o.classes_p ? o.classes_p : auto_classes;
+  const int classes_n = o.classes_n ? o.classes_n : auto_classes;
+  const int classes_c = o.classes_c ? o.classes_c : 64;
+  const Classification cp = classify_sigmas(sp, 3, classes_p, 20, threads);
   Classification cn, cc;
-  if (normals) cn = classify_sigmas(sn, 2, o.classes_n, 20, threads);
-  if (colors) cc = classify_sigmas(sc, 3, o.classes_c, 20, threads);
+  if (normals) cn = classify_sigmas(sn, 2, classes_n, 20, threads);
+  if (colors) cc = classify_sigmas(sc, 3, classes_c, 20, threads);
   report.classes[0] = static_cast<int>(cp.centers.size());
   report.classes[1] = static_cast<int>(cn.centers.size());
   report.classes[2] = static_cast<int>(cc.centers.size());

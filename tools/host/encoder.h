@@ -13,7 +13,10 @@ namespace stipple {
 
 struct EncodeOptions {
   TreeOptions tree;
-  int classes_p = 4096, classes_n = 4096, classes_c = 64;
+  // Class counts; 0 means automatic: clamp(nodes / 16, 64, 4096) for sigma_p
+  // and sigma_n (a small scan does not need 4096 classes of 12 bytes each),
+  // 64 for sigma_c.
+  int classes_p = 0, classes_n = 0, classes_c = 0;
   bool normals = true;  // store normals (computed when the scan has none)
   bool colors = true;   // store colours when the scan has them
   int normal_neighbours = 12;

@@ -1,0 +1,245 @@
+// Hierarchy invariants, determinism, golden bitstream, reference decoding and
+// metrics on synthetic and real scans.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "platform/file_io.h"
+#include "test_util.h"
+#include "tools/host/encoder.h"
+#include "tools/host/metrics.h"
+#include "tools/host/ply_io.h"
+#include "tools/host/sampler.h"
+#include "tools/host/spg_model.h"
+
+namespace stipple {
+namespace {
+
+void check_invariants(const Tree& tree, size_t points, const TreeOptions& o) {
+  ASSERT_FALSE(tree.nodes.empty());
+  EXPECT_EQ(tree.nodes[0].count(), points);
+  // Every point in exactly one leaf.
+  std::vector<int> seen(points, 0);
+  for (const TreeNode& n : tree.nodes)
+    if (n.leaf())
+      for (uint32_t i = n.begin; i < n.end; ++i) ++seen[tree.order[i]];
+  for (size_t i = 0; i < points; ++i) ASSERT_EQ(seen[i], 1) << "point " << i;
+  uint64_t unbalanced = 0;
+  for (size_t id = 0; id < tree.nodes.size(); ++id) {
+    const TreeNode& n = tree.nodes[id];
+    EXPECT_EQ(n.stats.count, n.count());
+    if (n.leaf()) {
+      // A leaf is small, flat at the floor, or a failed split.
+      continue;
+    }
+    EXPECT_GE(n.count(), o.leaf_size);
+    EXPECT_GT(n.first_child, id);  // breadth-first: children after the parent
+    uint32_t sum = 0, smallest = n.count();
+    uint32_t at = n.begin;
+    for (uint32_t c = n.first_child; c < n.first_child + n.child_count; ++c) {
+      const TreeNode& child = tree.nodes[c];
+      EXPECT_EQ(child.begin, at);  // siblings adjacent, ranges contiguous
+      EXPECT_EQ(child.depth, n.depth + 1);
+      at = child.end;
+      sum += child.count();
+      smallest = std::min(smallest, child.count());
+    }
+    EXPECT_EQ(sum, n.count());  // counts add up
+    if (!o.octree) {
+      EXPECT_EQ(n.child_count, 2);
+      if (static_cast<double>(smallest) < o.balance * n.count()) ++unbalanced;
+    }
+  }
+  // Out-of-band splits exist only as the counted Euclidean fallback.
+  EXPECT_EQ(unbalanced, tree.report.unbalanced);
+  EXPECT_LE(tree.report.unbalanced, tree.report.euclidean_fallbacks);
+}
+
+TEST(Hierarchy, InvariantsOnTwoDisjointSheets) {
+  // Two parallel planes 0.05 apart: Mahalanobis keeps them apart.
+  PointCloud c;
+  for (int s = 0; s < 2; ++s)
+    for (int i = 0; i < 60; ++i)
+      for (int j = 0; j < 60; ++j) {
+        c.positions.push_back(Vec3(i / 60.0, j / 60.0, s * 0.05));
+        c.normals.push_back(Vec3(0, 0, s ? 1 : -1));
+      }
+  TreeOptions o;
+  o.leaf_size = 10;
+  const Tree tree = build_tree(c, o);
+  check_invariants(tree, c.size(), o);
+  // No leaf mixes the two sheets.
+  for (const TreeNode& n : tree.nodes) {
+    if (!n.leaf()) continue;
+    const double z0 = c.positions[tree.order[n.begin]].z();
+    for (uint32_t i = n.begin; i < n.end; ++i) ASSERT_EQ(c.positions[tree.order[i]].z(), z0);
+  }
+  EXPECT_LT(tree.nodes.size(), 2 * c.size() / 5);
+}
+
+TEST(Hierarchy, OctreeInvariantsAndPartitionRatios) {
+  PointCloud c = test::sphere_cloud(5000);
+  TreeOptions o;
+  o.leaf_size = 12;
+  const Tree binary = build_tree(c, o);
+  o.octree = true;
+  const Tree octree = build_tree(c, o);
+  check_invariants(octree, c.size(), o);
+  const PartitionRatios rb = partition_ratios(binary), ro = partition_ratios(octree);
+  EXPECT_LT(rb.apr, 1.6);    // 2-means with a 30-70 band: at most 2.33, typically ~1.2
+  EXPECT_GT(ro.apr, rb.apr);  // the octree is far less balanced (TOG05 Table II)
+}
+
+TEST(Hierarchy, CoincidentPointsBecomeOneLeaf) {
+  PointCloud c;
+  c.positions.assign(100, Vec3(0.5, 0.5, 0.5));
+  c.normals.assign(100, Vec3::UnitZ());
+  TreeOptions o;
+  o.stats.sigma_floor = 1e-15;
+  const Tree tree = build_tree(c, o);
+  ASSERT_EQ(tree.nodes.size(), 1u);
+  EXPECT_EQ(tree.nodes[0].count(), 100u);
+}
+
+TEST(Encoder, SameInputSameBytesAnyThreadCount) {
+  PointCloud a = test::sphere_cloud(4000), b = a;
+  EncodeOptions o1, o2;
+  o1.tree.threads = 1;
+  o2.tree.threads = 2;
+  std::vector<uint8_t> s1, s2;
+  EncodeReport r;
+  std::string error;
+  ASSERT_TRUE(encode_cloud(a, o1, s1, r, error)) << error;
+  ASSERT_TRUE(encode_cloud(b, o2, s2, r, error)) << error;
+  EXPECT_EQ(s1, s2);
+}
+
+TEST(Encoder, RejectsBadOptionsByName) {
+  PointCloud c = test::sphere_cloud(100);
+  EncodeOptions o;
+  o.classes_p = 5000;
+  std::vector<uint8_t> spg;
+  EncodeReport r;
+  std::string error;
+  EXPECT_FALSE(encode_cloud(c, o, spg, r, error));
+  EXPECT_NE(error.find("--classes"), std::string::npos) << error;
+}
+
+TEST(Encoder, DecodedNodesMatchTheEncoderWithinQuantization) {
+  PointCloud c = test::sphere_cloud(3000);
+  EncodeOptions o;
+  o.tree.leaf_size = 10;
+  std::vector<uint8_t> spg;
+  EncodeReport r;
+  std::string error;
+  ASSERT_TRUE(encode_cloud(c, o, spg, r, error)) << error;
+  DecodedModel m;
+  ASSERT_TRUE(decode_spg("sphere.spg", spg.data(), spg.size(), m, error)) << error;
+  ASSERT_EQ(m.nodes.size(), r.nodes);
+  // Positions: every leaf mean lies within half a grid cell of a leaf's true mean
+  // (checked through the root, whose mean is the centroid).
+  Vec3 cell;
+  for (int k = 0; k < 3; ++k) cell[k] = (m.bbox_max[k] - m.bbox_min[k]) / std::ldexp(1.0, m.header.layout.bits[k]);
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : c.positions) centroid += p;
+  centroid /= static_cast<double>(c.size());
+  for (int k = 0; k < 3; ++k) EXPECT_LE(std::abs(m.nodes[0].position.mean[k] - centroid[k]), cell[k] / 2 + 1e-12);
+  // Point counts rebuilt from the leaf table.
+  EXPECT_EQ(m.nodes[0].point_count, 3000u);
+  uint64_t leaf_sum = 0;
+  for (const DecodedNode& n : m.nodes) leaf_sum += n.leaf() ? n.point_count : 0;
+  EXPECT_EQ(leaf_sum, 3000u);
+}
+
+TEST(Encoder, SampledLeavesReproduceTheSurface) {
+  PointCloud c = test::sphere_cloud(20000);
+  const PointCloud original = c;
+  EncodeOptions o;
+  std::vector<uint8_t> spg;
+  EncodeReport r;
+  std::string error;
+  ASSERT_TRUE(encode_cloud(c, o, spg, r, error)) << error;
+  DecodedModel m;
+  ASSERT_TRUE(decode_spg("sphere.spg", spg.data(), spg.size(), m, error)) << error;
+  const PointCloud leaves = sample_cut(m, leaf_cut(m), 0);
+  ASSERT_EQ(leaves.size(), original.size());
+  const CloudMetrics leaf_metrics = compare_clouds(original, leaves);
+  // Measured 50.6 dB one-sided, 48.0 dB symmetric: the sphere's own sample
+  // spacing (~0.025 on a 3.46 diagonal) bounds what any resampling can reach.
+  EXPECT_GT(leaf_metrics.psnr_one_sided, 49.5);
+  EXPECT_GT(leaf_metrics.psnr_symmetric, 47.0);
+  EXPECT_LT(leaf_metrics.generated_to_original.normal_rms_deg, 10.0);
+  // Coarser cuts are worse: PSNR falls with the level.
+  const CloudMetrics coarse = compare_clouds(original, sample_cut(m, level_cut(m, 4), 0));
+  EXPECT_LT(coarse.psnr_one_sided, leaf_metrics.psnr_one_sided);
+}
+
+TEST(Metrics, KnownDistances) {
+  PointCloud a, b;
+  for (int i = 0; i < 100; ++i) {
+    a.positions.push_back(Vec3(i, 0, 0));
+    b.positions.push_back(Vec3(i, 0.5, 0));
+  }
+  const CloudMetrics m = compare_clouds(a, b);
+  EXPECT_DOUBLE_EQ(m.generated_to_original.rms, 0.5);
+  EXPECT_DOUBLE_EQ(m.hausdorff, 0.5);
+  EXPECT_NEAR(m.psnr_one_sided, 20 * std::log10(99.0 / 0.5), 1e-9);
+  // A hole: generated covers half the original. One-sided cannot see it.
+  b.positions.resize(50);
+  const CloudMetrics hole = compare_clouds(a, b);
+  EXPECT_DOUBLE_EQ(hole.generated_to_original.rms, 0.5);
+  EXPECT_GT(hole.original_to_generated.max, 49.0);
+  EXPECT_LT(hole.psnr_symmetric, hole.psnr_one_sided - 20);
+  EXPECT_TRUE(std::isinf(compare_clouds(a, a).psnr_one_sided));
+}
+
+// The bundled bunny, encoded with the defaults, must reproduce
+// tests/golden/bunny_v1.spg bit for bit. Regenerate only on purpose, with
+// tests/golden/regenerate.sh; on failure the actual bytes are written beside
+// the test binary.
+TEST(Golden, BundledBunnyBitstream) {
+  PointCloud cloud;
+  std::string error;
+  ASSERT_TRUE(read_point_cloud(test::source_path("data/bunny.ply"), cloud, error)) << error;
+  std::vector<uint8_t> spg;
+  EncodeReport r;
+  ASSERT_TRUE(encode_cloud(cloud, EncodeOptions{}, spg, r, error)) << error;
+  std::vector<uint8_t> golden;
+  ASSERT_TRUE(read_file(test::source_path("tests/golden/bunny_v1.spg"), golden, error))
+      << error << " (a missing golden file fails; run tests/golden/regenerate.sh on purpose)";
+  if (spg != golden) {
+    const std::string actual = "bunny_v1.spg.actual";
+    write_file_atomic(actual, spg, error);
+    size_t first = 0;
+    while (first < std::min(spg.size(), golden.size()) && spg[first] == golden[first]) ++first;
+    FAIL() << "bitstream differs from tests/golden/bunny_v1.spg at byte " << first << " (sizes " << spg.size()
+           << " vs " << golden.size() << "); actual written to " << std::filesystem::absolute(actual);
+  }
+}
+
+TEST(RealScans, SharedBunnyAndDragonEncode) {
+  for (const char* name : {"bunny.ply", "dragon.ply"}) {
+    const std::string path = test::shared_data(name);
+    if (!std::filesystem::exists(path)) {
+      GTEST_SKIP() << path << " not present (../shared/data is optional for tests)";
+    }
+    PointCloud cloud;
+    std::string error;
+    ASSERT_TRUE(read_point_cloud(path, cloud, error)) << error;
+    const size_t points = cloud.size();
+    EXPECT_FALSE(cloud.triangles.empty());
+    std::vector<uint8_t> spg;
+    EncodeReport r;
+    ASSERT_TRUE(encode_cloud(cloud, EncodeOptions{}, spg, r, error)) << error;
+    EXPECT_EQ(r.normals_source, "faces");
+    EXPECT_EQ(r.record_bytes, 13u);
+    EXPECT_LT(r.ratios.apr, 1.6) << name;
+    DecodedModel m;
+    ASSERT_TRUE(decode_spg(name, spg.data(), spg.size(), m, error)) << error;
+    EXPECT_EQ(m.header.point_count, points);
+  }
+}
+
+}  // namespace
+}  // namespace stipple

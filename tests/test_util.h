@@ -1,0 +1,43 @@
+// Shared helpers for stipple's tests.
+#pragma once
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "tools/host/point_cloud.h"
+
+namespace stipple::test {
+
+// Points of an anisotropic Gaussian with the given sigmas and frame.
+inline std::vector<Vec3> gaussian_points(size_t n, const Vec3& mean, const Eigen::Matrix3d& frame, const Vec3& sigma,
+                                         uint64_t seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<Vec3> out;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 g(normal(rng), normal(rng), normal(rng));
+    out.push_back(mean + frame * sigma.cwiseProduct(g));
+  }
+  return out;
+}
+
+// Points on a sphere (a surface with outward normals), deterministic.
+inline PointCloud sphere_cloud(size_t n, double radius = 1.0, bool with_normals = true) {
+  PointCloud c;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (size_t i = 0; i < n; ++i) {
+    const double z = 1.0 - 2.0 * (static_cast<double>(i) + 0.5) / static_cast<double>(n);
+    const double r = std::sqrt(1.0 - z * z);
+    const Vec3 p(r * std::cos(golden * static_cast<double>(i)), r * std::sin(golden * static_cast<double>(i)), z);
+    c.positions.push_back(radius * p);
+    if (with_normals) c.normals.push_back(p);
+  }
+  return c;
+}
+
+inline std::string source_path(const std::string& rel) { return std::string(STIPPLE_SOURCE_DIR) + "/" + rel; }
+inline std::string shared_data(const std::string& name) { return std::string(STIPPLE_SHARED_DATA) + "/" + name; }
+
+}  // namespace stipple::test
