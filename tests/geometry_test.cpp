@@ -127,10 +127,12 @@ TEST(Pca, CurvatureShrinkFollowsTheFormula) {
   const auto ids = iota_ids(40);  // a cap near the pole
   StatsOptions off;
   off.shrink_eta0 = 1.0;
-  StatsOptions on;  // eta0 0.5, eta1 1
+  const StatsOptions on;  // the defaults
   const NodeStats a = node_stats(c, ids.data(), ids.size(), off);
   const NodeStats b = node_stats(c, ids.data(), ids.size(), on);
-  const double beta = 0.5 + 0.5 * std::max(0.0, 1 - std::sqrt(a.sigma_n[0]));
+  const double beta =
+      on.shrink_eta0 + (1 - on.shrink_eta0) * std::max(0.0, 1 - on.shrink_eta1 * std::sqrt(a.sigma_n[0]));
+  EXPECT_LT(beta, 1.0);
   EXPECT_NEAR(b.position.sigma[2], a.position.sigma[2] * beta, 1e-15);
   EXPECT_EQ(b.position.sigma[0], a.position.sigma[0]);
 }

@@ -56,4 +56,5 @@ int cmd_demo(int argc, char** argv);
 int cmd_info(int argc, char** argv);
 int cmd_sample(int argc, char** argv);
 int cmd_metrics(int argc, char** argv);
+int cmd_levels(int argc, char** argv);
 }  // namespace stipple

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <string>
 
+#include "platform/progress.h"
 #include "tools/cli.h"
 #include "tools/host/metrics.h"
 #include "tools/host/ply_io.h"
@@ -207,6 +208,86 @@ int cmd_metrics(int argc, char** argv) {
     std::printf("  normals  %.2f deg RMS, %.2f deg mean (generated vs nearest original)\n", g2o.normal_rms_deg,
                 g2o.normal_mean_deg);
   if (bpp >= 0) std::printf("  %.3f bits per original point (%s)\n", bpp, spg_path.c_str());
+  return 0;
+}
+
+}  // namespace stipple
+
+namespace stipple {
+namespace {
+
+const char kLevelsHelp[] =
+    "usage: stipple levels MODEL.spg ORIGINAL [--levels A,B,...] [--json]\n"
+    "\n"
+    "The size/accuracy trade of a model's tree levels: for each level's cut (the\n"
+    "nodes at that depth plus the leaves above it, then all leaves), the nodes\n"
+    "in the cut, the bits per original point a client receives for it (its\n"
+    "records plus the startup header and class tables), and the PSNR of points\n"
+    "regenerated from the cut (as many per node as it held originals) against\n"
+    "the original scan, one-sided (the paper's) and symmetric.\n";
+
+}  // namespace
+
+int cmd_levels(int argc, char** argv) {
+  cli::Args args(argc, argv, 2);
+  if (args.flag("--help") || args.flag("-h")) {
+    std::fputs(kLevelsHelp, stdout);
+    return 0;
+  }
+  std::string levels_text;
+  const bool has_levels = args.value("--levels", levels_text);
+  const bool json = args.flag("--json");
+  const std::vector<std::string> files = args.positionals();
+  if (args.bad()) return cli::fail("levels: " + args.error());
+  if (!args.unknown_option().empty()) return cli::fail("levels: unknown option '" + args.unknown_option() + "'");
+  if (files.size() != 2) return cli::fail("levels: expected MODEL.spg and ORIGINAL (see stipple levels --help)");
+  DecodedModel model;
+  PointCloud original;
+  std::string error;
+  if (!load_spg(files[0], model, error) || !read_point_cloud(files[1], original, error)) return cli::fail(error);
+  std::vector<int> levels;
+  if (has_levels) {
+    size_t start = 0;
+    while (start <= levels_text.size()) {
+      const size_t comma = levels_text.find(',', start);
+      const std::string part = levels_text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+      unsigned long long v;
+      if (!cli::parse_uint(part, 65535, v)) return cli::fail("levels: --levels: expected integers, got '" + part + "'");
+      levels.push_back(static_cast<int>(v));
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
+  } else {
+    for (int l = 0; l <= model.header.depth; ++l) levels.push_back(l);
+  }
+  const SpgHeader& h = model.header;
+  const double startup_bytes = static_cast<double>(kSpgFixedHeaderBytes) +
+                               4.0 * (3 * h.class_count[0] + 2 * h.class_count[1] + 3 * h.class_count[2]);
+  ProgressBar progress("levels");
+  std::string rows;
+  if (!json) std::printf("%6s %10s %12s %10s %10s\n", "level", "nodes", "bits/point", "PSNR-1", "PSNR-sym");
+  for (size_t i = 0; i < levels.size(); ++i) {
+    progress.update(static_cast<double>(i) / static_cast<double>(levels.size()), "level " + std::to_string(levels[i]));
+    const std::vector<uint32_t> cut = level_cut(model, levels[i]);
+    const CloudMetrics m = compare_clouds(original, sample_cut(model, cut, 0));
+    const double bits = 8.0 * (startup_bytes + static_cast<double>(cut.size()) * h.layout.record_bytes()) /
+                        static_cast<double>(original.size());
+    if (json) {
+      cli::Json j;
+      j.integer("level", levels[i])
+          .integer("nodes", static_cast<long long>(cut.size()))
+          .num("bits_per_point", bits)
+          .num("psnr_one_sided_db", m.psnr_one_sided)
+          .num("psnr_symmetric_db", m.psnr_symmetric)
+          .num("hausdorff", m.hausdorff);
+      rows += (rows.empty() ? "" : ", ") + j.done();
+    } else {
+      progress.finish();
+      std::printf("%6d %10zu %12.3f %10.2f %10.2f\n", levels[i], cut.size(), bits, m.psnr_one_sided, m.psnr_symmetric);
+    }
+  }
+  progress.finish();
+  if (json) std::printf("[%s]\n", rows.c_str());
   return 0;
 }
 

@@ -18,6 +18,7 @@ const char kUsage[] =
     "  info      describe a .spg file\n"
     "  sample    generate points from a .spg cut (reference decoder) -> .ply\n"
     "  metrics   nearest-neighbour error and PSNR between two point sets\n"
+    "  levels    bits per point and PSNR of each tree level's cut (the trade)\n"
     "\n"
     "`stipple <command> --help` describes each command.\n";
 
@@ -34,6 +35,7 @@ int main(int argc, char** argv) {
   if (!std::strcmp(command, "info")) return stipple::cmd_info(argc, argv);
   if (!std::strcmp(command, "sample")) return stipple::cmd_sample(argc, argv);
   if (!std::strcmp(command, "metrics")) return stipple::cmd_metrics(argc, argv);
+  if (!std::strcmp(command, "levels")) return stipple::cmd_levels(argc, argv);
   std::fprintf(stderr, "stipple: unknown command '%s'\n\n%s", command, kUsage);
   return 2;
 }
