@@ -7,6 +7,7 @@
 #include "tools/cli.h"
 #include "tools/host/encoder.h"
 #include "tools/host/metrics.h"
+#include "tools/host/normals.h"
 #include "tools/host/ply_io.h"
 #include "tools/host/sampler.h"
 #include "tools/host/spg_model.h"
@@ -35,6 +36,8 @@ const char kEncodeHelp[] =
     "  --no-shrink           no curvature shrink\n"
     "  --neighbours K        k for normals of bare point clouds (default 12)\n"
     "  --threads N           worker threads (default 2)\n"
+    "  --every K             keep every K-th point (after normals are derived from\n"
+    "                        the full mesh): quick previews and scaling studies\n"
     "  --json                print the summary as JSON\n"
     "  -q, --quiet           no progress bar\n";
 
@@ -116,6 +119,7 @@ std::string summary_json(const std::string& scan, const EncodeReport& r, double 
       .integer("classes_c", r.classes[2])
       .num("apr", r.ratios.apr)
       .num("capr", r.ratios.capr)
+      .integer("capr_excluded", static_cast<long long>(r.ratios.capr_excluded))
       .integer("euclidean_fallbacks", static_cast<long long>(r.tree.euclidean_fallbacks))
       .integer("unbalanced_splits", static_cast<long long>(r.tree.unbalanced));
   return j.done();
@@ -127,6 +131,19 @@ void print_summary(const std::string& scan, const EncodeReport& r, double second
               scan.c_str(), cli::with_commas(r.points).c_str(), cli::with_commas(r.nodes).c_str(),
               cli::with_commas(r.leaves).c_str(), r.depth, cli::with_commas(r.bytes).c_str(),
               static_cast<unsigned long long>(r.record_bytes), r.bits_per_point, seconds, peak_mb);
+}
+
+// Keeps every k-th point. Normals are derived first, from the full mesh, since
+// the subset's triangles would be meaningless.
+void keep_every(PointCloud& cloud, unsigned long long k, const EncodeOptions& o) {
+  if (o.normals) estimate_normals(cloud, o.normal_neighbours);
+  PointCloud out;
+  for (size_t i = 0; i < cloud.size(); i += k) {
+    out.positions.push_back(cloud.positions[i]);
+    if (cloud.has_normals()) out.normals.push_back(cloud.normals[i]);
+    if (cloud.has_colors()) out.colors.push_back(cloud.colors[i]);
+  }
+  cloud = std::move(out);
 }
 
 }  // namespace
@@ -142,6 +159,10 @@ int cmd_encode(int argc, char** argv) {
   std::string output, error;
   if (!args.value("-o", output)) args.value("--output", output);
   if (!parse_encode_options(args, options, quiet, json, error)) return cli::fail(error);
+  std::string every_text;
+  unsigned long long every = 1;
+  if (args.value("--every", every_text) && (!cli::parse_uint(every_text, 1u << 30, every) || every == 0))
+    return cli::fail("encode: --every: expected a positive integer, got '" + every_text + "'");
   const std::vector<std::string> inputs = args.positionals();
   if (!args.unknown_option().empty()) return cli::fail("encode: unknown option '" + args.unknown_option() + "'");
   if (inputs.size() != 1) return cli::fail("encode: expected one scan file (see stipple encode --help)");
@@ -152,6 +173,7 @@ int cmd_encode(int argc, char** argv) {
   progress.update(0.0, "reading");
   PointCloud cloud;
   if (!read_point_cloud(inputs[0], cloud, error)) return cli::fail(error);
+  if (every > 1) keep_every(cloud, every, options);
   std::vector<uint8_t> spg;
   EncodeReport report;
   if (!encode_cloud(cloud, options, spg, report, error, &progress)) return cli::fail(error);

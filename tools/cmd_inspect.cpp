@@ -5,6 +5,7 @@
 
 #include "platform/progress.h"
 #include "tools/cli.h"
+#include "tools/host/hierarchy.h"
 #include "tools/host/metrics.h"
 #include "tools/host/ply_io.h"
 #include "tools/host/sampler.h"
@@ -59,25 +60,16 @@ int cmd_info(int argc, char** argv) {
   std::string error;
   if (!load_spg(files[0], model, error)) return cli::fail(error);
   const SpgHeader& h = model.header;
-  double apr = 0, capr = 0;
-  uint32_t internal = 0;
+  PartitionRatioAccumulator acc;
+  double counts[8], sigma1[8];
   for (const DecodedNode& node : model.nodes) {
-    if (node.leaf()) continue;
-    double cmin = 1e300, cmax = 0, smin = 1e300, smax = 0;
-    for (uint32_t c = node.first_child; c < node.first_child + node.child_count; ++c) {
-      cmin = std::min<double>(cmin, model.nodes[c].point_count);
-      cmax = std::max<double>(cmax, model.nodes[c].point_count);
-      smin = std::min(smin, model.nodes[c].position.sigma[0]);
-      smax = std::max(smax, model.nodes[c].position.sigma[0]);
+    for (uint32_t c = 0; c < node.child_count; ++c) {
+      counts[c] = model.nodes[node.first_child + c].point_count;
+      sigma1[c] = model.nodes[node.first_child + c].position.sigma[0];
     }
-    apr += cmax / cmin;
-    capr += smax / std::max(smin, 1e-300);
-    ++internal;
+    acc.add_family(node.position.sigma[0], counts, sigma1, node.child_count);
   }
-  if (internal) {
-    apr /= internal;
-    capr /= internal;
-  }
+  const PartitionRatios ratios = acc.result();
   const double bpp = 8.0 * static_cast<double>(model.file_bytes) / h.point_count;
   const uint64_t record_total = static_cast<uint64_t>(h.node_count) * static_cast<uint64_t>(h.layout.record_bytes());
   if (json) {
@@ -98,8 +90,9 @@ int cmd_info(int argc, char** argv) {
         .integer("classes_p", h.class_count[0])
         .integer("classes_n", h.class_count[1])
         .integer("classes_c", h.class_count[2])
-        .num("apr", apr)
-        .num("capr", capr);
+        .num("apr", ratios.apr)
+        .num("capr", ratios.capr)
+        .integer("capr_excluded", static_cast<long long>(ratios.capr_excluded));
     std::printf("%s\n", j.done().c_str());
     return 0;
   }
@@ -114,7 +107,10 @@ int cmd_info(int argc, char** argv) {
   std::printf("  file         %s bytes, %.2f bits per original point\n", cli::with_commas(model.file_bytes).c_str(), bpp);
   std::printf("  classes      sigma_p %u, sigma_n %u, sigma_c %u\n", h.class_count[0], h.class_count[1],
               h.class_count[2]);
-  std::printf("  APR %.3f, cAPR %.3f (TOG05 Table II; cAPR from class-quantized sigma1)\n", apr, capr);
+  std::printf("  APR %.3f, cAPR %.3f (TOG05 Table II; cAPR from class-quantized sigma1, %llu of %llu families\n"
+              "               with a degenerate child left out)\n",
+              ratios.apr, ratios.capr, static_cast<unsigned long long>(ratios.capr_excluded),
+              static_cast<unsigned long long>(ratios.families));
   std::printf("  bbox         (%g, %g, %g) - (%g, %g, %g)\n", model.bbox_min.x(), model.bbox_min.y(),
               model.bbox_min.z(), model.bbox_max.x(), model.bbox_max.y(), model.bbox_max.z());
   return 0;

@@ -226,28 +226,39 @@ Tree build_tree(const PointCloud& cloud, const TreeOptions& o, const std::functi
   return tree;
 }
 
-PartitionRatios partition_ratios(const Tree& tree) {
+void PartitionRatioAccumulator::add_family(double parent_sigma1, const double* counts, const double* sigma1,
+                                           size_t children) {
+  if (children == 0) return;
+  const auto [cmin, cmax] = std::minmax_element(counts, counts + children);
+  const auto [smin, smax] = std::minmax_element(sigma1, sigma1 + children);
+  apr_sum_ += *cmax / *cmin;
+  ++families_;
+  if (*smin >= 1e-6 * parent_sigma1) {
+    capr_sum_ += *smax / *smin;
+    ++capr_families_;
+  }
+}
+
+PartitionRatios PartitionRatioAccumulator::result() const {
   PartitionRatios r;
-  uint64_t internal = 0;
-  for (const TreeNode& node : tree.nodes) {
-    if (node.leaf()) continue;
-    double cmin = 1e300, cmax = 0, smin = 1e300, smax = 0;
-    for (uint32_t c = node.first_child; c < node.first_child + node.child_count; ++c) {
-      const TreeNode& child = tree.nodes[c];
-      cmin = std::min(cmin, static_cast<double>(child.count()));
-      cmax = std::max(cmax, static_cast<double>(child.count()));
-      smin = std::min(smin, child.stats.position.sigma[0]);
-      smax = std::max(smax, child.stats.position.sigma[0]);
-    }
-    r.apr += cmax / cmin;
-    r.capr += smax / std::max(smin, 1e-300);
-    ++internal;
-  }
-  if (internal) {
-    r.apr /= static_cast<double>(internal);
-    r.capr /= static_cast<double>(internal);
-  }
+  r.families = families_;
+  r.capr_excluded = families_ - capr_families_;
+  if (families_) r.apr = apr_sum_ / static_cast<double>(families_);
+  if (capr_families_) r.capr = capr_sum_ / static_cast<double>(capr_families_);
   return r;
+}
+
+PartitionRatios partition_ratios(const Tree& tree) {
+  PartitionRatioAccumulator acc;
+  double counts[8], sigma1[8];
+  for (const TreeNode& node : tree.nodes) {
+    for (uint32_t c = 0; c < node.child_count; ++c) {
+      counts[c] = tree.nodes[node.first_child + c].count();
+      sigma1[c] = tree.nodes[node.first_child + c].stats.position.sigma[0];
+    }
+    acc.add_family(node.stats.position.sigma[0], counts, sigma1, node.child_count);
+  }
+  return acc.result();
 }
 
 }  // namespace stipple

@@ -74,11 +74,27 @@ struct Tree {
 Tree build_tree(const PointCloud& cloud, const TreeOptions& options,
                 const std::function<void(double)>& progress = {});
 
-// Table II statistics: average over internal nodes of max/min child point
-// count (APR) and of max/min child sigma1 (cAPR).
+// Table II statistics. APR: the average over internal nodes of the largest /
+// smallest child point count. cAPR: the same for sigma1, over the families
+// whose children all have a sigma1 of at least 1e-6 of their parent's — a
+// single-point child sits at the variance floor and would make the ratio
+// ~1e9; such families are counted in `capr_excluded` instead.
 struct PartitionRatios {
   double apr = 0, capr = 0;
+  uint64_t families = 0, capr_excluded = 0;
 };
+
+class PartitionRatioAccumulator {
+ public:
+  // One internal node: its sigma1 and its children's point counts and sigma1s.
+  void add_family(double parent_sigma1, const double* counts, const double* sigma1, size_t children);
+  PartitionRatios result() const;
+
+ private:
+  double apr_sum_ = 0, capr_sum_ = 0;
+  uint64_t families_ = 0, capr_families_ = 0;
+};
+
 PartitionRatios partition_ratios(const Tree& tree);
 
 }  // namespace stipple

@@ -1,0 +1,159 @@
+// Benchmarks of the host hot paths: encoding (at three sizes, for the n log n
+// claim), hierarchy, classification, .spg validation, record unpacking,
+// kd-tree queries and PLY parsing.
+//
+//   build/release/tools/stipple_bench [--benchmark_filter=...]
+//
+// Uses ../shared/data/dragon.ply when present (STIPPLE_BENCH_SCAN overrides),
+// else the bundled bunny.
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <random>
+
+#include "core/spg_format.h"
+#include "platform/file_io.h"
+#include "tools/host/classify.h"
+#include "tools/host/encoder.h"
+#include "tools/host/kdtree.h"
+#include "tools/host/normals.h"
+#include "tools/host/ply_io.h"
+
+namespace stipple {
+namespace {
+
+std::string scan_path() {
+  if (const char* env = std::getenv("STIPPLE_BENCH_SCAN")) return env;
+  const std::string dragon = STIPPLE_SOURCE_DIR "/../shared/data/dragon.ply";
+  return std::filesystem::exists(dragon) ? dragon : STIPPLE_SOURCE_DIR "/data/bunny.ply";
+}
+
+// The scan with normals from its faces, loaded once.
+const PointCloud& scan() {
+  static const PointCloud cloud = [] {
+    PointCloud c;
+    std::string error;
+    if (!read_point_cloud(scan_path(), c, error)) std::abort();
+    estimate_normals(c);
+    c.triangles.clear();
+    return c;
+  }();
+  return cloud;
+}
+
+// Every k-th point of the scan (normals kept): sizes n/k for the scaling runs.
+PointCloud subsample(size_t k) {
+  const PointCloud& full = scan();
+  PointCloud c;
+  for (size_t i = 0; i < full.size(); i += k) {
+    c.positions.push_back(full.positions[i]);
+    c.normals.push_back(full.normals[i]);
+  }
+  return c;
+}
+
+void BM_Encode(benchmark::State& state) {
+  const PointCloud input = subsample(static_cast<size_t>(state.range(0)));
+  std::vector<uint8_t> spg;
+  for (auto _ : state) {
+    PointCloud c = input;
+    EncodeReport r;
+    std::string error;
+    if (!encode_cloud(c, EncodeOptions{}, spg, r, error)) state.SkipWithError(error.c_str());
+    benchmark::DoNotOptimize(spg.data());
+  }
+  state.counters["points"] = static_cast<double>(input.size());
+  state.counters["ns_per_point"] = benchmark::Counter(static_cast<double>(input.size()),
+                                                      benchmark::Counter::kIsIterationInvariantRate |
+                                                          benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_Encode)->Arg(4)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)
+    ->ReportAggregatesOnly(true);
+
+void BM_BuildTree(benchmark::State& state) {
+  const PointCloud& c = scan();
+  for (auto _ : state) benchmark::DoNotOptimize(build_tree(c, TreeOptions{}).nodes.size());
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(c.size()));
+}
+BENCHMARK(BM_BuildTree)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+void BM_ClassifySigmas(benchmark::State& state) {
+  std::mt19937_64 rng(1);
+  std::lognormal_distribution<double> d(-6, 1);
+  std::vector<Vec3> t(static_cast<size_t>(state.range(0)));
+  for (Vec3& v : t) {
+    double a = d(rng), b = d(rng), c = d(rng);
+    if (a < b) std::swap(a, b);
+    if (b < c) std::swap(b, c);
+    if (a < b) std::swap(a, b);
+    v = Vec3(a, b, c);
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(classify_sigmas(t, 3, 4096).centers.size());
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+BENCHMARK(BM_ClassifySigmas)->Arg(100000)->Unit(benchmark::kMillisecond)->Iterations(2);
+
+std::vector<uint8_t> encoded_scan() {
+  PointCloud c = scan();
+  std::vector<uint8_t> spg;
+  EncodeReport r;
+  std::string error;
+  encode_cloud(c, EncodeOptions{}, spg, r, error);
+  return spg;
+}
+
+void BM_SpgParse(benchmark::State& state) {
+  const std::vector<uint8_t> spg = encoded_scan();
+  SpgView view;
+  for (auto _ : state) {
+    const SpgResult r = spg_parse(spg.data(), spg.size(), &view);
+    benchmark::DoNotOptimize(r);
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<int64_t>(spg.size()));
+  state.counters["nodes"] = view.header.node_count;
+}
+BENCHMARK(BM_SpgParse)->Unit(benchmark::kMillisecond);
+
+void BM_UnpackRecord(benchmark::State& state) {
+  const std::vector<uint8_t> spg = encoded_scan();
+  SpgView view;
+  if (!spg_parse(spg.data(), spg.size(), &view).ok()) state.SkipWithError("parse");
+  const uint32_t n = view.header.node_count;
+  uint32_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(unpack_record(view.header.layout, view.records + static_cast<size_t>(i) * view.record_bytes));
+    i = i + 1 == n ? 0 : i + 1;
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_UnpackRecord);
+
+void BM_KdNearest(benchmark::State& state) {
+  const PointCloud& c = scan();
+  const KdTree tree(c.positions);
+  size_t i = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(tree.nearest(c.positions[i] + Vec3(1e-4, -1e-4, 1e-4)));
+    i = (i + 7919) % c.size();
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_KdNearest);
+
+void BM_PlyParse(benchmark::State& state) {
+  std::vector<uint8_t> bytes;
+  std::string error;
+  if (!read_file(scan_path(), bytes, error)) state.SkipWithError(error.c_str());
+  for (auto _ : state) {
+    PointCloud c;
+    benchmark::DoNotOptimize(parse_point_cloud("scan", bytes.data(), bytes.size(), c, error));
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<int64_t>(bytes.size()));
+}
+BENCHMARK(BM_PlyParse)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace stipple
+
+BENCHMARK_MAIN();
