@@ -1,12 +1,15 @@
 // stipple info / stipple sample / stipple metrics.
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
+#include "platform/png_io.h"
 #include "platform/progress.h"
 #include "tools/cli.h"
 #include "tools/host/hierarchy.h"
 #include "tools/host/metrics.h"
+#include "tools/host/plot.h"
 #include "tools/host/ply_io.h"
 #include "tools/host/sampler.h"
 #include "tools/host/spg_model.h"
@@ -220,7 +223,11 @@ const char kLevelsHelp[] =
     "in the cut, the bits per original point a client receives for it (its\n"
     "records plus the startup header and class tables), and the PSNR of points\n"
     "regenerated from the cut (as many per node as it held originals) against\n"
-    "the original scan, one-sided (the paper's) and symmetric.\n";
+    "the original scan, one-sided (the paper's) and symmetric.\n"
+    "\n"
+    "  --levels A,B,...   the levels to measure (default: every level)\n"
+    "  --plot FILE.png    also draw PSNR against bits per point\n"
+    "  --json             print the table as a JSON array\n";
 
 }  // namespace
 
@@ -230,8 +237,9 @@ int cmd_levels(int argc, char** argv) {
     std::fputs(kLevelsHelp, stdout);
     return 0;
   }
-  std::string levels_text;
+  std::string levels_text, plot_path;
   const bool has_levels = args.value("--levels", levels_text);
+  args.value("--plot", plot_path);
   const bool json = args.flag("--json");
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("levels: " + args.error());
@@ -261,6 +269,7 @@ int cmd_levels(int argc, char** argv) {
                                4.0 * (3 * h.class_count[0] + 2 * h.class_count[1] + 3 * h.class_count[2]);
   ProgressBar progress("levels");
   std::string rows;
+  PlotSeries one_sided{"one-sided (paper)", {}, {}, 0x1f77b4, {}}, symmetric{"symmetric", {}, {}, 0xd62728, {}};
   if (!json) std::printf("%6s %10s %12s %10s %10s\n", "level", "nodes", "bits/point", "PSNR-1", "PSNR-sym");
   for (size_t i = 0; i < levels.size(); ++i) {
     progress.update(static_cast<double>(i) / static_cast<double>(levels.size()), "level " + std::to_string(levels[i]));
@@ -268,6 +277,10 @@ int cmd_levels(int argc, char** argv) {
     const CloudMetrics m = compare_clouds(original, sample_cut(model, cut, 0));
     const double bits = 8.0 * (startup_bytes + static_cast<double>(cut.size()) * h.layout.record_bytes()) /
                         static_cast<double>(original.size());
+    for (PlotSeries* s : {&one_sided, &symmetric}) s->x.push_back(bits);
+    one_sided.y.push_back(m.psnr_one_sided);
+    symmetric.y.push_back(m.psnr_symmetric);
+    one_sided.point_labels.push_back(std::to_string(levels[i]));
     if (json) {
       cli::Json j;
       j.integer("level", levels[i])
@@ -284,6 +297,17 @@ int cmd_levels(int argc, char** argv) {
   }
   progress.finish();
   if (json) std::printf("[%s]\n", rows.c_str());
+  if (!plot_path.empty()) {
+    PlotSpec spec;
+    const std::string name = std::filesystem::path(files[0]).filename().string();
+    spec.title = name + ": PSNR by tree level (labels: level)";
+    spec.x_label = "bits per original point (cut records + startup tables)";
+    spec.y_label = "PSNR (dB)";
+    spec.series = {one_sided, symmetric};
+    const RgbImage img = render_plot(spec);
+    if (!write_png_rgb(plot_path, img.width, img.height, img.pixels, error)) return cli::fail(error);
+    if (!json) std::printf("plot: %s\n", plot_path.c_str());
+  }
   return 0;
 }
 

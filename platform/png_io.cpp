@@ -1,0 +1,54 @@
+// stipple platform — PNG read/write with libpng's simplified API (1.6).
+#include "platform/png_io.h"
+
+#include <png.h>
+
+#include <cstdio>
+
+namespace stipple {
+
+bool write_png_rgb(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb,
+                   std::string& error) {
+  if (width <= 0 || height <= 0 || rgb.size() != static_cast<size_t>(width) * static_cast<size_t>(height) * 3) {
+    error = path + ": image size does not match its pixels";
+    return false;
+  }
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  image.width = static_cast<png_uint_32>(width);
+  image.height = static_cast<png_uint_32>(height);
+  image.format = PNG_FORMAT_RGB;
+  const std::string tmp = path + ".partial";
+  if (!png_image_write_to_file(&image, tmp.c_str(), 0, rgb.data(), width * 3, nullptr)) {
+    error = path + ": " + image.message;
+    std::remove(tmp.c_str());
+    return false;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    error = path + ": cannot rename the temporary file";
+    std::remove(tmp.c_str());
+    return false;
+  }
+  return true;
+}
+
+bool read_png_rgb(const std::string& path, int& width, int& height, std::vector<uint8_t>& rgb, std::string& error) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  if (!png_image_begin_read_from_file(&image, path.c_str())) {
+    error = path + ": " + image.message;
+    return false;
+  }
+  image.format = PNG_FORMAT_RGB;
+  width = static_cast<int>(image.width);
+  height = static_cast<int>(image.height);
+  rgb.assign(PNG_IMAGE_SIZE(image), 0);
+  if (!png_image_finish_read(&image, nullptr, rgb.data(), 0, nullptr)) {
+    error = path + ": " + image.message;
+    png_image_free(&image);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace stipple

@@ -1,0 +1,56 @@
+// Plot rendering and PNG round trip.
+#include <gtest/gtest.h>
+
+#include "platform/png_io.h"
+#include "tools/host/plot.h"
+
+namespace stipple {
+namespace {
+
+PlotSpec spec() {
+  PlotSpec s;
+  s.title = "PSNR by level";
+  s.x_label = "bits per point";
+  s.y_label = "PSNR (dB)";
+  s.series = {{"one-sided", {1.5, 2.5, 11.3}, {30, 56, 62}, 0x1f77b4, {"8", "12", "19"}},
+              {"symmetric", {1.5, 2.5, 11.3}, {30, 56, 61}, 0xd62728, {}}};
+  return s;
+}
+
+TEST(Plot, MarkersLandWhereTheDataSays) {
+  const PlotSpec s = spec();
+  const RgbImage img = render_plot(s);
+  ASSERT_EQ(img.width, 900);
+  ASSERT_EQ(img.height, 560);
+  EXPECT_EQ(img.at(0, 0), 0xFFFFFFu);  // background
+  int px, py;
+  plot_position(s, 11.3, 61, px, py);  // drawn last: its colour is on top
+  EXPECT_EQ(img.at(px, py), 0xd62728u);
+  plot_position(s, 11.3, 62, px, py);
+  EXPECT_EQ(img.at(px, py), 0x1f77b4u);
+  // The title is drawn: dark pixels in the top band.
+  int ink = 0;
+  for (int y = 10; y < 35; ++y)
+    for (int x = 0; x < img.width; ++x) ink += img.at(x, y) == 0;
+  EXPECT_GT(ink, 200);
+  EXPECT_EQ(render_plot(s).pixels, img.pixels);  // deterministic
+}
+
+TEST(Plot, PngRoundTripIsExact) {
+  const RgbImage img = render_plot(spec());
+  const std::string path = testing::TempDir() + "plot.png";
+  std::string error;
+  ASSERT_TRUE(write_png_rgb(path, img.width, img.height, img.pixels, error)) << error;
+  int w, h;
+  std::vector<uint8_t> back;
+  ASSERT_TRUE(read_png_rgb(path, w, h, back, error)) << error;
+  EXPECT_EQ(w, img.width);
+  EXPECT_EQ(h, img.height);
+  EXPECT_EQ(back, img.pixels);
+  EXPECT_FALSE(write_png_rgb(path, 10, 10, back, error));  // size mismatch
+  EXPECT_NE(error.find("does not match"), std::string::npos);
+  EXPECT_FALSE(read_png_rgb(testing::TempDir() + "missing.png", w, h, back, error));
+}
+
+}  // namespace
+}  // namespace stipple
