@@ -192,6 +192,10 @@ TEST(Metrics, KnownDistances) {
   EXPECT_GT(hole.original_to_generated.max, 49.0);
   EXPECT_LT(hole.psnr_symmetric, hole.psnr_one_sided - 20);
   EXPECT_TRUE(std::isinf(compare_clouds(a, a).psnr_one_sided));
+  EXPECT_EQ(hole.generated_to_original.color_rms, -1);  // no colours: not measured
+  a.colors.assign(a.size(), Vec3(1, 0, 0));
+  b.colors.assign(b.size(), Vec3(1, 0.3, 0.4));
+  EXPECT_NEAR(compare_clouds(a, b).generated_to_original.color_rms, 0.5, 1e-12);
 }
 
 // The bundled bunny, encoded with the defaults, must reproduce

@@ -44,7 +44,8 @@ const char kMetricsHelp[] =
     "Nearest-neighbour distances both ways (kd-tree, exact): RMS, mean, maximum;\n"
     "PSNR = 20 log10(original bbox diagonal / RMS), one-sided (generated ->\n"
     "original, the paper's) and symmetric (the worse direction); Hausdorff\n"
-    "distance; normal angle error when both clouds carry normals; with --spg,\n"
+    "distance; normal angle error and RGB colour error when both clouds carry\n"
+    "them (generated -> nearest original); with --spg,\n"
     "the model's bits per original point.\n";
 
 }  // namespace
@@ -193,6 +194,7 @@ int cmd_metrics(int argc, char** argv) {
         .num("psnr_one_sided_db", m.psnr_one_sided)
         .num("psnr_symmetric_db", m.psnr_symmetric);
     if (g2o.normal_rms_deg >= 0) j.num("normal_rms_deg", g2o.normal_rms_deg).num("normal_mean_deg", g2o.normal_mean_deg);
+    if (g2o.color_rms >= 0) j.num("color_rms", g2o.color_rms);
     if (bpp >= 0) j.num("bits_per_point", bpp);
     std::printf("%s\n", j.done().c_str());
     return 0;
@@ -206,6 +208,9 @@ int cmd_metrics(int argc, char** argv) {
   if (g2o.normal_rms_deg >= 0)
     std::printf("  normals  %.2f deg RMS, %.2f deg mean (generated vs nearest original)\n", g2o.normal_rms_deg,
                 g2o.normal_mean_deg);
+  if (g2o.color_rms >= 0)
+    std::printf("  colour   %.4f RMS RGB distance (0..1 units; %.1f in 8-bit steps)\n", g2o.color_rms,
+                g2o.color_rms * 255);
   if (bpp >= 0) std::printf("  %.3f bits per original point (%s)\n", bpp, spg_path.c_str());
   return 0;
 }

@@ -19,9 +19,10 @@ DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to,
   if (from.size() == 0 || to.size() == 0) return d;
   const KdTree tree(to.positions);
   const bool normals = from.has_normals() && to.has_normals();
+  const bool colors = from.has_colors() && to.has_colors();
   const size_t parts = static_cast<size_t>(std::max(1, threads));
   struct Partial {
-    double sum2 = 0, sum = 0, max = 0, angle2 = 0, angle = 0;
+    double sum2 = 0, sum = 0, max = 0, angle2 = 0, angle = 0, color2 = 0;
   };
   std::vector<Partial> partial(parts);
   auto work = [&](size_t part) {
@@ -40,6 +41,7 @@ DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to,
         p.angle += deg;
         p.angle2 += deg * deg;
       }
+      if (colors) p.color2 += (from.colors[i] - to.colors[j]).squaredNorm();
     }
   };
   std::vector<std::thread> pool;
@@ -53,6 +55,7 @@ DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to,
     total.max = std::max(total.max, p.max);
     total.angle += p.angle;
     total.angle2 += p.angle2;
+    total.color2 += p.color2;
   }
   const double n = static_cast<double>(from.size());
   d.rms = std::sqrt(total.sum2 / n);
@@ -62,6 +65,7 @@ DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to,
     d.normal_rms_deg = std::sqrt(total.angle2 / n);
     d.normal_mean_deg = total.angle / n;
   }
+  if (colors) d.color_rms = std::sqrt(total.color2 / n);
   return d;
 }
 

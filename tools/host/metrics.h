@@ -16,6 +16,7 @@ namespace stipple {
 struct DirectedDistance {
   double rms = 0, mean = 0, max = 0;
   double normal_rms_deg = -1, normal_mean_deg = -1;  // -1: not measured
+  double color_rms = -1;  // RMS RGB distance (0..1 units) to the nearest point's colour; -1: not measured
 };
 
 struct CloudMetrics {
@@ -27,7 +28,7 @@ struct CloudMetrics {
 
 // Distances from every point of `from` to its nearest point of `to`. When both
 // clouds have normals, also the angle between each point's normal and its
-// nearest neighbour's.
+// nearest neighbour's; when both have colours, the RGB distance likewise.
 DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to, int threads = 2);
 
 CloudMetrics compare_clouds(const PointCloud& original, const PointCloud& generated, int threads = 2);
