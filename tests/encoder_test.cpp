@@ -103,16 +103,11 @@ TEST(Hierarchy, CoincidentPointsBecomeOneLeaf) {
 }
 
 TEST(Encoder, SameInputSameBytesAnyThreadCount) {
-  PointCloud a = test::sphere_cloud(4000), b = a;
+  const PointCloud cloud = test::sphere_cloud(4000);
   EncodeOptions o1, o2;
   o1.tree.threads = 1;
   o2.tree.threads = 2;
-  std::vector<uint8_t> s1, s2;
-  EncodeReport r;
-  std::string error;
-  ASSERT_TRUE(encode_cloud(a, o1, s1, r, error)) << error;
-  ASSERT_TRUE(encode_cloud(b, o2, s2, r, error)) << error;
-  EXPECT_EQ(s1, s2);
+  EXPECT_EQ(test::encode(cloud, o1), test::encode(cloud, o2));
 }
 
 TEST(Encoder, RejectsBadOptionsByName) {
@@ -127,15 +122,11 @@ TEST(Encoder, RejectsBadOptionsByName) {
 }
 
 TEST(Encoder, DecodedNodesMatchTheEncoderWithinQuantization) {
-  PointCloud c = test::sphere_cloud(3000);
+  const PointCloud c = test::sphere_cloud(3000);
   EncodeOptions o;
   o.tree.leaf_size = 10;
-  std::vector<uint8_t> spg;
   EncodeReport r;
-  std::string error;
-  ASSERT_TRUE(encode_cloud(c, o, spg, r, error)) << error;
-  DecodedModel m;
-  ASSERT_TRUE(decode_spg("sphere.spg", spg.data(), spg.size(), m, error)) << error;
+  const DecodedModel m = test::decode(test::encode(c, o, &r));
   ASSERT_EQ(m.nodes.size(), r.nodes);
   // Positions: every leaf mean lies within half a grid cell of a leaf's true mean
   // (checked through the root, whose mean is the centroid).
@@ -153,15 +144,8 @@ TEST(Encoder, DecodedNodesMatchTheEncoderWithinQuantization) {
 }
 
 TEST(Encoder, SampledLeavesReproduceTheSurface) {
-  PointCloud c = test::sphere_cloud(20000);
-  const PointCloud original = c;
-  EncodeOptions o;
-  std::vector<uint8_t> spg;
-  EncodeReport r;
-  std::string error;
-  ASSERT_TRUE(encode_cloud(c, o, spg, r, error)) << error;
-  DecodedModel m;
-  ASSERT_TRUE(decode_spg("sphere.spg", spg.data(), spg.size(), m, error)) << error;
+  const PointCloud original = test::sphere_cloud(20000);
+  const DecodedModel m = test::decode(test::encode(original));
   const PointCloud leaves = sample_cut(m, leaf_cut(m), 0);
   ASSERT_EQ(leaves.size(), original.size());
   const CloudMetrics leaf_metrics = compare_clouds(original, leaves);

@@ -71,11 +71,7 @@ std::vector<uint8_t> small_spg(bool normals = true, bool colors = false, bool oc
   o.normals = normals;
   o.tree.octree = octree;
   o.tree.leaf_size = 8;
-  std::vector<uint8_t> spg;
-  EncodeReport report;
-  std::string error;
-  EXPECT_TRUE(encode_cloud(cloud, o, spg, report, error)) << error;
-  return spg;
+  return test::encode(cloud, o);
 }
 
 void fix_crc(std::vector<uint8_t>& f) {
@@ -100,10 +96,7 @@ TEST(SpgFormat, RoundTripEveryVariant) {
     EXPECT_EQ(v.header.has_color(), colors);
     EXPECT_EQ(v.header.tree_arity, octree ? 8 : 2);
     EXPECT_EQ(v.record_bytes, colors ? 17u : normals ? 13u : 9u);
-    DecodedModel m;
-    std::string error;
-    ASSERT_TRUE(decode_spg("small.spg", f.data(), f.size(), m, error)) << error;
-    EXPECT_EQ(m.nodes[0].point_count, 600u);
+    EXPECT_EQ(test::decode(f).nodes[0].point_count, 600u);
   }
 }
 

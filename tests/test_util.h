@@ -6,7 +6,11 @@
 #include <string>
 #include <vector>
 
+#include <gtest/gtest.h>
+
+#include "tools/host/encoder.h"
 #include "tools/host/point_cloud.h"
+#include "tools/host/spg_model.h"
 
 namespace stipple::test {
 
@@ -35,6 +39,24 @@ inline PointCloud sphere_cloud(size_t n, double radius = 1.0, bool with_normals 
     if (with_normals) c.normals.push_back(p);
   }
   return c;
+}
+
+// Encodes a copy of `cloud`; a failure fails the calling test.
+inline std::vector<uint8_t> encode(PointCloud cloud, const EncodeOptions& options = {}, EncodeReport* report = nullptr) {
+  std::vector<uint8_t> spg;
+  EncodeReport r;
+  std::string error;
+  EXPECT_TRUE(encode_cloud(cloud, options, spg, r, error)) << error;
+  if (report) *report = r;
+  return spg;
+}
+
+// Decodes `spg` with the reference decoder; a failure fails the calling test.
+inline DecodedModel decode(const std::vector<uint8_t>& spg) {
+  DecodedModel m;
+  std::string error;
+  EXPECT_TRUE(decode_spg("test.spg", spg.data(), spg.size(), m, error)) << error;
+  return m;
 }
 
 inline std::string source_path(const std::string& rel) { return std::string(STIPPLE_SOURCE_DIR) + "/" + rel; }
