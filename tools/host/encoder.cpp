@@ -55,7 +55,14 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   const bool colors = o.colors && cloud.has_colors();
   report.colors = colors;
   report.normals_source = !normals ? "none" : cloud.has_normals() ? "file" : !cloud.triangles.empty() ? "faces" : "k-NN";
-  if (normals && !cloud.has_normals()) estimate_normals(cloud, o.normal_neighbours, progress);
+  // Progress: normal estimation (when needed) takes the first 30 %, the
+  // hierarchy up to 85 %, classification and writing the rest.
+  const bool estimate = normals && !cloud.has_normals();
+  const double tree_start = estimate ? 0.3 : 0.02;
+  if (estimate)
+    estimate_normals(cloud, o.normal_neighbours, [&](double f, const char* phase) {
+      if (progress) progress->update(0.3 * f, phase);
+    });
   if (!normals) cloud.normals.clear();
   if (!colors) cloud.colors.clear();
 
@@ -70,7 +77,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   tree_options.stats.colors = colors;
   tree_options.stats.sigma_floor = 1e-15 * std::max(diag, 1e-30);
   const Tree tree = build_tree(cloud, tree_options, [&](double f) {
-    if (progress) progress->update(0.1 + 0.7 * f, "building hierarchy");
+    if (progress) progress->update(tree_start + (0.85 - tree_start) * f, "building hierarchy");
   });
   report.nodes = tree.nodes.size();
   report.leaves = tree.leaf_count();

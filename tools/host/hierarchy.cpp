@@ -139,7 +139,9 @@ Tree build_tree(const PointCloud& cloud, const TreeOptions& o, const std::functi
     cubes.push_back({(box.min + box.max) / 2, (box.max - box.min).maxCoeff() / 2 * (1 + 1e-9) + o.stats.sigma_floor});
   }
   const Vec3* p = cloud.positions.data();
-  uint64_t settled = 0;  // points in finished leaves
+  double processed = 0;  // points handled by finished levels
+  const double expected_work = static_cast<double>(n) *
+      (std::log2(std::max(2.0, static_cast<double>(n) / std::max<uint32_t>(o.leaf_size, 2))) + 2);
 
   size_t level_begin = 0;
   while (level_begin < tree.nodes.size()) {
@@ -206,10 +208,8 @@ Tree build_tree(const PointCloud& cloud, const TreeOptions& o, const std::functi
       tree.report.unbalanced += r.unbalanced && r.ok;
       tree.report.failed_splits += (r.fallback || r.iterations > 0) && !r.ok;
       const size_t id = level_begin + k;
-      if (children[k].empty()) {
-        settled += tree.nodes[id].count();
-        continue;
-      }
+      processed += tree.nodes[id].count();
+      if (children[k].empty()) continue;
       ++tree.report.splits;
       tree.nodes[id].first_child = static_cast<uint32_t>(tree.nodes.size());
       tree.nodes[id].child_count = static_cast<uint8_t>(children[k].size());
@@ -221,7 +221,7 @@ Tree build_tree(const PointCloud& cloud, const TreeOptions& o, const std::functi
       }
     }
     level_begin = level_end;
-    if (progress) progress(n ? static_cast<double>(settled) / static_cast<double>(n) : 1.0);
+    if (progress) progress(std::min(0.99, processed / std::max(expected_work, 1.0)));
   }
   return tree;
 }

@@ -70,7 +70,9 @@ struct Tree {
   uint32_t leaf_count() const;
 };
 
-// `progress(fraction)` is called from the building thread between levels.
+// `progress(fraction)` is called from the building thread between levels;
+// the fraction estimates the work done: points processed so far over
+// n x (expected depth + 1), with the expected depth log2(n / leaf_size) + 1.
 Tree build_tree(const PointCloud& cloud, const TreeOptions& options,
                 const std::function<void(double)>& progress = {});
 

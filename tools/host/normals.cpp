@@ -27,7 +27,7 @@ Vec3 pca_normal(const std::vector<Vec3>& p, const std::vector<uint32_t>& ids) {
 
 }  // namespace
 
-void estimate_normals(PointCloud& cloud, int k, ProgressBar* progress) {
+void estimate_normals(PointCloud& cloud, int k, const std::function<void(double, const char*)>& progress) {
   if (cloud.has_normals()) return;
   const size_t n = cloud.size();
   const std::vector<Vec3>& p = cloud.positions;
@@ -63,7 +63,7 @@ void estimate_normals(PointCloud& cloud, int k, ProgressBar* progress) {
         std::copy(nb.begin(), nb.end(), graph.begin() + static_cast<ptrdiff_t>(i * kk));
       }
       normals[i] = nrm;
-      if (progress && (m & 4095) == 0) progress->update(0.5 * static_cast<double>(m) / static_cast<double>(missing.size()), "normals");
+      if (progress && (m & 4095) == 0) progress(0.5 * static_cast<double>(m) / static_cast<double>(missing.size()), "normals");
     }
     if (!from_faces) {
       // Orientation: Prim's algorithm over the k-NN graph, flipping each newly
@@ -86,7 +86,8 @@ void estimate_normals(PointCloud& cloud, int k, ProgressBar* progress) {
           if (done[v]) continue;
           done[v] = 1;
           if (v != from && normals[v].dot(normals[from]) < 0) normals[v] = -normals[v];
-          if (progress && (++reached & 4095) == 0) progress->update(0.5 + 0.5 * static_cast<double>(reached) / static_cast<double>(n), "orienting normals");
+          if (progress && (++reached & 4095) == 0)
+            progress(0.5 + 0.5 * static_cast<double>(reached) / static_cast<double>(n), "orienting normals");
           for (size_t j = 0; j < kk; ++j) {
             const uint32_t w = graph[v * kk + j];
             if (!done[w]) heap.push({1.0 - std::abs(normals[v].dot(normals[w])), {w, v}});

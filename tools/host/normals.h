@@ -10,12 +10,15 @@
 // point with its normal pointing up (+z). Deterministic for a given input.
 #pragma once
 
-#include "platform/progress.h"
+#include <functional>
+
 #include "tools/host/point_cloud.h"
 
 namespace stipple {
 
 // Fills `cloud.normals` if empty. `k` is the neighbourhood size (3..64).
-void estimate_normals(PointCloud& cloud, int k = 12, ProgressBar* progress = nullptr);
+// `progress(fraction, phase)` is called now and then with fraction in [0, 1].
+void estimate_normals(PointCloud& cloud, int k = 12,
+                      const std::function<void(double, const char*)>& progress = {});
 
 }  // namespace stipple
