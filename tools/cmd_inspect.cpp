@@ -36,7 +36,9 @@ const char kSampleHelp[] =
     "  --leaves              all leaves\n"
     "  --per-node original   as many points per node as it held originals (default;\n"
     "                        the paper's PSNR experiment)\n"
-    "  --per-node N          N points per node\n";
+    "  --per-node N          N points per node\n"
+    "  --max-points M        refuse cuts that would generate more than M points\n"
+    "                        (default 268,435,456: a file's counts are only claims)\n";
 
 const char kMetricsHelp[] =
     "usage: stipple metrics ORIGINAL GENERATED [--spg MODEL.spg] [--json]\n"
@@ -130,6 +132,8 @@ int cmd_sample(int argc, char** argv) {
   const bool has_level = args.value("--level", level_text);
   const bool leaves = args.flag("--leaves");
   args.value("--per-node", per_node_text);
+  std::string max_text;
+  const bool has_max = args.value("--max-points", max_text);
   if (!args.value("-o", output)) args.value("--output", output);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("sample: " + args.error());
@@ -142,10 +146,17 @@ int cmd_sample(int argc, char** argv) {
     return cli::fail("sample: --level: expected a non-negative integer, got '" + level_text + "'");
   if (per_node_text != "original" && (!cli::parse_uint(per_node_text, 1u << 20, per_node) || per_node == 0))
     return cli::fail("sample: --per-node: expected 'original' or a positive integer, got '" + per_node_text + "'");
+  unsigned long long max_points = kDefaultMaxSamples;
+  if (has_max && !cli::parse_uint(max_text, ~0ull, max_points))
+    return cli::fail("sample: --max-points: expected a non-negative integer, got '" + max_text + "'");
   DecodedModel model;
   std::string error;
   if (!load_spg(files[0], model, error)) return cli::fail(error);
   const std::vector<uint32_t> cut = leaves ? leaf_cut(model) : level_cut(model, static_cast<int>(level));
+  const uint64_t count = cut_sample_count(model, cut, static_cast<uint32_t>(per_node));
+  if (count > max_points)
+    return cli::fail(files[0] + ": the cut would generate " + cli::with_commas(count) + " points, more than --max-points " +
+                     cli::with_commas(max_points));
   const PointCloud points = sample_cut(model, cut, static_cast<uint32_t>(per_node));
   if (!write_ply(output, points, error)) return cli::fail(error);
   std::printf("%s: %s nodes in the cut, %s points -> %s\n", files[0].c_str(), cli::with_commas(cut.size()).c_str(),
@@ -279,6 +290,9 @@ int cmd_levels(int argc, char** argv) {
   for (size_t i = 0; i < levels.size(); ++i) {
     progress.update(static_cast<double>(i) / static_cast<double>(levels.size()), "level " + std::to_string(levels[i]));
     const std::vector<uint32_t> cut = level_cut(model, levels[i]);
+    if (cut_sample_count(model, cut, 0) > kDefaultMaxSamples)
+      return cli::fail(files[0] + ": level " + std::to_string(levels[i]) + " would generate more than " +
+                       cli::with_commas(kDefaultMaxSamples) + " points");
     const CloudMetrics m = compare_clouds(original, sample_cut(model, cut, 0));
     const double bits = 8.0 * (startup_bytes + static_cast<double>(cut.size()) * h.layout.record_bytes()) /
                         static_cast<double>(original.size());

@@ -25,11 +25,16 @@ Vec3 gaussian3(uint32_t index, int d0) {
 
 }  // namespace
 
+uint64_t cut_sample_count(const DecodedModel& model, const std::vector<uint32_t>& cut, uint32_t per_node) {
+  uint64_t total = 0;
+  for (uint32_t id : cut) total += per_node ? per_node : model.nodes[id].point_count;
+  return total;
+}
+
 PointCloud sample_cut(const DecodedModel& model, const std::vector<uint32_t>& cut, uint32_t per_node) {
   PointCloud out;
   const bool normals = model.header.has_normals(), colors = model.header.has_color();
-  uint64_t total = 0;
-  for (uint32_t id : cut) total += per_node ? per_node : model.nodes[id].point_count;
+  const uint64_t total = cut_sample_count(model, cut, per_node);
   out.positions.reserve(total);
   if (normals) out.normals.reserve(total);
   if (colors) out.colors.reserve(total);

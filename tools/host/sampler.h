@@ -26,4 +26,11 @@ inline constexpr double kGamma = 3.5;
 // experiment). Normals and colours are generated when the model has them.
 PointCloud sample_cut(const DecodedModel& model, const std::vector<uint32_t>& cut, uint32_t per_node);
 
+// How many points `sample_cut` would generate. A file's point counts are
+// claims: check this against a limit before sampling an untrusted file.
+uint64_t cut_sample_count(const DecodedModel& model, const std::vector<uint32_t>& cut, uint32_t per_node);
+
+// The default limit of the command-line tools (~6 GB of points with normals).
+inline constexpr uint64_t kDefaultMaxSamples = uint64_t{1} << 28;
+
 }  // namespace stipple
