@@ -1,0 +1,67 @@
+// stipple core — fixed-point trigonometry and frame decoding for node
+// records (TOG05 §5, "Decoding"), integer only.
+//
+// Formats
+//   Q14     int16 / int32 value v means v / 2^14; unit vectors and sines lie in
+//           [-16384, 16384]. One LSB is 6.1e-5.
+//   binary angle  uint32 a means a / 2^32 of a turn (wraps for free).
+//
+// Angles of a record field map to binary angles exactly as the reference
+// decoder maps them to radians (docs/format.md §5): theta = q range/(2^b - 1)
+// (range pi, or pi/2 for hemispheric colour frames), phi = q 2pi/2^b,
+// psi = q pi/2^b; the conversion rounds to the nearest binary angle.
+//
+// `sincos_q14` evaluates sine and cosine with a degree-9/10 Taylor series in
+// Q30 on [0, pi/4] and octant symmetry: |error| <= 1 LSB of Q14 (tested
+// against libm over all 2^16 angles of a 16-bit grid). Tables are therefore
+// exact functions of the format, generated at init, identical on every build.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace stipple {
+
+inline constexpr int32_t kQ14One = 1 << 14;
+inline constexpr int kMaxAngleBits = 12;  // table sizes are 2^bits entries
+
+struct SinCosQ14 {
+  int16_t sin = 0, cos = 0;
+};
+
+SinCosQ14 sincos_q14(uint32_t binary_angle);
+
+enum class AngleKind : uint8_t { kThetaSphere, kThetaHemisphere, kPhi, kPsi };
+
+// Binary angle of quantized value `q` of a `bits`-wide field (1 <= bits <= 16).
+uint32_t field_angle(AngleKind kind, uint32_t q, int bits);
+
+// Sine/cosine of every value of one angle field: 2^bits entries.
+constexpr size_t angle_table_entries(int bits) { return size_t{1} << bits; }
+// Fills `out[0 .. 2^bits)`; `bits` in 1..kMaxAngleBits (returns false otherwise).
+[[nodiscard]] bool build_angle_table(AngleKind kind, int bits, SinCosQ14* out, size_t capacity);
+
+// The three sin/cos tables of one frame field (theta, phi, psi).
+struct FrameTables {
+  const SinCosQ14* theta = nullptr;
+  const SinCosQ14* phi = nullptr;
+  const SinCosQ14* psi = nullptr;
+};
+
+// A decoded frame: axis[k] is f_(k+1) as (x, y, z) in Q14.
+struct FrameQ14 {
+  int16_t axis[3][3] = {};
+};
+
+// f3 = (cos phi sin theta, sin phi sin theta, cos theta); x', y' = x, y rotated
+// by theta about (-sin phi, cos phi, 0); f1 = cos psi x' + sin psi y',
+// f2 = cos psi y' - sin psi x'. Indices must be below their tables' sizes.
+FrameQ14 decode_frame_q14(const FrameTables& tables, uint32_t theta, uint32_t phi, uint32_t psi);
+
+// IEEE-754 binary32 (raw bits) to a signed fixed-point value with `frac_bits`
+// fraction bits (0..30), rounded to nearest (ties away from zero), saturated
+// to [INT32_MIN + 1, INT32_MAX]. NaN gives 0 and sets *saturated; so does
+// infinity (saturated to the signed bound). `saturated` may be null.
+int32_t f32_bits_to_fixed(uint32_t bits, int frac_bits, bool* saturated);
+
+}  // namespace stipple
