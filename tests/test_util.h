@@ -10,6 +10,7 @@
 
 #include "tools/host/encoder.h"
 #include "tools/host/point_cloud.h"
+#include "tools/host/ply_io.h"
 #include "tools/host/spg_model.h"
 
 namespace stipple::test {

@@ -1,0 +1,170 @@
+// stipple core — fixed-point node decoder. See node_decoder.h.
+#include "core/node_decoder.h"
+
+namespace stipple {
+namespace {
+
+// An exact binary32 value m * 2^e.
+struct Dyadic {
+  int64_t m = 0;
+  int e = 0;
+};
+
+Dyadic dyadic_of(uint32_t bits) {
+  const int exponent = static_cast<int>((bits >> 23) & 0xFFu);  // finite: checked by spg_parse
+  const int64_t mantissa = exponent == 0 ? (bits & 0x7FFFFFu) : ((bits & 0x7FFFFFu) | 0x800000u);
+  Dyadic d{mantissa, (exponent == 0 ? -149 : exponent - 150)};
+  if (bits >> 31) d.m = -d.m;
+  return d;
+}
+
+// a - b. When the exponents differ by more than 38 the smaller operand is
+// below 2^-37 of the larger and is dropped (keeps every shift inside int64).
+Dyadic subtract(Dyadic a, Dyadic b) {
+  if (a.m == 0) return Dyadic{-b.m, b.e};
+  if (b.m == 0) return a;
+  if (a.e - b.e > 38) return a;
+  if (b.e - a.e > 38) return Dyadic{-b.m, b.e};
+  if (a.e > b.e) return Dyadic{(a.m << (a.e - b.e)) - b.m, b.e};
+  return Dyadic{a.m - (b.m << (b.e - a.e)), a.e};
+}
+
+// round(num / den * 2^frac) for num >= 0, den > 0, saturated to [0, limit].
+int64_t ratio(Dyadic num, Dyadic den, int frac, int64_t limit) {
+  if (num.m <= 0) return 0;
+  // Normalize both mantissas to [2^30, 2^31).
+  while (num.m >= (int64_t{1} << 31)) num.m >>= 1, ++num.e;
+  while (num.m < (int64_t{1} << 30)) num.m <<= 1, --num.e;
+  while (den.m >= (int64_t{1} << 31)) den.m >>= 1, ++den.e;
+  while (den.m < (int64_t{1} << 30)) den.m <<= 1, --den.e;
+  const int64_t q = (num.m << 31) / den.m;  // num.m/den.m * 2^31, in (2^30, 2^32)
+  const int shift = num.e - den.e - 31 + frac;
+  if (shift >= 0) return shift > 30 || (q << shift) > limit ? limit : q << shift;
+  if (-shift > 40) return 0;
+  const int64_t v = (q + (int64_t{1} << (-shift - 1))) >> -shift;
+  return v > limit ? limit : v;
+}
+
+constexpr size_t kAlign = 4;
+size_t aligned(size_t n) { return (n + kAlign - 1) / kAlign * kAlign; }
+
+size_t frame_table_bytes(const RecordLayout& l, Field theta) {
+  const int t = static_cast<int>(theta);
+  size_t bytes = 0;
+  for (int k = 0; k < 3; ++k)
+    if (l.bits[t + k] > 0 && l.bits[t + k] <= kMaxAngleBits)
+      bytes += aligned(angle_table_entries(l.bits[t + k]) * sizeof(SinCosQ14));
+  return bytes;
+}
+
+int32_t mul_q14(int32_t a_q14, int32_t b) {
+  return static_cast<int32_t>((static_cast<int64_t>(a_q14) * b + (1 << 13)) >> 14);
+}
+
+}  // namespace
+
+size_t node_decoder_bytes(const SpgHeader& h) {
+  return frame_table_bytes(h.layout, Field::kFpTheta) + frame_table_bytes(h.layout, Field::kFnTheta) +
+         frame_table_bytes(h.layout, Field::kFcTheta) +
+         aligned(sizeof(int32_t) * (3u * h.class_count[0] + 2u * h.class_count[1] + 3u * h.class_count[2]));
+}
+
+DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes) {
+  header_ = view.header;
+  const RecordLayout& l = header_.layout;
+  for (int f = static_cast<int>(Field::kFpTheta); f < kFieldCount; ++f) {
+    const bool angle = (f >= static_cast<int>(Field::kFpTheta) && f <= static_cast<int>(Field::kFpPsi)) ||
+                       (f >= static_cast<int>(Field::kFnTheta) && f <= static_cast<int>(Field::kFnPsi)) ||
+                       (f >= static_cast<int>(Field::kFcTheta) && f <= static_cast<int>(Field::kFcPsi));
+    if (angle && l.bits[f] > kMaxAngleBits) return DecodeStatus::kBadLayout;
+  }
+  if (bytes < node_decoder_bytes(header_)) return DecodeStatus::kStorageTooSmall;
+  uint8_t* at = static_cast<uint8_t*>(storage);
+
+  // Angle tables.
+  auto build = [&](Field theta, AngleKind theta_kind, FrameTables& out) {
+    const int t = static_cast<int>(theta);
+    const SinCosQ14** slots[3] = {&out.theta, &out.phi, &out.psi};
+    const AngleKind kinds[3] = {theta_kind, AngleKind::kPhi, AngleKind::kPsi};
+    for (int k = 0; k < 3; ++k) {
+      const int b = l.bits[t + k];
+      if (b == 0) continue;
+      SinCosQ14* table = reinterpret_cast<SinCosQ14*>(at);
+      if (!build_angle_table(kinds[k], b, table, angle_table_entries(b))) return;
+      *slots[k] = table;
+      at += aligned(angle_table_entries(b) * sizeof(SinCosQ14));
+    }
+  };
+  build(Field::kFpTheta, AngleKind::kThetaSphere, fp_);
+  build(Field::kFnTheta, AngleKind::kThetaSphere, fn_);
+  build(Field::kFcTheta, AngleKind::kThetaHemisphere, fc_);
+
+  // Box: extents and the largest, E.
+  Dyadic extent[3], largest;
+  for (int a = 0; a < 3; ++a) {
+    extent[a] = subtract(dyadic_of(header_.bbox_bits[3 + a]), dyadic_of(header_.bbox_bits[a]));
+    if (subtract(extent[a], largest).m > 0) largest = extent[a];
+  }
+  if (largest.m <= 0) largest = Dyadic{1, 0};  // a single point: every offset is 0 anyway
+  for (int a = 0; a < 3; ++a) {
+    axis_scale_q8_[a] = ratio(extent[a], largest, kModelUnitBits + 8, int64_t{1} << (kModelUnitBits + 8));
+    extent_mu_[a] = static_cast<int32_t>((axis_scale_q8_[a] + 128) >> 8);
+  }
+
+  // Class tables: sigma_p in MU, sigma_n and sigma_c in Q12.
+  int32_t* sigmas = reinterpret_cast<int32_t*>(at);
+  const int64_t limit = int64_t{1} << 30;
+  for (uint32_t i = 0; i < 3u * header_.class_count[0]; ++i)
+    sigmas[i] = static_cast<int32_t>(ratio(dyadic_of(load_u32le(view.sigma_p + 4 * i)), largest, kModelUnitBits, limit));
+  sigma_p_ = sigmas;
+  sigmas += 3u * header_.class_count[0];
+  for (uint32_t i = 0; i < 2u * header_.class_count[1]; ++i)
+    sigmas[i] = f32_bits_to_fixed(load_u32le(view.sigma_n + 4 * i), 12, nullptr);
+  sigma_n_ = sigmas;
+  sigmas += 2u * header_.class_count[1];
+  for (uint32_t i = 0; i < 3u * header_.class_count[2]; ++i)
+    sigmas[i] = f32_bits_to_fixed(load_u32le(view.sigma_c + 4 * i), 12, nullptr);
+  sigma_c_ = sigmas;
+  return DecodeStatus::kOk;
+}
+
+DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
+  const RecordLayout& l = header_.layout;
+  const NodeFields f = unpack_record(l, record);
+  const bool normals = header_.has_normals(), color = header_.has_color();
+  if (f[Field::kSigmaP] >= header_.class_count[0] || (normals && f[Field::kSigmaN] >= header_.class_count[1]) ||
+      (color && f[Field::kSigmaC] >= header_.class_count[2]))
+    return DecodeStatus::kBadClass;
+  FixedNode n{};
+  for (int a = 0; a < 3; ++a) {
+    // Cell centre: (q + 1/2) * extent / 2^b = (2q + 1) * extent / 2^(b+1).
+    const int64_t v = (2 * static_cast<int64_t>(f.v[a]) + 1) * axis_scale_q8_[a];
+    const int shift = l.bits[a] + 1 + 8;
+    n.mean[a] = static_cast<int32_t>((v + (int64_t{1} << (shift - 1))) >> shift);
+  }
+  const FrameQ14 fp = decode_frame_q14(fp_, f[Field::kFpTheta], f[Field::kFpPhi], f[Field::kFpPsi]);
+  const int32_t* sp = sigma_p_ + 3u * f[Field::kSigmaP];
+  for (int k = 0; k < 3; ++k)
+    for (int c = 0; c < 3; ++c) n.axis[k][c] = mul_q14(fp.axis[k][c], sp[k]);
+  if (normals) {
+    const FrameQ14 fn = decode_frame_q14(fn_, f[Field::kFnTheta], f[Field::kFnPhi], f[Field::kFnPsi]);
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) n.normal_frame[k][c] = fn.axis[k][c];
+    n.sigma_n[0] = sigma_n_[2u * f[Field::kSigmaN]];
+    n.sigma_n[1] = sigma_n_[2u * f[Field::kSigmaN] + 1];
+  }
+  if (color) {
+    for (int c = 0; c < 3; ++c) {
+      const uint32_t max = (1u << l.bits[static_cast<int>(Field::kColorR) + c]) - 1;
+      n.color[c] = static_cast<uint8_t>((f.v[static_cast<int>(Field::kColorR) + c] * 255u + max / 2) / max);
+    }
+    const FrameQ14 fc = decode_frame_q14(fc_, f[Field::kFcTheta], f[Field::kFcPhi], f[Field::kFcPsi]);
+    const int32_t* sc = sigma_c_ + 3u * f[Field::kSigmaC];
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) n.color_axis[k][c] = mul_q14(fc.axis[k][c], sc[k]);
+  }
+  *out = n;
+  return DecodeStatus::kOk;
+}
+
+}  // namespace stipple

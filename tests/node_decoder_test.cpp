@@ -1,0 +1,126 @@
+// The fixed-point node decoder against the double reference decoder: every
+// node of several models, each field within its quantization step.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "core/node_decoder.h"
+#include "test_util.h"
+#include "tools/host/quantize.h"
+
+namespace stipple {
+namespace {
+
+struct Case {
+  const char* name;
+  PointCloud cloud;
+  EncodeOptions options;
+};
+
+std::vector<Case> cases() {
+  std::vector<Case> out;
+  out.push_back({"sphere, normals", test::sphere_cloud(3000), {}});
+  PointCloud colored = test::sphere_cloud(2000);
+  for (const Vec3& p : colored.positions) colored.colors.push_back(((p + Vec3::Ones()) / 2).cwiseProduct(Vec3(1, 0.6, 0.3)));
+  out.push_back({"sphere, colour", colored, {}});
+  EncodeOptions no_normals;
+  no_normals.normals = false;
+  out.push_back({"sphere, no normals", test::sphere_cloud(1500), no_normals});
+  PointCloud far = test::sphere_cloud(2000, 3.0);
+  for (Vec3& p : far.positions) p += Vec3(1e6, -2e5, 4e4);  // float32 box far from the origin
+  out.push_back({"far from origin", far, {}});
+  PointCloud flat;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) {
+      flat.positions.push_back(Vec3(i * 0.01, j * 0.02, 0.0));  // zero extent along z
+      flat.normals.push_back(Vec3::UnitZ());
+    }
+  out.push_back({"flat", flat, {}});
+  PointCloud bunny;
+  std::string error;
+  EXPECT_TRUE(read_point_cloud(test::source_path("data/bunny.ply"), bunny, error)) << error;
+  out.push_back({"bunny", bunny, {}});
+  return out;
+}
+
+TEST(NodeDecoder, EveryNodeMatchesTheReferenceDecoder) {
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    const std::vector<uint8_t> spg = test::encode(c.cloud, c.options);
+    const DecodedModel ref = test::decode(spg);
+    SpgView view;
+    ASSERT_TRUE(spg_parse(spg.data(), spg.size(), &view).ok());
+    std::vector<uint32_t> storage(node_decoder_bytes(view.header) / 4);
+    NodeDecoder decoder;
+    ASSERT_EQ(decoder.init(view, storage.data(), storage.size() * 4), DecodeStatus::kOk);
+    const Vec3 extent = ref.bbox_max - ref.bbox_min;
+    const double mu = std::ldexp(1.0, kModelUnitBits) / std::max(extent.maxCoeff(), 1e-300);
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(decoder.extent_mu()[a], extent[a] * mu, 1.0);
+    double worst_mean = 0, worst_axis = 0;
+    for (uint32_t i = 0; i < view.header.node_count; ++i) {
+      FixedNode n;
+      ASSERT_EQ(decoder.decode(view.records + i * view.record_bytes, &n), DecodeStatus::kOk);
+      const DecodedNode& r = ref.nodes[i];
+      for (int a = 0; a < 3; ++a) {
+        const double expect = (r.position.mean[a] - ref.bbox_min[a]) * mu;
+        worst_mean = std::max(worst_mean, std::abs(n.mean[a] - expect));
+        ASSERT_LE(std::abs(n.mean[a] - expect), 1.0) << "node " << i << " axis " << a;
+      }
+      for (int k = 0; k < 3; ++k) {
+        const double sigma_mu = r.position.sigma[k] * mu;
+        for (int c2 = 0; c2 < 3; ++c2) {
+          const double expect = r.position.frame(c2, k) * sigma_mu;
+          const double err = std::abs(n.axis[k][c2] - expect);
+          worst_axis = std::max(worst_axis, err / std::max(sigma_mu, 1.0));
+          // Q14 frame (<= 3 LSB) times sigma, plus sigma's own rounding.
+          ASSERT_LE(err, sigma_mu * 4.0 / 16384 + 1.5) << "node " << i << " axis " << k;
+        }
+      }
+      if (view.header.has_normals()) {
+        for (int k = 0; k < 3; ++k)
+          for (int c2 = 0; c2 < 3; ++c2)
+            ASSERT_LE(std::abs(n.normal_frame[k][c2] - r.normal_frame(c2, k) * 16384), 4.5) << "node " << i;
+        for (int k = 0; k < 2; ++k) ASSERT_LE(std::abs(n.sigma_n[k] - r.sigma_n[k] * 4096), 0.5) << "node " << i;
+      }
+      if (view.header.has_color()) {
+        for (int c2 = 0; c2 < 3; ++c2) {
+          ASSERT_EQ(n.color[c2], std::lround(r.color.mean[c2] * 255)) << "node " << i;
+          for (int k = 0; k < 3; ++k) {
+            const double expect = r.color.frame(c2, k) * r.color.sigma[k] * 4096;
+            ASSERT_LE(std::abs(n.color_axis[k][c2] - expect), r.color.sigma[k] * 4096 * 4.0 / 16384 + 1.5);
+          }
+        }
+      }
+    }
+    RecordProperty(std::string(c.name) + " worst_mean_mu", std::to_string(worst_mean));
+    RecordProperty(std::string(c.name) + " worst_axis_rel", std::to_string(worst_axis));
+  }
+}
+
+TEST(NodeDecoder, RejectsBadRecordsAndSmallStorage) {
+  const std::vector<uint8_t> spg = test::encode(test::sphere_cloud(800));
+  SpgView view;
+  ASSERT_TRUE(spg_parse(spg.data(), spg.size(), &view).ok());
+  const size_t need = node_decoder_bytes(view.header);
+  std::vector<uint32_t> storage(need / 4);
+  NodeDecoder decoder;
+  EXPECT_EQ(decoder.init(view, storage.data(), need - 4), DecodeStatus::kStorageTooSmall);
+  ASSERT_EQ(decoder.init(view, storage.data(), need), DecodeStatus::kOk);
+  // A record whose sigma_n class is past the table: rejected, output untouched.
+  std::vector<uint8_t> record(view.records, view.records + view.record_bytes);
+  NodeFields f = unpack_record(view.header.layout, record.data());
+  f[Field::kSigmaN] = view.header.class_count[1];
+  pack_record(view.header.layout, f, record.data());
+  FixedNode n{};
+  n.mean[0] = 12345;
+  EXPECT_EQ(decoder.decode(record.data(), &n), DecodeStatus::kBadClass);
+  EXPECT_EQ(n.mean[0], 12345);
+  // Angle fields wider than the tables allow are refused at init.
+  SpgView wide = view;
+  wide.header.layout.bits[static_cast<int>(Field::kFpPhi)] = kMaxAngleBits + 1;
+  EXPECT_EQ(decoder.init(wide, storage.data(), need), DecodeStatus::kBadLayout);
+}
+
+}  // namespace
+}  // namespace stipple
