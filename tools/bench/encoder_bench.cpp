@@ -12,6 +12,8 @@
 #include <filesystem>
 #include <random>
 
+#include "core/gaussian_table.h"
+#include "core/node_decoder.h"
 #include "core/spg_format.h"
 #include "platform/file_io.h"
 #include "tools/host/classify.h"
@@ -128,6 +130,45 @@ void BM_UnpackRecord(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_UnpackRecord);
+
+void BM_DecodeNodeFixed(benchmark::State& state) {
+  const std::vector<uint8_t> spg = encoded_scan();
+  SpgView view;
+  if (!spg_parse(spg.data(), spg.size(), &view).ok()) state.SkipWithError("parse");
+  std::vector<uint32_t> storage(node_decoder_bytes(view.header) / 4);
+  NodeDecoder decoder;
+  if (decoder.init(view, storage.data(), storage.size() * 4) != DecodeStatus::kOk) state.SkipWithError("init");
+  const uint32_t n = view.header.node_count;
+  uint32_t i = 0;
+  FixedNode node;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(decoder.decode(view.records + static_cast<size_t>(i) * view.record_bytes, &node));
+    benchmark::DoNotOptimize(node);
+    i = i + 1 == n ? 0 : i + 1;
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_DecodeNodeFixed);
+
+void BM_DecoderInit(benchmark::State& state) {
+  const std::vector<uint8_t> spg = encoded_scan();
+  SpgView view;
+  if (!spg_parse(spg.data(), spg.size(), &view).ok()) state.SkipWithError("parse");
+  std::vector<uint32_t> storage(node_decoder_bytes(view.header) / 4);
+  NodeDecoder decoder;
+  for (auto _ : state) benchmark::DoNotOptimize(decoder.init(view, storage.data(), storage.size() * 4));
+}
+BENCHMARK(BM_DecoderInit)->Unit(benchmark::kMicrosecond);
+
+void BM_GaussianTable(benchmark::State& state) {
+  std::vector<Gaussian3Q12> table(static_cast<size_t>(state.range(0)));
+  for (auto _ : state) {
+    build_gaussian3_table(GaussianSource::kSobol, table.data(), table.size());
+    benchmark::DoNotOptimize(table.data());
+  }
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+BENCHMARK(BM_GaussianTable)->Arg(1024)->Unit(benchmark::kMicrosecond);
 
 void BM_KdNearest(benchmark::State& state) {
   const PointCloud& c = scan();
