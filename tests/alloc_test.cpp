@@ -12,6 +12,7 @@
 #include "core/node_decoder.h"
 #include "core/spg_format.h"
 #include "platform/file_io.h"
+#include "raster/point_raster.h"
 
 extern "C" void* __libc_malloc(size_t);
 extern "C" void* __libc_calloc(size_t, size_t);
@@ -75,6 +76,11 @@ int main(int argc, char** argv) {
   stipple::SpgView view;
   if (!stipple::spg_parse(spg.data(), spg.size(), &view).ok()) return 2;
   std::vector<uint32_t> storage(stipple::node_decoder_bytes(view.header) / 4 + 1);
+  const stipple::RasterConfig raster_config{240, 320, 5, stipple::PixelFormat::kRgb565, 30000};
+  std::vector<uint64_t> raster_arena(stipple::point_raster_bytes(raster_config) / 8 + 1);
+  stipple::PointRaster raster;
+  if (raster.init(raster_config, raster_arena.data(), raster_arena.size() * 8) != stipple::RasterStatus::kOk) return 2;
+  std::vector<uint8_t> frame_pixels(240 * 320 * 2);
   stipple::NodeDecoder decoder;
   if (decoder.init(view, storage.data(), storage.size() * 4) != stipple::DecodeStatus::kOk) return 2;
 
@@ -91,6 +97,18 @@ int main(int argc, char** argv) {
     }
   }
   check(g_heap_calls.load() - before == 0, "100 x (spg_parse + decode every node) after init", g_heap_calls.load() - before);
+
+  before = g_heap_calls.load();
+  for (int frame = 0; frame < 100; ++frame) {
+    raster.begin_frame();
+    for (uint32_t i = 0; i < 30000; ++i)
+      raster.add(stipple::ScreenPoint{static_cast<int32_t>((i * 7919u) % (240 * 16)), static_cast<int32_t>((i * 104729u) % (320 * 16)),
+                                      i * 2654435761u, i * 40503u},
+                 1 + static_cast<int>(i % 3));
+    raster.draw(0x102030, frame_pixels.data(), 240 * 2);
+    checksum += frame_pixels[frame];
+  }
+  check(g_heap_calls.load() - before == 0, "100 frames of 30,000 points rasterized after init", g_heap_calls.load() - before);
   std::printf("checksum %ld\n%d passed, %d failed\n", checksum, passed, failed);
   return failed == 0 ? 0 : 1;
 }

@@ -16,6 +16,7 @@
 #include "core/node_decoder.h"
 #include "core/spg_format.h"
 #include "platform/file_io.h"
+#include "raster/point_raster.h"
 #include "tools/host/classify.h"
 #include "tools/host/encoder.h"
 #include "tools/host/kdtree.h"
@@ -169,6 +170,30 @@ void BM_GaussianTable(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
 BENCHMARK(BM_GaussianTable)->Arg(1024)->Unit(benchmark::kMicrosecond);
+
+// Rasterize 30 K points (sizes 1-3) into a 240x320 RGB565 or 640x480 RGB888 frame.
+void BM_RasterFrame(benchmark::State& state) {
+  const bool large = state.range(0) != 0;
+  const RasterConfig c{static_cast<uint16_t>(large ? 640 : 240), static_cast<uint16_t>(large ? 480 : 320), 5,
+                       large ? PixelFormat::kRgb888 : PixelFormat::kRgb565, 30000};
+  std::vector<uint64_t> arena(point_raster_bytes(c) / 8 + 1);
+  PointRaster raster;
+  if (raster.init(c, arena.data(), arena.size() * 8) != RasterStatus::kOk) state.SkipWithError("init");
+  std::vector<uint8_t> frame(static_cast<size_t>(c.width) * c.height * bytes_per_pixel(c.format));
+  std::mt19937 rng(1);
+  std::vector<ScreenPoint> pts(30000);
+  for (ScreenPoint& p : pts)
+    p = ScreenPoint{static_cast<int32_t>(rng() % (c.width * 16u)), static_cast<int32_t>(rng() % (c.height * 16u)),
+                    static_cast<uint32_t>(rng()), static_cast<uint32_t>(rng() & 0xFFFFFF)};
+  for (auto _ : state) {
+    raster.begin_frame();
+    for (size_t i = 0; i < pts.size(); ++i) raster.add(pts[i], 1 + static_cast<int>(i % 3));
+    raster.draw(0, frame.data(), static_cast<size_t>(c.width) * bytes_per_pixel(c.format));
+    benchmark::DoNotOptimize(frame.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(pts.size()));
+}
+BENCHMARK(BM_RasterFrame)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 void BM_KdNearest(benchmark::State& state) {
   const PointCloud& c = scan();

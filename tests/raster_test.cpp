@@ -1,0 +1,164 @@
+// Tile-based point rasterizer: depth order, tie rule, clipping, tile edges,
+// both pixel formats, and exact agreement with a naive untiled rasterizer.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "raster/point_raster.h"
+
+namespace stipple {
+namespace {
+
+struct Frame {
+  RasterConfig config;
+  std::vector<uint64_t> arena;
+  PointRaster raster;
+  std::vector<uint8_t> pixels;
+
+  explicit Frame(RasterConfig c) : config(c), arena(point_raster_bytes(c) / 8 + 1) {
+    EXPECT_EQ(raster.init(c, arena.data(), arena.size() * 8), RasterStatus::kOk);
+    pixels.assign(static_cast<size_t>(c.width) * c.height * bytes_per_pixel(c.format), 0);
+  }
+  void draw(uint32_t clear) { raster.draw(clear, pixels.data(), static_cast<size_t>(config.width) * bytes_per_pixel(config.format)); }
+  uint32_t at(int x, int y) const {  // RGB565 value or 0xRRGGBB
+    const uint8_t* p = &pixels[(static_cast<size_t>(y) * config.width + x) * bytes_per_pixel(config.format)];
+    return config.format == PixelFormat::kRgb565 ? static_cast<uint32_t>(p[0] | (p[1] << 8))
+                                                 : (uint32_t{p[0]} << 16) | (uint32_t{p[1]} << 8) | p[2];
+  }
+};
+
+ScreenPoint pt(double x, double y, uint32_t depth, uint32_t rgb) {
+  return ScreenPoint{static_cast<int32_t>(x * 16), static_cast<int32_t>(y * 16), depth, rgb};
+}
+
+TEST(Raster, Rgb565Packing) {
+  EXPECT_EQ(rgb565(0xFF8000), 0xFC00);
+  EXPECT_EQ(rgb565(0xFFFFFF), 0xFFFF);
+  EXPECT_EQ(rgb565(0x0000FF), 0x001F);
+}
+
+TEST(Raster, NearerPointWinsInEitherOrder) {
+  for (PixelFormat f : {PixelFormat::kRgb565, PixelFormat::kRgb888}) {
+    for (int order = 0; order < 2; ++order) {
+      Frame fr({64, 48, 5, f, 16});
+      fr.raster.begin_frame();
+      const ScreenPoint near = pt(10.5, 10.5, 0x10000000, 0xFF0000), far = pt(10.5, 10.5, 0x20000000, 0x00FF00);
+      fr.raster.add(order ? near : far, 1);
+      fr.raster.add(order ? far : near, 1);
+      fr.draw(0x000000);
+      EXPECT_EQ(fr.at(10, 10), f == PixelFormat::kRgb565 ? rgb565(0xFF0000) : 0xFF0000u);
+      EXPECT_EQ(fr.at(11, 10), 0u);  // clear colour elsewhere
+    }
+  }
+}
+
+TEST(Raster, EqualDepthResolvesDeterministically) {
+  Frame a({32, 32, 4, PixelFormat::kRgb888, 16}), b({32, 32, 4, PixelFormat::kRgb888, 16});
+  const ScreenPoint p = pt(5, 5, 777, 0x123456), q = pt(5, 5, 777, 0x654321);
+  a.raster.add(p, 2);
+  a.raster.add(q, 2);
+  b.raster.add(q, 2);
+  b.raster.add(p, 2);
+  a.draw(0xFFFFFF);
+  b.draw(0xFFFFFF);
+  EXPECT_EQ(a.pixels, b.pixels);
+  EXPECT_EQ(a.at(5, 5), 0x123456u);  // the smaller colour value
+}
+
+TEST(Raster, PointOnATileCornerIsDrawnExactlyOncePerPixel) {
+  Frame fr({64, 64, 5, PixelFormat::kRgb888, 16});  // tiles meet at (32, 32)
+  fr.raster.add(pt(32.0, 32.0, 5, 0xABCDEF), 3);     // covers 31..33 on both axes
+  fr.draw(0x000000);
+  int covered = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const bool inside = x >= 31 && x <= 33 && y >= 31 && y <= 33;
+      EXPECT_EQ(fr.at(x, y), inside ? 0xABCDEFu : 0u) << x << "," << y;
+      covered += fr.at(x, y) != 0;
+    }
+  EXPECT_EQ(covered, 9);
+}
+
+TEST(Raster, ClipsAtTheScreenEdgesAndRespectsTheBudget) {
+  Frame fr({20, 10, 3, PixelFormat::kRgb565, 3});
+  EXPECT_TRUE(fr.raster.add(pt(0.2, 0.2, 1, 0xFFFFFF), 3));    // corner: 2 x 2 visible
+  EXPECT_TRUE(fr.raster.add(pt(-5, 4, 1, 0xFFFFFF), 3));       // off screen: ignored
+  EXPECT_TRUE(fr.raster.add(pt(19.9, 9.9, 1, 0xFFFFFF), 2));   // bottom-right: 1 pixel visible
+  EXPECT_EQ(fr.raster.points(), 2u);
+  EXPECT_TRUE(fr.raster.add(pt(10, 5, 1, 0xFFFFFF), 1));
+  EXPECT_FALSE(fr.raster.add(pt(11, 5, 1, 0xFFFFFF), 1));      // budget of 3 is full
+  fr.draw(0x000000);
+  int lit = 0;
+  for (int y = 0; y < 10; ++y)
+    for (int x = 0; x < 20; ++x) lit += fr.at(x, y) != 0;
+  EXPECT_EQ(lit, 4 + 1 + 1);
+  EXPECT_NE(fr.at(0, 0), 0u);
+  EXPECT_NE(fr.at(19, 9), 0u);
+}
+
+TEST(Raster, ArenaAndConfigChecks) {
+  RasterConfig c{240, 320, 5, PixelFormat::kRgb565, 30000};
+  const size_t need = point_raster_bytes(c);
+  EXPECT_GT(need, 0u);
+  std::vector<uint64_t> arena(need / 8);
+  PointRaster r;
+  EXPECT_EQ(r.init(c, arena.data(), need - 8), RasterStatus::kArenaTooSmall);
+  EXPECT_EQ(r.init(c, arena.data(), need), RasterStatus::kOk);
+  c.tile_log2 = 9;
+  EXPECT_EQ(point_raster_bytes(c), 0u);
+  EXPECT_EQ(r.init(c, arena.data(), need), RasterStatus::kBadConfig);
+}
+
+// Naive reference: every pixel takes the minimum packed word of the points
+// covering it, with the same covering rule and no tiles.
+std::vector<uint8_t> naive(const RasterConfig& c, const std::vector<std::pair<ScreenPoint, int>>& pts, uint32_t clear) {
+  const bool r565 = c.format == PixelFormat::kRgb565;
+  auto pack = [&](uint32_t depth, uint32_t rgb) -> uint64_t {
+    return r565 ? ((depth & 0xFFFF0000u) | rgb565(rgb)) : ((uint64_t{depth} << 32) | (rgb & 0xFFFFFF));
+  };
+  std::vector<uint64_t> words(static_cast<size_t>(c.width) * c.height, pack(0xFFFFFFFFu, clear));
+  for (const auto& [p, s] : pts) {
+    const int x0 = (p.x_q4 - (s - 1) * 8) >> 4, y0 = (p.y_q4 - (s - 1) * 8) >> 4;
+    for (int y = y0; y < y0 + s; ++y)
+      for (int x = x0; x < x0 + s; ++x)
+        if (x >= 0 && y >= 0 && x < c.width && y < c.height) {
+          uint64_t& w = words[static_cast<size_t>(y) * c.width + x];
+          w = std::min(w, pack(p.depth, p.rgb));
+        }
+  }
+  std::vector<uint8_t> out;
+  for (uint64_t w : words) {
+    if (r565) {
+      out.push_back(static_cast<uint8_t>(w));
+      out.push_back(static_cast<uint8_t>(w >> 8));
+    } else {
+      out.push_back(static_cast<uint8_t>(w >> 16));
+      out.push_back(static_cast<uint8_t>(w >> 8));
+      out.push_back(static_cast<uint8_t>(w));
+    }
+  }
+  return out;
+}
+
+TEST(Raster, TiledEqualsNaiveForRandomPoints) {
+  std::mt19937 rng(42);
+  for (PixelFormat f : {PixelFormat::kRgb565, PixelFormat::kRgb888})
+    for (uint8_t tile_log2 : {uint8_t{3}, uint8_t{5}, uint8_t{7}}) {
+      const RasterConfig c{101, 67, tile_log2, f, 5000};  // sizes not multiples of the tile
+      Frame fr(c);
+      std::vector<std::pair<ScreenPoint, int>> pts;
+      for (int i = 0; i < 4000; ++i) {
+        const ScreenPoint p{static_cast<int32_t>(rng() % (110 * 16)) - 4 * 16, static_cast<int32_t>(rng() % (76 * 16)) - 4 * 16,
+                            static_cast<uint32_t>(rng() % 64) << 24, static_cast<uint32_t>(rng() & 0xFFFFFF)};  // many equal depths
+        const int s = 1 + static_cast<int>(rng() % 3);
+        ASSERT_TRUE(fr.raster.add(p, s));
+        pts.push_back({p, s});
+      }
+      fr.draw(0x334455);
+      ASSERT_EQ(fr.pixels, naive(c, pts, 0x334455)) << "format " << static_cast<int>(f) << " tile " << int{tile_log2};
+    }
+}
+
+}  // namespace
+}  // namespace stipple
