@@ -1,31 +1,13 @@
 // stipple host — normal estimation (faces, or k-NN PCA + MST orientation).
 #include "tools/host/normals.h"
 
-#include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <queue>
 
 #include "tools/host/kdtree.h"
+#include "tools/host/node_stats.h"
 
 namespace stipple {
-namespace {
-
-// Smallest-variance axis of the points `ids`.
-Vec3 pca_normal(const std::vector<Vec3>& p, const std::vector<uint32_t>& ids) {
-  Vec3 mean = Vec3::Zero();
-  for (uint32_t i : ids) mean += p[i];
-  mean /= static_cast<double>(ids.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (uint32_t i : ids) {
-    const Vec3 d = p[i] - mean;
-    cov += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  return eig.eigenvectors().col(0).normalized();
-}
-
-}  // namespace
 
 void estimate_normals(PointCloud& cloud, int k, const std::function<void(double, const char*)>& progress) {
   if (cloud.has_normals()) return;
@@ -53,7 +35,8 @@ void estimate_normals(PointCloud& cloud, int k, const std::function<void(double,
     for (size_t m = 0; m < missing.size(); ++m) {
       const uint32_t i = missing[m];
       tree.knearest(p[i], kk, nb);
-      Vec3 nrm = nb.size() >= 3 ? pca_normal(p, nb) : Vec3::UnitZ();
+      // The smallest-variance axis of the neighbourhood.
+      Vec3 nrm = nb.size() >= 3 ? Vec3(pca3(p.data(), nb.data(), nb.size()).frame.col(2)) : Vec3::UnitZ();
       if (!nrm.allFinite()) nrm = Vec3::UnitZ();
       if (from_faces) {
         Vec3 ref = Vec3::Zero();
