@@ -8,6 +8,7 @@
 #include "platform/progress.h"
 #include "tools/cli.h"
 #include "tools/host/hierarchy.h"
+#include "tools/host/kdtree.h"
 #include "tools/host/metrics.h"
 #include "tools/host/plot.h"
 #include "tools/host/ply_io.h"
@@ -283,6 +284,7 @@ int cmd_levels(int argc, char** argv) {
   const SpgHeader& h = model.header;
   const double startup_bytes = static_cast<double>(kSpgFixedHeaderBytes) +
                                4.0 * (3 * h.class_count[0] + 2 * h.class_count[1] + 3 * h.class_count[2]);
+  const KdTree original_tree(original.positions);  // built once, shared by every level
   ProgressBar progress("levels");
   std::string rows;
   PlotSeries one_sided{"one-sided (paper)", {}, {}, 0x1f77b4, {}}, symmetric{"symmetric", {}, {}, 0xd62728, {}};
@@ -293,7 +295,7 @@ int cmd_levels(int argc, char** argv) {
     if (cut_sample_count(model, cut, 0) > kDefaultMaxSamples)
       return cli::fail(files[0] + ": level " + std::to_string(levels[i]) + " would generate more than " +
                        cli::with_commas(kDefaultMaxSamples) + " points");
-    const CloudMetrics m = compare_clouds(original, sample_cut(model, cut, 0));
+    const CloudMetrics m = compare_clouds(original, original_tree, sample_cut(model, cut, 0));
     const double bits = 8.0 * (startup_bytes + static_cast<double>(cut.size()) * h.layout.record_bytes()) /
                         static_cast<double>(original.size());
     for (PlotSeries* s : {&one_sided, &symmetric}) s->x.push_back(bits);

@@ -15,9 +15,13 @@ double psnr(double diagonal, double rms) {
 }
 
 DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to, int threads) {
+  if (from.size() == 0 || to.size() == 0) return DirectedDistance{};
+  return directed_distance(from, to, KdTree(to.positions), threads);
+}
+
+DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to, const KdTree& tree, int threads) {
   DirectedDistance d;
   if (from.size() == 0 || to.size() == 0) return d;
-  const KdTree tree(to.positions);
   const bool normals = from.has_normals() && to.has_normals();
   const bool colors = from.has_colors() && to.has_colors();
   const size_t parts = static_cast<size_t>(std::max(1, threads));
@@ -70,9 +74,14 @@ DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to,
 }
 
 CloudMetrics compare_clouds(const PointCloud& original, const PointCloud& generated, int threads) {
+  return compare_clouds(original, KdTree(original.positions), generated, threads);
+}
+
+CloudMetrics compare_clouds(const PointCloud& original, const KdTree& original_tree, const PointCloud& generated,
+                            int threads) {
   CloudMetrics m;
   m.diagonal = bounding_box(original.positions).diagonal();
-  m.generated_to_original = directed_distance(generated, original, threads);
+  m.generated_to_original = directed_distance(generated, original, original_tree, threads);
   m.original_to_generated = directed_distance(original, generated, threads);
   m.psnr_one_sided = psnr(m.diagonal, m.generated_to_original.rms);
   m.psnr_symmetric = psnr(m.diagonal, std::max(m.generated_to_original.rms, m.original_to_generated.rms));

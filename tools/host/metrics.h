@@ -9,6 +9,7 @@
 
 #include <optional>
 
+#include "tools/host/kdtree.h"
 #include "tools/host/point_cloud.h"
 
 namespace stipple {
@@ -30,8 +31,15 @@ struct CloudMetrics {
 // clouds have normals, also the angle between each point's normal and its
 // nearest neighbour's; when both have colours, the RGB distance likewise.
 DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to, int threads = 2);
+// The same with a kd-tree already built over `to.positions`.
+DirectedDistance directed_distance(const PointCloud& from, const PointCloud& to, const KdTree& to_tree,
+                                   int threads = 2);
 
 CloudMetrics compare_clouds(const PointCloud& original, const PointCloud& generated, int threads = 2);
+// The same with a kd-tree already built over `original.positions`, for
+// comparing many generated clouds against one original.
+CloudMetrics compare_clouds(const PointCloud& original, const KdTree& original_tree, const PointCloud& generated,
+                            int threads = 2);
 
 double psnr(double diagonal, double rms);
 
