@@ -1,6 +1,8 @@
 // stipple core — fixed-point node decoder. See node_decoder.h.
 #include "core/node_decoder.h"
 
+#include <initializer_list>
+
 namespace stipple {
 namespace {
 
@@ -72,12 +74,9 @@ size_t node_decoder_bytes(const SpgHeader& h) {
 DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes) {
   header_ = view.header;
   const RecordLayout& l = header_.layout;
-  for (int f = static_cast<int>(Field::kFpTheta); f < kFieldCount; ++f) {
-    const bool angle = (f >= static_cast<int>(Field::kFpTheta) && f <= static_cast<int>(Field::kFpPsi)) ||
-                       (f >= static_cast<int>(Field::kFnTheta) && f <= static_cast<int>(Field::kFnPsi)) ||
-                       (f >= static_cast<int>(Field::kFcTheta) && f <= static_cast<int>(Field::kFcPsi));
-    if (angle && l.bits[f] > kMaxAngleBits) return DecodeStatus::kBadLayout;
-  }
+  for (Field theta : {Field::kFpTheta, Field::kFnTheta, Field::kFcTheta})
+    for (int k = 0; k < 3; ++k)  // theta, phi, psi
+      if (l.bits[static_cast<int>(theta) + k] > kMaxAngleBits) return DecodeStatus::kBadLayout;
   if (bytes < node_decoder_bytes(header_)) return DecodeStatus::kStorageTooSmall;
   uint8_t* at = static_cast<uint8_t*>(storage);
 
