@@ -67,12 +67,12 @@ uint64_t isqrt64(uint64_t x) {
   return root;
 }
 
-void gaussian_uniforms(GaussianSource source, uint32_t sample, uint32_t out[3]) {
+void gaussian_uniforms(GaussianSource source, uint32_t sample, uint32_t out[3], int first_dim) {
   if (source == GaussianSource::kSobol) {
-    for (int d = 0; d < 3; ++d) out[d] = sobol_u32(sample + 1, d);
+    for (int d = 0; d < 3; ++d) out[d] = sobol_u32(sample + 1, first_dim + d);
     return;
   }
-  uint32_t x = 0x9E3779B9u ^ (sample * 0x85EBCA6Bu);
+  uint32_t x = 0x9E3779B9u ^ ((sample + static_cast<uint32_t>(first_dim) * 0x20000u) * 0x85EBCA6Bu);
   for (int d = 0; d < 3; ++d) {
     x = xorshift32(x == 0 ? 1u : x);
     x = xorshift32(x);
@@ -80,10 +80,10 @@ void gaussian_uniforms(GaussianSource source, uint32_t sample, uint32_t out[3]) 
   }
 }
 
-void build_gaussian3_table(GaussianSource source, Gaussian3Q12* out, size_t count) {
+void build_gaussian3_table(GaussianSource source, Gaussian3Q12* out, size_t count, int first_dim) {
   for (size_t j = 0; j < count; ++j) {
     uint32_t u[3];
-    gaussian_uniforms(source, static_cast<uint32_t>(j), u);
+    gaussian_uniforms(source, static_cast<uint32_t>(j), u, first_dim);
     const int64_t tau = tau_q24(u[0], true);
     const SinCosQ14 sc = sincos_q14(u[1]);  // 2 pi r1: u is already a binary angle
     // r2 = 2 r - 1 = (2u + 1) / 2^32 - 1, Q31; ring = sqrt(1 - r2^2), Q31.

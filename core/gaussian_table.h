@@ -35,11 +35,14 @@ struct Gaussian2Q12 {
 };
 
 // Fills out[0 .. count) with samples 0 .. count-1. No allocation.
-void build_gaussian3_table(GaussianSource source, Gaussian3Q12* out, size_t count);
+// 3-D tables read Sobol dimensions first_dim .. first_dim + 2: 0 for
+// positions, kColorSobolDim for colours (the reference sampler's choice).
+inline constexpr int kColorSobolDim = 5;
+void build_gaussian3_table(GaussianSource source, Gaussian3Q12* out, size_t count, int first_dim = 0);
 void build_gaussian2_table(GaussianSource source, Gaussian2Q12* out, size_t count);
 
 // The 32-bit uniform inputs (r0, r1, r2 as 0.32 fractions) of sample j.
-void gaussian_uniforms(GaussianSource source, uint32_t sample, uint32_t out[3]);
+void gaussian_uniforms(GaussianSource source, uint32_t sample, uint32_t out[3], int first_dim = 0);
 
 // log2(x) for x >= 1, in Q24. Integer only.
 int64_t log2_q24(uint64_t x);

@@ -78,9 +78,11 @@ uint32_t spg_child_count(const SpgView& view, uint32_t node) {
   return (view.topology[node >> 1] >> ((node & 1) * 4)) & 0xFu;
 }
 
-SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
-  Cursor in{data, size, 0};
-  SpgView view;
+namespace {
+
+// §1 fixed header and §2 class tables: the startup message. With
+// `whole_file`, the counts must also fit the bytes after the header.
+SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgView& view, Cursor& in) {
   SpgHeader& h = view.header;
 
   // §1 fixed header.
@@ -119,7 +121,7 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
   // Every node needs a record and every leaf at least one LEB128 byte: bound
   // the counts by the file size before anything is sized from them.
   const uint64_t min_body = static_cast<uint64_t>(h.node_count) * h.layout.record_bytes() + h.leaf_count + 4;
-  if (min_body > size - kSpgFixedHeaderBytes) return fail(SpgError::kBadCounts, 28);
+  if (whole_file && min_body > size - kSpgFixedHeaderBytes) return fail(SpgError::kBadCounts, 28);
   for (int i = 0; i < 6; ++i) {
     h.bbox_bits[i] = load_u32le(data + 44 + 4 * i);
     if (!f32_finite(h.bbox_bits[i])) return fail(SpgError::kBadFloat, 44 + 4 * static_cast<size_t>(i));
@@ -145,6 +147,29 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
     if (!f32_finite(bits) || f32_negative(bits)) return fail(SpgError::kBadFloat, in.pos);
     in.pos += 4;
   }
+
+  return SpgResult{};
+}
+
+}  // namespace
+
+SpgResult spg_parse_startup(const uint8_t* data, size_t size, SpgView* out, size_t* startup_bytes) {
+  Cursor in{data, size, 0};
+  SpgView view;
+  const SpgResult r = parse_startup(data, size, false, view, in);
+  if (!r.ok()) return r;
+  *out = view;
+  *startup_bytes = in.pos;
+  return r;
+}
+
+SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
+  Cursor in{data, size, 0};
+  SpgView view;
+  const SpgResult startup = parse_startup(data, size, true, view, in);
+  if (!startup.ok()) return startup;
+  const SpgHeader& h = view.header;
+  const bool normals = h.has_normals(), color = h.has_color();
 
   // §3 topology: BFS order, siblings adjacent, children after their parent.
   const uint32_t bits_per_node = h.tree_arity == 2 ? 1u : 4u;

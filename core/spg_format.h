@@ -85,6 +85,13 @@ struct SpgResult {
 // Checks every rule of docs/format.md, including the class index of every record.
 [[nodiscard]] SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out);
 
+// Validates only the startup message — the fixed header and class tables
+// that begin a `.spg` file (docs/format.md §1-§2) — from `data[0 .. size)`.
+// Fills the header and class table views of `out` (no topology, counts or
+// records) and the startup message's length. Used by clients, which receive
+// the startup message first and node records afterwards.
+[[nodiscard]] SpgResult spg_parse_startup(const uint8_t* data, size_t size, SpgView* out, size_t* startup_bytes);
+
 // Children of node `i` of a validated view: number of children.
 uint32_t spg_child_count(const SpgView& view, uint32_t node);
 

@@ -57,4 +57,6 @@ int cmd_info(int argc, char** argv);
 int cmd_sample(int argc, char** argv);
 int cmd_metrics(int argc, char** argv);
 int cmd_levels(int argc, char** argv);
+int cmd_render(int argc, char** argv);
+int cmd_ppn_table(int argc, char** argv);
 }  // namespace stipple

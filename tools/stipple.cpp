@@ -13,12 +13,14 @@ const char kUsage[] =
     "Statistical point geometry: scans -> hierarchy of Gaussians -> 13/17-byte nodes.\n"
     "\n"
     "commands:\n"
-    "  demo      encode the bundled scan and report size and error (the main job)\n"
+    "  demo      encode the bundled scan, render it with the fixed-point client (the main job)\n"
     "  encode    scan (.ply or x y z text) -> .spg\n"
     "  info      describe a .spg file\n"
     "  sample    generate points from a .spg cut (reference decoder) -> .ply\n"
     "  metrics   nearest-neighbour error and PSNR between two point sets\n"
     "  levels    bits per point and PSNR of each tree level's cut (the trade)\n"
+    "  render    draw a .spg with the fixed-point handheld client -> .png\n"
+    "  ppn-table measure the points-per-node table with the client's rasterizer\n"
     "\n"
     "`stipple <command> --help` describes each command.\n";
 
@@ -36,6 +38,8 @@ int main(int argc, char** argv) {
   if (!std::strcmp(command, "sample")) return stipple::cmd_sample(argc, argv);
   if (!std::strcmp(command, "metrics")) return stipple::cmd_metrics(argc, argv);
   if (!std::strcmp(command, "levels")) return stipple::cmd_levels(argc, argv);
+  if (!std::strcmp(command, "render")) return stipple::cmd_render(argc, argv);
+  if (!std::strcmp(command, "ppn-table")) return stipple::cmd_ppn_table(argc, argv);
   std::fprintf(stderr, "stipple: unknown command '%s'\n\n%s", command, kUsage);
   return 2;
 }

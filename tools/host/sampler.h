@@ -21,6 +21,12 @@ namespace stipple {
 
 inline constexpr double kGamma = 3.5;
 
+// Sample `index` (>= 1: Sobol point index, i.e. sample j + 1) of the unit
+// 3-D Gaussian from Sobol dimensions first_dim .. first_dim + 2, and of the
+// unit 2-D Gaussian from dimensions 3-4, in doubles.
+Vec3 reference_gaussian3(uint32_t index, int first_dim);
+Vec2 reference_gaussian2(uint32_t index);
+
 // Generates points for the nodes in `cut`: `per_node` points each, or, when
 // `per_node` is 0, as many as each node held originals (the paper's PSNR
 // experiment). Normals and colours are generated when the model has them.

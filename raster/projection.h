@@ -1,0 +1,117 @@
+// stipple raster — projecting a node's Gaussian samples to the screen.
+//
+// Per node and frame, `NodeProjection::setup` takes the decoded node to
+// camera space — the mean (X, Y, Z) and the sigma-scaled axes A (MU per
+// sigma) — and linearizes the projection at the mean:
+//   x0 = cx + f X / Z,  M = f / Z (A_xy - (X, Y)/Z A_z)  (1/256 px per sigma),
+// with one division (u = 2^46 / Z). Per point, sample g (Q12) lands at
+//   kAffine      x = x0 + M g / 2^16                        no division
+//   kReciprocal  x = cx + f X_p r / 2^(e+16), 1/Z_p ~ r 2^-(e+16) from a
+//                1024-entry table indexed by the 10 bits below Z_p's top bit
+//   kExact       x = cx + floor(f X_p / Z_p)                two divisions
+// with X_p = X + (A g)_x / 2^12 (likewise Y_p, Z_p). Every position is
+// floored to 1/16 px. Ranges (camera.h): |X|, |Y| <= 8 Z, Z <= 2^30, the
+// near plane >= 2^12 MU, so u < 2^35, |X/Z| < 2^19 in Q16, and every product
+// below stays under 2^63; setup refuses nodes whose |M| reaches 2^28 (a node
+// millions of pixels wide, which the cut must refine). Measured errors of
+// each mode are in docs/fixed_point.md (tests/projection_test.cpp).
+#pragma once
+
+#include <cstdint>
+
+#include "core/camera.h"
+#include "core/gaussian_table.h"
+#include "core/node_decoder.h"
+
+namespace stipple {
+
+enum class Projection : uint8_t { kAffine, kReciprocal, kExact };
+
+inline constexpr int kReciprocalBits = 10;
+inline constexpr int64_t kMaxScreenSlope = int64_t{1} << 28;  // 1/256 px per sigma
+
+// Entry i = 2^26 / (1024 + i + 1/2), rounded: 1024 entries in (2^15, 2^16).
+void build_reciprocal_table(uint16_t out[1 << kReciprocalBits]);
+
+inline int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
+
+// floor(n / d) for d > 0.
+inline int64_t floor_div(int64_t n, int64_t d) {
+  const int64_t q = n / d;
+  return q * d > n ? q - 1 : q;
+}
+
+struct ScreenSample {
+  int32_t x_q4, y_q4;
+  int64_t z;  // MU
+};
+
+struct NodeProjection {
+  int64_t X = 0, Y = 0, Z = 0;  // mean, camera space, MU
+  int32_t A[3][3] = {};          // A[k]: axis k in camera space, MU per sigma
+  int32_t x0_q4 = 0, y0_q4 = 0;  // the mean on screen
+  int32_t mx[3] = {}, my[3] = {};  // 1/256 px per sigma
+  int32_t focal_q4 = 0, cx_q4 = 0, cy_q4 = 0;
+
+  // False when the node is not drawn: its mean behind the near plane or
+  // outside a ~165 degree cone, or its projection too large.
+  bool setup(const Camera& camera, const FixedNode& node) {
+    int32_t c[3];
+    camera_space(camera, node.mean, c);
+    X = c[0];
+    Y = c[1];
+    Z = c[2];
+    if (Z <= camera.near_mu || abs64(X) > 8 * Z || abs64(Y) > 8 * Z) return false;
+    for (int k = 0; k < 3; ++k) camera_rotate(camera, node.axis[k], A[k]);
+    focal_q4 = camera.focal_q4;
+    cx_q4 = camera.center_q4[0];
+    cy_q4 = camera.center_q4[1];
+    const int64_t u = (int64_t{1} << 46) / Z;
+    const int64_t xr = (X * u) >> 30, yr = (Y * u) >> 30;  // X/Z, Y/Z in Q16
+    x0_q4 = cx_q4 + static_cast<int32_t>((focal_q4 * xr) >> 16);
+    y0_q4 = cy_q4 + static_cast<int32_t>((focal_q4 * yr) >> 16);
+    for (int k = 0; k < 3; ++k) {
+      // (A - (X/Z) A_z) / Z in Q26: below 2^28.2 * 2^34 before the shift, 2^42.2 after;
+      // times f (<= 2^20) below 2^62.2.
+      const int64_t wx = ((A[k][0] - ((xr * A[k][2]) >> 16)) * u) >> 20;
+      const int64_t wy = ((A[k][1] - ((yr * A[k][2]) >> 16)) * u) >> 20;
+      const int64_t vx = (focal_q4 * wx) >> 22, vy = (focal_q4 * wy) >> 22;
+      if (abs64(vx) >= kMaxScreenSlope || abs64(vy) >= kMaxScreenSlope) return false;
+      mx[k] = static_cast<int32_t>(vx);
+      my[k] = static_cast<int32_t>(vy);
+    }
+    return true;
+  }
+
+  // Sample g on the screen. False when the point is behind the near plane
+  // or (per-point modes) outside the ~165 degree cone.
+  template <Projection P>
+  bool point(const Gaussian3Q12& g, int32_t near_mu, const uint16_t* reciprocal, ScreenSample* out) const {
+    const int64_t g0 = g.v[0], g1 = g.v[1], g2 = g.v[2];
+    const int64_t z = Z + ((A[0][2] * g0 + A[1][2] * g1 + A[2][2] * g2) >> 12);
+    if (z < near_mu) return false;
+    out->z = z;
+    if constexpr (P == Projection::kAffine) {
+      out->x_q4 = x0_q4 + static_cast<int32_t>((mx[0] * g0 + mx[1] * g1 + mx[2] * g2) >> 16);
+      out->y_q4 = y0_q4 + static_cast<int32_t>((my[0] * g0 + my[1] * g1 + my[2] * g2) >> 16);
+      return true;
+    } else {
+      const int64_t xp = X + ((A[0][0] * g0 + A[1][0] * g1 + A[2][0] * g2) >> 12);
+      const int64_t yp = Y + ((A[0][1] * g0 + A[1][1] * g1 + A[2][1] * g2) >> 12);
+      if (abs64(xp) > 8 * z || abs64(yp) > 8 * z) return false;
+      if constexpr (P == Projection::kExact) {
+        out->x_q4 = cx_q4 + static_cast<int32_t>(floor_div(focal_q4 * xp, z));
+        out->y_q4 = cy_q4 + static_cast<int32_t>(floor_div(focal_q4 * yp, z));
+      } else {
+        // z = (1024 + i + frac) 2^(e-10) with e >= 12 (z >= near >= 2^12).
+        const int e = 63 - __builtin_clzll(static_cast<uint64_t>(z));
+        const int64_t r = reciprocal[(z >> (e - kReciprocalBits)) & ((1 << kReciprocalBits) - 1)];
+        out->x_q4 = cx_q4 + static_cast<int32_t>((((xp * r) >> 16) * focal_q4) >> e);
+        out->y_q4 = cy_q4 + static_cast<int32_t>((((yp * r) >> 16) * focal_q4) >> e);
+      }
+      return true;
+    }
+  }
+};
+
+}  // namespace stipple

@@ -1,0 +1,270 @@
+// stipple — `render` (the fixed-point client in process, or the double
+// reference) and `ppn-table` (measures the points-per-node table).
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+#include "platform/file_io.h"
+#include "platform/png_io.h"
+#include "platform/progress.h"
+#include "tools/cli.h"
+#include "tools/cmd_render.h"
+#include "tools/host/ppn_measure.h"
+
+namespace stipple {
+namespace {
+
+const char kRenderHelp[] =
+    "usage: stipple render MODEL.spg -o IMAGE.png [options]\n"
+    "\n"
+    "Renders a .spg file with the handheld client — fixed point, one arena, the\n"
+    "same bytes on every platform — in this process: a simple cut of the tree is\n"
+    "chosen for the camera, its records are handed to the client, one frame is\n"
+    "drawn and written as PNG (RGB565 frames expanded by bit replication).\n"
+    "\n"
+    "view:\n"
+    "  --size WxH             screen (default 240x320)\n"
+    "  --format rgb565|rgb888 pixel format (default rgb565)\n"
+    "  --camera Y,P[,D[,F]]   orbit: yaw and pitch in degrees, distance from the\n"
+    "                         centre in model extents, vertical field of view in\n"
+    "                         degrees (default 30,20,2.2,35)\n"
+    "cut:\n"
+    "  --max-size PX          split nodes whose projected 3.5-sigma radius exceeds PX\n"
+    "                         pixels (default 2, the paper's threshold)\n"
+    "  --level L              instead: the nodes at tree level L and the leaves above\n"
+    "client:\n"
+    "  --projection affine|reciprocal|exact   per-point projection (default affine)\n"
+    "  --shading point|node|none              Lambert per sampled normal, per node, or\n"
+    "                                         none (default point)\n"
+    "  --no-specular          Lambert only\n"
+    "  --grey                 ignore the model's colours\n"
+    "  --mean-color           one colour per node (no per-point colour sampling)\n"
+    "  --quality Q            points-per-node scale, 0.01..16 (default 1)\n"
+    "  --point-size N         1..3 px (default 2)\n"
+    "  --pseudo               pseudo-random instead of Sobol samples\n"
+    "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
+    "  --max-points N         frame budget (default 1048576)\n"
+    "output:\n"
+    "  --reference            draw with the double-precision reference renderer instead\n"
+    "  --psnr                 also render the reference and report PSNR against it\n"
+    "  --json                 one JSON line of statistics\n";
+
+const char kPpnHelp[] =
+    "usage: stipple ppn-table [--coverage C] [--trials N] [--write FILE] [--quiet]\n"
+    "\n"
+    "Measures the points-per-node table (TOG05 Table 1) with the client's own\n"
+    "rasterizer and Gaussian tables: for each screen size and elongation of a\n"
+    "node, the fewest points whose squares cover the fraction C (default 0.95)\n"
+    "of the pixels inside its 2-sigma ellipse, for Sobol and pseudo-random\n"
+    "samples and point sizes 1-3. Prints the paper's examples side by side;\n"
+    "--write FILE writes the C++ table (raster/ppn_table.inc).\n";
+
+bool parse_size(const std::string& text, uint16_t& w, uint16_t& h) {
+  const size_t x = text.find('x');
+  unsigned long long a = 0, b = 0;
+  if (x == std::string::npos || !cli::parse_uint(text.substr(0, x), 4096, a) || !cli::parse_uint(text.substr(x + 1), 4096, b) ||
+      a == 0 || b == 0)
+    return false;
+  w = static_cast<uint16_t>(a);
+  h = static_cast<uint16_t>(b);
+  return true;
+}
+
+}  // namespace
+
+bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error) {
+  std::string v;
+  ClientConfig& c = o.config;
+  c.raster.width = 240;
+  c.raster.height = 320;
+  c.raster.max_points = 1u << 20;
+  if (args.value("--size", v) && !parse_size(v, c.raster.width, c.raster.height))
+    return error = "--size: expected WIDTHxHEIGHT within 1..4096, got '" + v + "'", false;
+  if (args.value("--format", v)) {
+    if (v == "rgb565") c.raster.format = PixelFormat::kRgb565;
+    else if (v == "rgb888") c.raster.format = PixelFormat::kRgb888;
+    else return error = "--format: expected rgb565 or rgb888, got '" + v + "'", false;
+  }
+  if (args.value("--camera", v) && !parse_view(v, o.view, error)) return false;
+  const bool has_level = args.value("--level", v);
+  if (has_level) {
+    unsigned long long level = 0;
+    if (!cli::parse_uint(v, 65535, level)) return error = "--level: expected a non-negative integer, got '" + v + "'", false;
+    o.rule.kind = CutRule::kLevel;
+    o.rule.level = static_cast<uint16_t>(level);
+  } else {
+    o.rule.kind = CutRule::kProjectedSize;
+  }
+  if (args.value("--max-size", v)) {
+    double px = 0;
+    if (has_level) return error = "--max-size and --level are alternatives; give one", false;
+    if (!cli::parse_double(v, px) || !(px >= 0.0625 && px <= 4096))
+      return error = "--max-size: expected pixels within [0.0625, 4096], got '" + v + "'", false;
+    o.rule.max_size_q4 = static_cast<int32_t>(std::lround(px * 16));
+  }
+  if (args.value("--projection", v)) {
+    if (v == "affine") c.projection = Projection::kAffine;
+    else if (v == "reciprocal") c.projection = Projection::kReciprocal;
+    else if (v == "exact") c.projection = Projection::kExact;
+    else return error = "--projection: expected affine, reciprocal or exact, got '" + v + "'", false;
+  }
+  if (args.value("--shading", v)) {
+    if (v == "point") c.shading = ShadingMode::kPerPoint;
+    else if (v == "node") c.shading = ShadingMode::kPerNode;
+    else if (v == "none") c.shading = ShadingMode::kNone;
+    else return error = "--shading: expected point, node or none, got '" + v + "'", false;
+  }
+  if (args.flag("--no-specular")) c.lighting.specular_q8 = 0;
+  if (args.flag("--grey")) c.grey = true;
+  if (args.flag("--mean-color")) c.sample_color = false;
+  if (args.flag("--pseudo")) c.source = GaussianSource::kPseudo;
+  if (args.value("--quality", v)) {
+    double q = 0;
+    if (!cli::parse_double(v, q) || !(q >= 0.01 && q <= 16))
+      return error = "--quality: expected a scale within [0.01, 16], got '" + v + "'", false;
+    c.quality_q8 = static_cast<uint16_t>(std::lround(q * 256));
+  }
+  unsigned long long u = 0;
+  if (args.value("--point-size", v)) {
+    if (!cli::parse_uint(v, 3, u) || u < 1) return error = "--point-size: expected 1, 2 or 3, got '" + v + "'", false;
+    c.point_size = static_cast<uint8_t>(u);
+  }
+  if (args.value("--samples", v)) {
+    if (!cli::parse_uint(v, 8192, u) || u < 1) return error = "--samples: expected 1..8192, got '" + v + "'", false;
+    c.samples = static_cast<uint16_t>(u);
+  }
+  if (args.value("--max-points", v)) {
+    if (!cli::parse_uint(v, 1u << 26, u) || u < 1) return error = "--max-points: expected 1..67108864, got '" + v + "'", false;
+    c.raster.max_points = static_cast<uint32_t>(u);
+  }
+  return true;
+}
+
+int render_to_png(const std::string& name, const std::vector<uint8_t>& file, const RenderOptions& o,
+                  const std::string& output, bool reference, bool psnr, bool json) {
+  SpgView view;
+  const SpgResult r = spg_parse(file.data(), file.size(), &view);
+  if (!r.ok()) return cli::fail(name + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error));
+  const double start = monotonic_seconds();
+  FixedRender fixed;
+  std::string error;
+  if (!render_fixed(view, file.data(), o.config, o.rule, o.view, fixed, error)) return cli::fail(name + ": " + error);
+  const double fixed_seconds = monotonic_seconds() - start;
+  Image ref;
+  if (reference || psnr) {
+    DecodedModel model;
+    if (!decode_spg(name, file.data(), file.size(), model, error)) return cli::fail(error);
+    ref = render_reference(model, fixed.cut, o.config, o.view);
+  }
+  const Image& image = reference ? ref : fixed.image;
+  if (!output.empty() && !write_png_rgb(output, image.width, image.height, image.rgb, error)) return cli::fail(error);
+  const double db = psnr ? image_psnr(fixed.image, ref) : 0;
+  if (json) {
+    cli::Json j;
+    j.str("model", name).integer("width", o.config.raster.width).integer("height", o.config.raster.height);
+    j.integer("cut_nodes", static_cast<long long>(fixed.cut.size()))
+        .integer("nodes_drawn", fixed.stats.nodes_drawn)
+        .integer("nodes_culled", fixed.stats.nodes_culled)
+        .integer("points", fixed.stats.points)
+        .integer("points_dropped", fixed.stats.points_dropped)
+        .integer("arena_bytes", static_cast<long long>(fixed.arena_bytes))
+        .num("seconds", fixed_seconds);
+    if (psnr) j.num("psnr_vs_reference", std::isinf(db) ? 999.0 : db);
+    if (!output.empty()) j.str("output", output);
+    std::printf("%s\n", j.done().c_str());
+  } else {
+    std::printf("%s: %s nodes in the cut, %s drawn, %s points%s, arena %s bytes%s%s\n", name.c_str(),
+                cli::with_commas(fixed.cut.size()).c_str(), cli::with_commas(fixed.stats.nodes_drawn).c_str(),
+                cli::with_commas(fixed.stats.points).c_str(),
+                fixed.stats.points_dropped ? (" (" + cli::with_commas(fixed.stats.points_dropped) + " over budget)").c_str() : "",
+                cli::with_commas(fixed.arena_bytes).c_str(), output.empty() ? "" : (" -> " + output).c_str(),
+                reference ? " (reference renderer)" : "");
+    if (psnr) std::printf("fixed point vs double reference: PSNR %.2f dB\n", db);
+  }
+  return 0;
+}
+
+int cmd_render(int argc, char** argv) {
+  cli::Args args(argc, argv, 2);
+  if (args.flag("--help") || args.flag("-h")) {
+    std::fputs(kRenderHelp, stdout);
+    return 0;
+  }
+  RenderOptions o;
+  std::string error, output;
+  if (!args.value("-o", output)) args.value("--output", output);
+  const bool reference = args.flag("--reference"), psnr = args.flag("--psnr"), json = args.flag("--json");
+  if (!parse_render_options(args, o, error)) return cli::fail("render: " + error);
+  const std::vector<std::string> files = args.positionals();
+  if (args.bad()) return cli::fail("render: " + args.error());
+  if (!args.unknown_option().empty()) return cli::fail("render: unknown option '" + args.unknown_option() + "'");
+  if (files.size() != 1) return cli::fail("render: expected one .spg file (see stipple render --help)");
+  if (output.empty() && !psnr) return cli::fail("render: -o IMAGE.png is required");
+  std::vector<uint8_t> file;
+  if (!read_file(files[0], file, error)) return cli::fail(error);
+  return render_to_png(files[0], file, o, output, reference, psnr, json);
+}
+
+int cmd_ppn_table(int argc, char** argv) {
+  cli::Args args(argc, argv, 2);
+  if (args.flag("--help") || args.flag("-h")) {
+    std::fputs(kPpnHelp, stdout);
+    return 0;
+  }
+  PpnMeasureOptions o;
+  std::string v, output;
+  unsigned long long u = 0;
+  if (args.value("--coverage", v) && (!cli::parse_double(v, o.coverage) || !(o.coverage > 0 && o.coverage <= 1)))
+    return cli::fail("ppn-table: --coverage: expected a fraction in (0, 1], got '" + v + "'");
+  if (args.value("--trials", v)) {
+    if (!cli::parse_uint(v, 1024, u) || u < 1) return cli::fail("ppn-table: --trials: expected 1..1024, got '" + v + "'");
+    o.trials = static_cast<int>(u);
+  }
+  args.value("--write", output);
+  const bool quiet = args.flag("--quiet");
+  if (args.bad()) return cli::fail("ppn-table: " + args.error());
+  if (!args.unknown_option().empty()) return cli::fail("ppn-table: unknown option '" + args.unknown_option() + "'");
+  if (!args.positionals().empty()) return cli::fail("ppn-table: takes no files (see stipple ppn-table --help)");
+
+  static PpnTable tables[2][kPpnPointSizes];
+  {
+    ProgressBar progress("ppn-table", !quiet);
+    for (int src = 0; src < 2; ++src)
+      for (int p = 0; p < kPpnPointSizes; ++p) {
+        PpnMeasureOptions m = o;
+        m.source = src == 0 ? GaussianSource::kSobol : GaussianSource::kPseudo;
+        m.point_size = p + 1;
+        const int part = src * kPpnPointSizes + p;
+        measure_ppn_table(m, tables[src][p], [&](double f) {
+          progress.update((part + f) / (2 * kPpnPointSizes), src == 0 ? "sobol" : "pseudo");
+        });
+      }
+  }
+  // The paper's Table 1 rows: gamma-sigma extents (px) -> points, here for
+  // 1 px points (the paper drew 1.8 px points).
+  std::printf("points per node, 95%% of the 2-sigma ellipse covered (sigma = extent / 3.5)\n");
+  std::printf("%-22s %8s %8s %8s %8s %8s %8s\n", "3.5 sigma extents (px)", "quasi-1", "pseudo-1", "quasi-2", "pseudo-2",
+              "quasi-3", "pseudo-3");
+  const double rows[][2] = {{1, 1}, {2, 2}, {4, 4}, {8, 8}, {8, 2}, {16, 16}, {16, 4}, {32, 32}};
+  for (const auto& row : rows) {
+    const int64_t a = std::llround(256 * std::pow(row[0] / 3.5, 2)), c = std::llround(256 * std::pow(row[1] / 3.5, 2));
+    const PpnIndex i = ppn_index(a, 0, c);
+    char label[32];
+    std::snprintf(label, sizeof label, "(%g, %g)", row[0], row[1]);
+    std::printf("%-22s", label);
+    for (int p = 0; p < kPpnPointSizes; ++p)
+      std::printf(" %8u %8u", static_cast<unsigned>(tables[0][p][i.size][i.aspect]),
+                  static_cast<unsigned>(tables[1][p][i.size][i.aspect]));
+    std::printf("\n");
+  }
+  if (!output.empty()) {
+    const std::string text = ppn_table_source(tables, o);
+    std::string error;
+    if (!write_file_atomic(output, std::vector<uint8_t>(text.begin(), text.end()), error)) return cli::fail(error);
+    std::printf("-> %s\n", output.c_str());
+  }
+  return 0;
+}
+
+}  // namespace stipple

@@ -1,0 +1,26 @@
+// stipple — options shared by the commands that render (render, demo).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "tools/cli.h"
+#include "tools/host/render.h"
+
+namespace stipple {
+
+struct RenderOptions {
+  ClientConfig config;
+  CutRule rule;
+  ViewSpec view;
+};
+
+// Reads the view, cut and client options of `stipple render --help`.
+bool parse_render_options(cli::Args& args, RenderOptions& options, std::string& error);
+
+// Renders `file` (a whole .spg named `name`) and writes `output` (PNG) when
+// not empty; prints a summary. Returns the process exit code.
+int render_to_png(const std::string& name, const std::vector<uint8_t>& file, const RenderOptions& options,
+                  const std::string& output, bool reference, bool psnr, bool json);
+
+}  // namespace stipple

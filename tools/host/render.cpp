@@ -1,0 +1,271 @@
+// stipple host — in-process rendering. See render.h.
+#include "tools/host/render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include "tools/host/sampler.h"
+
+namespace stipple {
+namespace {
+
+constexpr double kTurn = 4294967296.0;  // 2^32
+constexpr double kMu = 16777216.0;      // 2^24 MU per largest extent
+
+uint32_t binary_angle(double degrees) {
+  const double turns = degrees / 360.0 - std::floor(degrees / 360.0);
+  return static_cast<uint32_t>(static_cast<uint64_t>(std::llround(turns * kTurn)) & 0xFFFFFFFFu);
+}
+
+double radians(uint32_t angle) { return angle / kTurn * 2 * std::numbers::pi; }
+
+}  // namespace
+
+bool parse_view(const std::string& text, ViewSpec& out, std::string& error) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  std::string part;
+  while (std::getline(in, part, ',')) {
+    char* end = nullptr;
+    const double d = std::strtod(part.c_str(), &end);
+    if (part.empty() || *end != '\0' || !std::isfinite(d)) {
+      error = "--camera: '" + part + "' is not a number (expected yaw,pitch[,distance[,fov]] in degrees)";
+      return false;
+    }
+    v.push_back(d);
+  }
+  if (v.size() < 2 || v.size() > 4) {
+    error = "--camera: expected yaw,pitch[,distance[,fov]], got '" + text + "'";
+    return false;
+  }
+  ViewSpec s;
+  s.yaw = v[0];
+  s.pitch = v[1];
+  if (v.size() > 2) s.distance = v[2];
+  if (v.size() > 3) s.fov = v[3];
+  if (s.pitch < -90 || s.pitch > 90) return error = "--camera: pitch must be within [-90, 90] degrees", false;
+  if (!(s.distance >= 0.001 && s.distance <= 16))
+    return error = "--camera: distance must be within [0.001, 16] model extents", false;
+  if (!(s.fov >= 1 && s.fov <= 170)) return error = "--camera: field of view must be within [1, 170] degrees", false;
+  out = s;
+  return true;
+}
+
+OrbitView orbit_view(const int32_t extent_mu[3], const ViewSpec& spec) {
+  OrbitView o;
+  for (int a = 0; a < 3; ++a) o.target_mu[a] = extent_mu[a] / 2;
+  o.distance_mu = static_cast<int32_t>(std::llround(spec.distance * kMu));
+  o.yaw = binary_angle(spec.yaw);
+  o.pitch = binary_angle(spec.pitch);
+  o.fov = binary_angle(spec.fov);
+  return o;
+}
+
+Image frame_to_image(const std::vector<uint8_t>& frame, const RasterConfig& config) {
+  Image img;
+  img.width = config.width;
+  img.height = config.height;
+  const size_t pixels = static_cast<size_t>(config.width) * config.height;
+  img.rgb.resize(pixels * 3);
+  for (size_t i = 0; i < pixels; ++i) {
+    if (config.format == PixelFormat::kRgb888) {
+      for (int c = 0; c < 3; ++c) img.rgb[3 * i + c] = frame[3 * i + c];
+    } else {
+      const unsigned v = frame[2 * i] | (frame[2 * i + 1] << 8);
+      const unsigned r = v >> 11, g = (v >> 5) & 63, b = v & 31;
+      img.rgb[3 * i] = static_cast<uint8_t>((r << 3) | (r >> 2));
+      img.rgb[3 * i + 1] = static_cast<uint8_t>((g << 2) | (g >> 4));
+      img.rgb[3 * i + 2] = static_cast<uint8_t>((b << 3) | (b >> 2));
+    }
+  }
+  return img;
+}
+
+double image_psnr(const Image& a, const Image& b) {
+  if (a.rgb.size() != b.rgb.size() || a.rgb.empty()) return 0;
+  double sum = 0;
+  for (size_t i = 0; i < a.rgb.size(); ++i) {
+    const double d = static_cast<double>(a.rgb[i]) - b.rgb[i];
+    sum += d * d;
+  }
+  if (sum == 0) return std::numeric_limits<double>::infinity();
+  return 10 * std::log10(255.0 * 255.0 / (sum / static_cast<double>(a.rgb.size())));
+}
+
+bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
+                  const ViewSpec& spec, FixedRender& out, std::string& error) {
+  // The cut: a decoder over the whole file, as the server side will hold.
+  std::vector<uint8_t> decoder_storage(node_decoder_bytes(view.header));
+  NodeDecoder decoder;
+  if (decoder.init(view, decoder_storage.data(), decoder_storage.size()) != DecodeStatus::kOk) {
+    error = "the file's angle fields are wider than the decoder supports";
+    return false;
+  }
+  Camera camera;
+  if (!orbit_camera(orbit_view(decoder.extent_mu(), spec), config.raster.width, config.raster.height, &camera)) {
+    error = "--camera: the view is out of the camera's range";
+    return false;
+  }
+  std::vector<uint8_t> scratch(cut_scratch_bytes(view.header));
+  std::vector<uint32_t> cut(view.header.node_count);
+  cut.resize(simple_cut(view, rule, &decoder, &camera, scratch.data(), cut.data(), static_cast<uint32_t>(cut.size())));
+  config.node_capacity = std::max<uint32_t>(config.node_capacity, static_cast<uint32_t>(cut.size()));
+
+  out.arena_bytes = client_arena_bytes(config);
+  if (out.arena_bytes == 0) {
+    error = "invalid renderer configuration";
+    return false;
+  }
+  std::vector<uint64_t> arena(out.arena_bytes / 8 + 1);
+  Client client;
+  ClientStatus s = client.init(config, arena.data(), arena.size() * 8);
+  if (s == ClientStatus::kOk) s = client.load_startup(file, static_cast<size_t>(view.topology - file));
+  for (size_t i = 0; s == ClientStatus::kOk && i < cut.size(); ++i)
+    s = client.put_node(cut[i], view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes);
+  const size_t stride = static_cast<size_t>(config.raster.width) * bytes_per_pixel(config.raster.format);
+  out.frame.assign(stride * config.raster.height, 0);
+  if (s == ClientStatus::kOk) s = client.render(camera, out.frame.data(), stride, &out.stats);
+  if (s != ClientStatus::kOk) {
+    error = std::string("client: ") + client_status_text(s);
+    return false;
+  }
+  out.image = frame_to_image(out.frame, config.raster);
+  out.cut = std::move(cut);
+  out.camera = camera;
+  return true;
+}
+
+Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& cut, const ClientConfig& config,
+                       const ViewSpec& spec) {
+  const int w = config.raster.width, h = config.raster.height;
+  // Model units as the fixed decoder defines them.
+  const Vec3 extent = model.bbox_max - model.bbox_min;
+  const double largest = std::max({extent.x(), extent.y(), extent.z(), 0.0}) > 0 ? extent.maxCoeff() : 1.0;
+  const double to_mu = kMu / largest;
+  int32_t extent_mu[3];
+  for (int a = 0; a < 3; ++a) extent_mu[a] = static_cast<int32_t>(std::llround(extent[a] * to_mu));
+  const OrbitView o = orbit_view(extent_mu, spec);
+  // The camera of orbit_camera, in doubles.
+  const double yaw = radians(o.yaw), pitch = radians(o.pitch), fov = radians(o.fov);
+  const Vec3 back(std::sin(yaw) * std::cos(pitch), std::sin(pitch), std::cos(yaw) * std::cos(pitch));
+  const Vec3 right(std::cos(yaw), 0, -std::sin(yaw));
+  const Vec3 up = back.cross(right);
+  Mat3 R;
+  R.row(0) = right.transpose();
+  R.row(1) = -up.transpose();
+  R.row(2) = -back.transpose();
+  const Vec3 target(o.target_mu[0], o.target_mu[1], o.target_mu[2]);
+  const Vec3 eye = target + o.distance_mu * back;
+  const double focal = (h / 2.0) / std::tan(fov / 2), cx = w / 2.0, cy = h / 2.0;
+  const double near = std::max(o.distance_mu / 64, kCameraMinDistance);
+
+  // Lighting in camera space, then in the model.
+  const Lighting& L = config.lighting;
+  const Vec3 light_cam = Vec3(L.light_q14[0], L.light_q14[1], L.light_q14[2]).normalized();
+  Vec3 half_cam = (light_cam + Vec3(0, 0, -1));
+  half_cam = half_cam.norm() > 0 ? half_cam.normalized() : Vec3(0, 0, -1);
+  const Vec3 light = R.transpose() * light_cam, half = R.transpose() * half_cam;
+  const double ambient = std::min<int>(L.ambient_q8, 256) / 256.0, strength = L.specular_q8 / 256.0;
+
+  const bool normals = model.header.has_normals() && config.shading != ShadingMode::kNone;
+  const bool per_point_normals = normals && config.shading == ShadingMode::kPerPoint;
+  const bool specular = normals && L.specular_q8 > 0;
+  const bool color = model.header.has_color() && !config.grey;
+  const bool color_points = color && config.sample_color;
+  const PpnTable& table = ppn_table(config.source, config.point_size);
+  std::vector<Gaussian3Q12> pseudo3(config.samples), pseudo_c(config.samples);
+  std::vector<Gaussian2Q12> pseudo2(config.samples);
+  if (config.source == GaussianSource::kPseudo) {
+    build_gaussian3_table(config.source, pseudo3.data(), pseudo3.size());
+    build_gaussian3_table(config.source, pseudo_c.data(), pseudo_c.size(), kColorSobolDim);
+    build_gaussian2_table(config.source, pseudo2.data(), pseudo2.size());
+  }
+  auto g3 = [&](uint32_t j, int dim) -> Vec3 {
+    if (config.source == GaussianSource::kSobol) return reference_gaussian3(j + 1, dim);
+    const Gaussian3Q12& q = dim == 0 ? pseudo3[j] : pseudo_c[j];
+    return Vec3(q.v[0], q.v[1], q.v[2]) / 4096.0;
+  };
+  auto g2 = [&](uint32_t j) -> Vec2 {
+    if (config.source == GaussianSource::kSobol) return reference_gaussian2(j + 1);
+    return Vec2(pseudo2[j].v[0], pseudo2[j].v[1]) / 4096.0;
+  };
+
+  std::vector<double> depth(static_cast<size_t>(w) * h, std::numeric_limits<double>::infinity());
+  std::vector<uint32_t> color_buf(static_cast<size_t>(w) * h, config.clear_rgb);
+  const Vec3 grey(((config.grey_rgb >> 16) & 255), ((config.grey_rgb >> 8) & 255), (config.grey_rgb & 255));
+  const int s = config.point_size;
+  for (uint32_t id : cut) {
+    const DecodedNode& node = model.nodes[id];
+    const Vec3 mean = (node.position.mean - model.bbox_min) * to_mu;
+    const Mat3 axes = node.position.frame * node.position.sigma.asDiagonal() * to_mu;  // columns: sigma-scaled axes, MU
+    const Vec3 c = R * (mean - eye);
+    if (c.z() <= near || std::abs(c.x()) > 8 * c.z() || std::abs(c.y()) > 8 * c.z()) continue;
+    const Mat3 A = R * axes;  // camera-space axes (columns)
+    // Jacobian of the projection at the mean, px per MU; M = J A, px per sigma.
+    Eigen::Matrix<double, 2, 3> J;
+    J << focal / c.z(), 0, -focal * c.x() / (c.z() * c.z()), 0, focal / c.z(), -focal * c.y() / (c.z() * c.z());
+    const Eigen::Matrix<double, 2, 3> M = J * A;
+    const double sx0 = cx + focal * c.x() / c.z(), sy0 = cy + focal * c.y() / c.z();
+    const double ex = 3.5 * M.row(0).cwiseAbs().sum(), ey = 3.5 * M.row(1).cwiseAbs().sum();
+    if (sx0 + ex < 0 || sx0 - ex >= w || sy0 + ey < 0 || sy0 - ey >= h) continue;
+    const Eigen::Matrix2d S = M * M.transpose() * 256.0;  // 1/256 px^2
+    const uint32_t count = points_per_node(table, ppn_index(std::llround(S(0, 0)), std::llround(S(0, 1)), std::llround(S(1, 1))),
+                                           config.quality_q8, config.samples);
+    const Vec3 base = color ? Vec3(node.color.mean * 255.0) : grey;
+    const Vec3 n0 = node.normal_frame.col(2);
+    for (uint32_t j = 0; j < count; ++j) {
+      const Vec3 p = c + A * g3(j, 0);
+      if (p.z() < near) continue;
+      if (std::abs(p.x()) > 8 * p.z() || std::abs(p.y()) > 8 * p.z()) continue;
+      const double x = cx + focal * p.x() / p.z(), y = cy + focal * p.y() / p.z();
+      Vec3 col = base;
+      if (color_points)
+        col = (node.color.mean + node.color.frame * node.color.sigma.cwiseProduct(g3(j, kColorSobolDim))).cwiseMax(0.0).cwiseMin(1.0) * 255.0;
+      double intensity = 1, highlight = 0;
+      if (normals) {
+        Vec3 n = n0;
+        if (per_point_normals) {
+          const Vec2 t = g2(j);
+          const double a = node.sigma_n[0] * t.x(), b = node.sigma_n[1] * t.y();
+          const double theta = std::hypot(a, b), phi = std::atan2(b, a);
+          n = node.normal_frame * Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+        }
+        intensity = ambient + (1 - ambient) * std::max(0.0, light.dot(n));
+        if (specular) highlight = 255 * strength * std::pow(std::max(0.0, half.dot(n)), L.shininess);
+      }
+      col = (col * intensity).array() + highlight;
+      uint32_t rgb = 0;
+      for (int k = 0; k < 3; ++k) rgb = (rgb << 8) | static_cast<uint32_t>(std::clamp(std::lround(col[k]), 0L, 255L));
+      const int x0 = static_cast<int>(std::floor(x - (s - 1) / 2.0)), y0 = static_cast<int>(std::floor(y - (s - 1) / 2.0));
+      for (int py = std::max(y0, 0); py < std::min(y0 + s, h); ++py)
+        for (int px = std::max(x0, 0); px < std::min(x0 + s, w); ++px) {
+          const size_t i = static_cast<size_t>(py) * w + px;
+          if (p.z() < depth[i]) {
+            depth[i] = p.z();
+            color_buf[i] = rgb;
+          }
+        }
+    }
+  }
+  Image img;
+  img.width = w;
+  img.height = h;
+  img.rgb.resize(static_cast<size_t>(w) * h * 3);
+  for (size_t i = 0; i < color_buf.size(); ++i) {
+    uint32_t v = color_buf[i];
+    if (config.raster.format == PixelFormat::kRgb565) {
+      const uint16_t q = rgb565(v);
+      const unsigned r = q >> 11, g = (q >> 5) & 63, b = q & 31;
+      v = (((r << 3) | (r >> 2)) << 16) | (((g << 2) | (g >> 4)) << 8) | ((b << 3) | (b >> 2));
+    }
+    img.rgb[3 * i] = static_cast<uint8_t>(v >> 16);
+    img.rgb[3 * i + 1] = static_cast<uint8_t>(v >> 8);
+    img.rgb[3 * i + 2] = static_cast<uint8_t>(v);
+  }
+  return img;
+}
+
+}  // namespace stipple
