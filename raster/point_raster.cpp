@@ -10,6 +10,11 @@ struct Layout {
   size_t points, tile_start, tile_count, tile_fill, tile_index, tile_words, total;
 };
 
+// Tile-index entries: one per point plus a quarter for points on tile edges
+// (a point of s <= 3 px straddles an edge of a 2^k-pixel tile with
+// probability about 2 (s - 1) / 2^k; at 32 px and s = 2, 6 %).
+uint32_t tile_entries(const RasterConfig& c) { return c.max_points + c.max_points / 4 + 3; }
+
 bool valid(const RasterConfig& c) {
   return c.width > 0 && c.height > 0 && c.tile_log2 >= 3 && c.tile_log2 <= 7 && c.max_points > 0 &&
          c.max_points <= (1u << 26);
@@ -30,7 +35,7 @@ Layout layout_of(const RasterConfig& c, size_t binned_size) {
   l.tile_fill = at;
   at += align8(4 * tiles);
   l.tile_index = at;
-  at += align8(4 * 4 * size_t{c.max_points});  // a point of <= 3 px touches <= 4 tiles
+  at += align8(4 * size_t{tile_entries(c)});
   l.tile_words = at;
   at += align8(word * tile * tile);
   l.total = at;
@@ -61,11 +66,11 @@ void store(uint8_t* p, uint64_t word) {  // RGB888
 }  // namespace
 
 size_t point_raster_bytes(const RasterConfig& config) {
-  return valid(config) ? layout_of(config, sizeof(uint32_t) * 4).total : 0;
+  return valid(config) ? layout_of(config, sizeof(uint32_t) * 3).total : 0;
 }
 
 RasterStatus PointRaster::init(const RasterConfig& config, void* arena, size_t bytes) {
-  static_assert(sizeof(Binned) == 16, "Binned is sized into point_raster_bytes");
+  static_assert(sizeof(Binned) == 12, "Binned is sized into point_raster_bytes");
   if (!valid(config)) return RasterStatus::kBadConfig;
   const Layout l = layout_of(config, sizeof(Binned));
   if (bytes < l.total) return RasterStatus::kArenaTooSmall;
@@ -79,6 +84,7 @@ RasterStatus PointRaster::init(const RasterConfig& config, void* arena, size_t b
   tile_fill_ = reinterpret_cast<uint32_t*>(base + l.tile_fill);
   tile_index_ = reinterpret_cast<uint32_t*>(base + l.tile_index);
   tile_words_ = base + l.tile_words;
+  bin_capacity_ = tile_entries(config);
   begin_frame();
   return RasterStatus::kOk;
 }
@@ -100,15 +106,15 @@ bool PointRaster::add(const ScreenPoint& p, int size_px) {
   if (y0 < 0) y0 = 0;
   if (x1 > config_.width) x1 = config_.width;
   if (y1 > config_.height) y1 = config_.height;
-  Binned& b = points_[count_++];
-  b = Binned{static_cast<uint16_t>(x0), static_cast<uint16_t>(y0), static_cast<uint8_t>(x1 - x0),
-             static_cast<uint8_t>(y1 - y0), p.depth, p.rgb};
   const int sh = config_.tile_log2;
-  for (int ty = y0 >> sh; ty <= (y1 - 1) >> sh; ++ty)
-    for (int tx = x0 >> sh; tx <= (x1 - 1) >> sh; ++tx) {
-      ++tile_count_[ty * tiles_x_ + tx];
-      ++bins_;
-    }
+  const int tx0 = x0 >> sh, tx1 = (x1 - 1) >> sh, ty0 = y0 >> sh, ty1 = (y1 - 1) >> sh;
+  const uint32_t entries = static_cast<uint32_t>((tx1 - tx0 + 1) * (ty1 - ty0 + 1));
+  if (bins_ + entries > bin_capacity_) return false;
+  points_[count_++] = Binned{static_cast<uint16_t>(x0), static_cast<uint16_t>(y0), p.depth,
+                             (p.rgb & 0xFFFFFFu) | static_cast<uint32_t>(x1 - x0) << 24 | static_cast<uint32_t>(y1 - y0) << 28};
+  for (int ty = ty0; ty <= ty1; ++ty)
+    for (int tx = tx0; tx <= tx1; ++tx) ++tile_count_[ty * tiles_x_ + tx];
+  bins_ += entries;
   return true;
 }
 
@@ -131,8 +137,9 @@ void PointRaster::draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride) 
   }
   for (uint32_t i = 0; i < count_; ++i) {
     const Binned& b = points_[i];
-    for (int ty = b.y0 >> sh; ty <= (b.y0 + b.h - 1) >> sh; ++ty)
-      for (int tx = b.x0 >> sh; tx <= (b.x0 + b.w - 1) >> sh; ++tx) tile_index_[tile_fill_[ty * tiles_x_ + tx]++] = i;
+    const int w = static_cast<int>((b.rgb_wh >> 24) & 15u), h = static_cast<int>(b.rgb_wh >> 28);
+    for (int ty = b.y0 >> sh; ty <= (b.y0 + h - 1) >> sh; ++ty)
+      for (int tx = b.x0 >> sh; tx <= (b.x0 + w - 1) >> sh; ++tx) tile_index_[tile_fill_[ty * tiles_x_ + tx]++] = i;
   }
   Word* words = static_cast<Word*>(tile_words_);
   const Word clear = pack<Word>(0xFFFFFFFFu, clear_rgb);
@@ -146,10 +153,11 @@ void PointRaster::draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride) 
       for (int i = 0; i < tile * tile; ++i) words[i] = clear;
       for (uint32_t k = tile_start_[t]; k < tile_start_[t] + tile_count_[t]; ++k) {
         const Binned& b = points_[tile_index_[k]];
-        const Word w = pack<Word>(b.depth, b.rgb);
+        const Word w = pack<Word>(b.depth, b.rgb_wh & 0xFFFFFFu);
+        const int bw = static_cast<int>((b.rgb_wh >> 24) & 15u), bh = static_cast<int>(b.rgb_wh >> 28);
         // Only the pixels of this tile: each pixel belongs to exactly one tile.
-        const int xa = b.x0 > px0 ? b.x0 : px0, xb = b.x0 + b.w < px0 + pw ? b.x0 + b.w : px0 + pw;
-        const int ya = b.y0 > py0 ? b.y0 : py0, yb = b.y0 + b.h < py0 + ph ? b.y0 + b.h : py0 + ph;
+        const int xa = b.x0 > px0 ? b.x0 : px0, xb = b.x0 + bw < px0 + pw ? b.x0 + bw : px0 + pw;
+        const int ya = b.y0 > py0 ? b.y0 : py0, yb = b.y0 + bh < py0 + ph ? b.y0 + bh : py0 + ph;
         for (int y = ya; y < yb; ++y) {
           Word* row = words + ((y - py0) << sh);
           for (int x = xa; x < xb; ++x)

@@ -56,9 +56,10 @@ class PointRaster {
 
   // Starts a frame: forgets all points.
   void begin_frame();
-  // Bins a point of `size_px` (1..3). Returns false when the frame's point
-  // budget is full (the point is dropped); a point entirely off screen is
-  // accepted and ignored.
+  // Bins a point of `size_px` (1..3). Returns false when the frame's budget
+  // is full — max_points points, or max_points * 5/4 tile entries (a point
+  // straddling tile edges takes 2 or 4) — and the point is dropped; a point
+  // entirely off screen is accepted and ignored.
   bool add(const ScreenPoint& p, int size_px);
   // Draws the binned points over `clear_rgb` into `frame` (height rows of
   // `stride` bytes, pixels in the configured format, little-endian RGB565).
@@ -69,8 +70,8 @@ class PointRaster {
  private:
   struct Binned {
     uint16_t x0, y0;  // first covered pixel (clipped to the screen)
-    uint8_t w, h;     // covered size after clipping
-    uint32_t depth, rgb;
+    uint32_t depth;
+    uint32_t rgb_wh;  // 0xRRGGBB, covered width << 24, height << 28 (after clipping, 1..3)
   };
   template <class Word>
   void draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride) const;
@@ -83,7 +84,7 @@ class PointRaster {
   uint32_t* tile_index_ = nullptr;  // point indices grouped by tile
   uint32_t* tile_fill_ = nullptr;
   void* tile_words_ = nullptr;      // one tile of depth+colour words
-  uint32_t count_ = 0, bins_ = 0;
+  uint32_t count_ = 0, bins_ = 0, bin_capacity_ = 0;
 };
 
 }  // namespace stipple

@@ -12,6 +12,8 @@
 #include "core/node_decoder.h"
 #include "core/spg_format.h"
 #include "platform/file_io.h"
+#include "core/cut.h"
+#include "raster/client.h"
 #include "raster/point_raster.h"
 
 extern "C" void* __libc_malloc(size_t);
@@ -109,6 +111,47 @@ int main(int argc, char** argv) {
     checksum += frame_pixels[frame];
   }
   check(g_heap_calls.load() - before == 0, "100 frames of 30,000 points rasterized after init", g_heap_calls.load() - before);
+
+  // The whole client: init over one arena, then startup, nodes, frames from
+  // several cameras, node churn and a reload — with no heap call after init.
+  stipple::ClientConfig client_config;
+  client_config.raster = stipple::RasterConfig{240, 320, 5, stipple::PixelFormat::kRgb565, 60000};
+  client_config.node_capacity = 8000;
+  std::vector<uint64_t> client_arena(stipple::client_arena_bytes(client_config) / 8 + 1);
+  stipple::Client client;
+  if (client.init(client_config, client_arena.data(), client_arena.size() * 8) != stipple::ClientStatus::kOk) return 2;
+  std::vector<uint8_t> cut_scratch(stipple::cut_scratch_bytes(view.header));
+  std::vector<uint32_t> cut(view.header.node_count);
+  const size_t startup_bytes = static_cast<size_t>(view.topology - spg.data());
+  before = g_heap_calls.load();
+  bool client_ok = true;
+  stipple::FrameStats stats;
+  for (int reload = 0; reload < 3; ++reload) {
+    client_ok &= client.load_startup(spg.data(), startup_bytes) == stipple::ClientStatus::kOk;
+    for (int frame = 0; frame < 30; ++frame) {
+      stipple::OrbitView orbit;
+      for (int a = 0; a < 3; ++a) orbit.target_mu[a] = decoder.extent_mu()[a] / 2;
+      orbit.distance_mu = 3 << 24;
+      orbit.yaw = static_cast<uint32_t>(frame) * 0x08000000u;
+      orbit.pitch = static_cast<uint32_t>(reload) * 0x04000000u;
+      stipple::Camera camera;
+      client_ok &= stipple::orbit_camera(orbit, 240, 320, &camera);
+      const stipple::CutRule rule{stipple::CutRule::kProjectedSize, 0, 32};
+      const uint32_t n = stipple::simple_cut(view, rule, &decoder, &camera, cut_scratch.data(), cut.data(),
+                                             static_cast<uint32_t>(cut.size()));
+      // Drop what left the cut (every node, for simplicity, every 10th frame), add what entered.
+      if (frame % 10 == 0)
+        for (uint32_t i = 0; i < view.header.node_count; ++i)
+          if (client.has_node(i)) client_ok &= client.drop_node(i) == stipple::ClientStatus::kOk;
+      for (uint32_t i = 0; i < n && i < client_config.node_capacity; ++i)
+        client_ok &= client.put_node(cut[i], view.records + static_cast<size_t>(cut[i]) * view.record_bytes,
+                                     view.record_bytes) == stipple::ClientStatus::kOk;
+      client_ok &= client.render(camera, frame_pixels.data(), 240 * 2, &stats) == stipple::ClientStatus::kOk;
+      checksum += frame_pixels[1000 + frame] + stats.points;
+    }
+  }
+  check(client_ok && g_heap_calls.load() - before == 0,
+        "client: 3 startups, 90 frames with cuts, puts, drops after init", g_heap_calls.load() - before);
   std::printf("checksum %ld\n%d passed, %d failed\n", checksum, passed, failed);
   return failed == 0 ? 0 : 1;
 }

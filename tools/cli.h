@@ -59,4 +59,5 @@ int cmd_metrics(int argc, char** argv);
 int cmd_levels(int argc, char** argv);
 int cmd_render(int argc, char** argv);
 int cmd_ppn_table(int argc, char** argv);
+int cmd_image_diff(int argc, char** argv);
 }  // namespace stipple

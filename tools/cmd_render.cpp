@@ -1,6 +1,8 @@
 // stipple — `render` (the fixed-point client in process, or the double
 // reference) and `ppn-table` (measures the points-per-node table).
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -28,7 +30,7 @@ const char kRenderHelp[] =
     "  --format rgb565|rgb888 pixel format (default rgb565)\n"
     "  --camera Y,P[,D[,F]]   orbit: yaw and pitch in degrees, distance from the\n"
     "                         centre in model extents, vertical field of view in\n"
-    "                         degrees (default 30,20,2.2,35)\n"
+    "                         degrees (default 30,20,3,35)\n"
     "cut:\n"
     "  --max-size PX          split nodes whose projected 3.5-sigma radius exceeds PX\n"
     "                         pixels (default 2, the paper's threshold)\n"
@@ -59,6 +61,14 @@ const char kPpnHelp[] =
     "of the pixels inside its 2-sigma ellipse, for Sobol and pseudo-random\n"
     "samples and point sizes 1-3. Prints the paper's examples side by side;\n"
     "--write FILE writes the C++ table (raster/ppn_table.inc).\n";
+
+const char kDiffHelp[] =
+    "usage: stipple image-diff EXPECTED.png ACTUAL.png [-o DIFF.png]\n"
+    "\n"
+    "Compares two RGB images of the same size byte for byte. Prints the number of\n"
+    "differing pixels, the largest channel difference and the PSNR; -o writes a\n"
+    "diff image (the expected image darkened, differing pixels in red, brighter\n"
+    "for larger differences). Exit status 0 when identical, 1 when not.\n";
 
 bool parse_size(const std::string& text, uint16_t& w, uint16_t& h) {
   const size_t x = text.find('x');
@@ -204,6 +214,50 @@ int cmd_render(int argc, char** argv) {
   std::vector<uint8_t> file;
   if (!read_file(files[0], file, error)) return cli::fail(error);
   return render_to_png(files[0], file, o, output, reference, psnr, json);
+}
+
+int cmd_image_diff(int argc, char** argv) {
+  cli::Args args(argc, argv, 2);
+  if (args.flag("--help") || args.flag("-h")) {
+    std::fputs(kDiffHelp, stdout);
+    return 0;
+  }
+  std::string output, error;
+  if (!args.value("-o", output)) args.value("--output", output);
+  const std::vector<std::string> files = args.positionals();
+  if (args.bad()) return cli::fail("image-diff: " + args.error());
+  if (!args.unknown_option().empty()) return cli::fail("image-diff: unknown option '" + args.unknown_option() + "'");
+  if (files.size() != 2) return cli::fail("image-diff: expected EXPECTED.png and ACTUAL.png");
+  Image a, b;
+  if (!read_png_rgb(files[0], a.width, a.height, a.rgb, error) || !read_png_rgb(files[1], b.width, b.height, b.rgb, error))
+    return cli::fail(error);
+  if (a.width != b.width || a.height != b.height)
+    return cli::fail("image-diff: " + files[0] + " is " + std::to_string(a.width) + "x" + std::to_string(a.height) + ", " +
+                     files[1] + " is " + std::to_string(b.width) + "x" + std::to_string(b.height));
+  long differing = 0;
+  int largest = 0;
+  std::vector<uint8_t> diff(a.rgb.size());
+  for (size_t i = 0; i < a.rgb.size(); i += 3) {
+    int d = 0;
+    for (int c = 0; c < 3; ++c) d = std::max(d, std::abs(a.rgb[i + c] - b.rgb[i + c]));
+    largest = std::max(largest, d);
+    if (d > 0) {
+      ++differing;
+      diff[i] = static_cast<uint8_t>(std::min(255, 128 + 2 * d));
+      diff[i + 1] = diff[i + 2] = 0;
+    } else {
+      for (int c = 0; c < 3; ++c) diff[i + c] = static_cast<uint8_t>(a.rgb[i + c] / 4);
+    }
+  }
+  if (!output.empty() && !write_png_rgb(output, a.width, a.height, diff, error)) return cli::fail(error);
+  if (differing == 0) {
+    std::printf("%s and %s are identical (%dx%d)\n", files[0].c_str(), files[1].c_str(), a.width, a.height);
+    return 0;
+  }
+  std::printf("%s and %s differ: %ld of %ld pixels, largest channel difference %d, PSNR %.2f dB%s\n", files[0].c_str(),
+              files[1].c_str(), differing, static_cast<long>(a.width) * a.height, largest, image_psnr(a, b),
+              output.empty() ? "" : (" -> " + output).c_str());
+  return 1;
 }
 
 int cmd_ppn_table(int argc, char** argv) {

@@ -18,7 +18,7 @@ namespace stipple {
 // An orbit camera in user units: degrees, and the distance from the model's
 // centre in units of the model's largest extent.
 struct ViewSpec {
-  double yaw = 30, pitch = 20, distance = 2.2, fov = 35;
+  double yaw = 30, pitch = 20, distance = 3, fov = 35;
 };
 
 // "yaw,pitch[,distance[,fov]]"; error names the bad part.

@@ -1,0 +1,278 @@
+// The handheld client's API (raster/client.h): arena sizing, startup and
+// record validation, the node cache, and what it draws — against the double
+// reference renderer and against itself under cache churn.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "core/cut.h"
+#include "platform/file_io.h"
+#include "raster/client.h"
+#include "test_util.h"
+#include "tools/host/render.h"
+
+namespace stipple {
+namespace {
+
+struct Model {
+  std::vector<uint8_t> file;
+  SpgView view;
+  size_t startup_bytes = 0;
+};
+
+const Model& bunny() {
+  static const Model m = [] {
+    Model out;
+    std::string error;
+    EXPECT_TRUE(read_file(test::source_path("tests/golden/bunny_v1.spg"), out.file, error)) << error;
+    EXPECT_TRUE(spg_parse(out.file.data(), out.file.size(), &out.view).ok());
+    out.startup_bytes = static_cast<size_t>(out.view.topology - out.file.data());
+    return out;
+  }();
+  return m;
+}
+
+ClientConfig small_config(uint32_t capacity = 8000) {
+  ClientConfig c;
+  c.raster = RasterConfig{240, 320, 5, PixelFormat::kRgb565, 200000};
+  c.node_capacity = capacity;
+  return c;
+}
+
+struct Harness {
+  std::vector<uint64_t> arena;
+  Client client;
+  explicit Harness(const ClientConfig& c) : arena(client_arena_bytes(c) / 8 + 1) {
+    EXPECT_EQ(client.init(c, arena.data(), arena.size() * 8), ClientStatus::kOk);
+  }
+};
+
+const uint8_t* record(uint32_t id) { return bunny().view.records + static_cast<size_t>(id) * bunny().view.record_bytes; }
+
+Camera camera_for(const Client& client, double yaw, double pitch, uint16_t w = 240, uint16_t h = 320) {
+  ViewSpec spec;
+  spec.yaw = yaw;
+  spec.pitch = pitch;
+  Camera cam;
+  EXPECT_TRUE(orbit_camera(orbit_view(client.decoder().extent_mu(), spec), w, h, &cam));
+  return cam;
+}
+
+std::vector<uint8_t> draw(Client& client, const Camera& cam, FrameStats* stats = nullptr) {
+  std::vector<uint8_t> frame(240 * 320 * 2, 0xAB);
+  EXPECT_EQ(client.render(cam, frame.data(), 240 * 2, stats), ClientStatus::kOk);
+  return frame;
+}
+
+TEST(Client, ArenaSizeIsExactAndChecked) {
+  const ClientConfig c = small_config();
+  const size_t need = client_arena_bytes(c);
+  ASSERT_GT(need, 0u);
+  std::vector<uint64_t> arena(need / 8);
+  Client client;
+  EXPECT_EQ(client.init(c, arena.data(), need - 1), ClientStatus::kArenaTooSmall);
+  EXPECT_EQ(client.init(c, arena.data(), need), ClientStatus::kOk);
+  ClientConfig bad = c;
+  bad.point_size = 4;
+  EXPECT_EQ(client_arena_bytes(bad), 0u);
+  EXPECT_EQ(client.init(bad, arena.data(), need), ClientStatus::kBadConfig);
+  bad = c;
+  bad.lighting.light_q14[0] = bad.lighting.light_q14[1] = bad.lighting.light_q14[2] = 0;
+  EXPECT_EQ(client.init(bad, arena.data(), need), ClientStatus::kBadConfig);
+  bad = c;
+  bad.raster.width = 0;
+  EXPECT_EQ(client_arena_bytes(bad), 0u);
+}
+
+TEST(Client, HandheldArenaAt240x320With30KNodes) {
+  // The configuration docs/fixed_point.md reports: normals, no colour (the
+  // bunny and dragon scans), 30 K cached nodes, a 60 K-point frame budget.
+  ClientConfig c;
+  c.raster = RasterConfig{240, 320, 5, PixelFormat::kRgb565, 60000};
+  c.node_capacity = 30000;
+  c.color = false;
+  const size_t bytes = client_arena_bytes(c);
+  c.color = true;
+  const size_t with_color = client_arena_bytes(c);
+  std::printf("arena at 240x320, 30,000 nodes, 60,000 points: %zu bytes (%zu with colour)\n", bytes, with_color);
+  EXPECT_LE(bytes, 2u << 20);
+  EXPECT_LE(with_color, 2u << 20);
+}
+
+TEST(Client, RefusesWorkBeforeStartupAndBadStartups) {
+  Harness h(small_config());
+  Camera cam{};
+  std::vector<uint8_t> frame(240 * 320 * 2);
+  EXPECT_EQ(h.client.put_node(0, record(0), bunny().view.record_bytes), ClientStatus::kNoStartup);
+  EXPECT_EQ(h.client.drop_node(0), ClientStatus::kNoStartup);
+  EXPECT_EQ(h.client.render(cam, frame.data(), 480), ClientStatus::kNoStartup);
+
+  std::vector<uint8_t> startup(bunny().file.begin(), bunny().file.begin() + static_cast<long>(bunny().startup_bytes));
+  // Truncated inside the class tables.
+  EXPECT_EQ(h.client.load_startup(startup.data(), startup.size() - 1), ClientStatus::kBadStartup);
+  EXPECT_EQ(h.client.startup_error().error, SpgError::kTruncated);
+  // A NaN in the sigma_p table: the error names its byte.
+  std::vector<uint8_t> nan = startup;
+  const size_t at = kSpgFixedHeaderBytes + 4;
+  nan[at] = 0x00, nan[at + 1] = 0x00, nan[at + 2] = 0xC0, nan[at + 3] = 0x7F;
+  EXPECT_EQ(h.client.load_startup(nan.data(), nan.size()), ClientStatus::kBadStartup);
+  EXPECT_EQ(h.client.startup_error().error, SpgError::kBadFloat);
+  EXPECT_EQ(h.client.startup_error().offset, at);
+  // More classes than the arena was sized for.
+  ClientConfig tight = small_config();
+  tight.max_classes[0] = 16;
+  Harness t(tight);
+  EXPECT_EQ(t.client.load_startup(startup.data(), startup.size()), ClientStatus::kStartupTooLarge);
+  // Normals the configuration does not accept.
+  ClientConfig bare = small_config();
+  bare.normals = false;
+  Harness b(bare);
+  EXPECT_EQ(b.client.load_startup(startup.data(), startup.size()), ClientStatus::kStartupTooLarge);
+  // The good one, from a copy that then goes away.
+  {
+    std::vector<uint8_t> copy = startup;
+    EXPECT_EQ(h.client.load_startup(copy.data(), copy.size()), ClientStatus::kOk);
+  }
+  EXPECT_EQ(h.client.record_bytes(), bunny().view.record_bytes);
+  EXPECT_EQ(h.client.put_node(0, record(0), bunny().view.record_bytes), ClientStatus::kOk);
+}
+
+TEST(Client, ValidatesRecordsAndCacheBounds) {
+  Harness h(small_config(4));
+  ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+  const size_t rb = bunny().view.record_bytes;
+  EXPECT_EQ(h.client.put_node(1, record(1), rb - 1), ClientStatus::kBadRecordSize);
+  // A sigma_p class index beyond the table: all ones in the record's class field.
+  std::vector<uint8_t> bad(record(1), record(1) + rb);
+  const RecordLayout& l = bunny().view.header.layout;
+  NodeFields f = unpack_record(l, bad.data());
+  f.v[static_cast<int>(Field::kSigmaP)] = static_cast<uint16_t>((1u << l.width(Field::kSigmaP)) - 1);
+  ASSERT_GE(f[Field::kSigmaP], bunny().view.header.class_count[0]);
+  pack_record(l, f, bad.data());
+  EXPECT_EQ(h.client.put_node(1, bad.data(), rb), ClientStatus::kBadRecord);
+  EXPECT_FALSE(h.client.has_node(1));
+  for (uint32_t id = 0; id < 4; ++id) EXPECT_EQ(h.client.put_node(id * 1000, record(id), rb), ClientStatus::kOk);
+  EXPECT_EQ(h.client.put_node(7, record(7), rb), ClientStatus::kCacheFull);
+  EXPECT_EQ(h.client.put_node(2000, record(9), rb), ClientStatus::kOk);  // replacing is not adding
+  EXPECT_EQ(h.client.node_count(), 4u);
+  EXPECT_EQ(h.client.drop_node(5), ClientStatus::kUnknownNode);
+  EXPECT_EQ(h.client.drop_node(0), ClientStatus::kOk);
+  EXPECT_EQ(h.client.drop_node(0), ClientStatus::kUnknownNode);
+  EXPECT_EQ(h.client.put_node(7, record(7), rb), ClientStatus::kOk);
+  Camera cam{};
+  std::vector<uint8_t> frame(240 * 320 * 2);
+  EXPECT_EQ(h.client.render(cam, frame.data(), 480), ClientStatus::kBadCamera);
+}
+
+// The cache is a set: any order of puts and drops that ends with the same
+// nodes draws the same frame as loading those nodes fresh.
+TEST(Client, FrameDependsOnlyOnTheCachedSet) {
+  const uint32_t n = bunny().view.header.node_count;
+  const size_t rb = bunny().view.record_bytes;
+  ClientConfig c = small_config(n);
+  c.raster.max_points = 1u << 21;  // no point dropped: the budget would make the frame order-dependent
+  Harness churn(c), fresh(c);
+  ASSERT_EQ(churn.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+  ASSERT_EQ(fresh.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+  std::mt19937 rng(7);
+  std::vector<bool> held(n, false);
+  for (int step = 0; step < 60000; ++step) {
+    const uint32_t id = static_cast<uint32_t>(rng() % n);
+    if (held[id] && rng() % 2) {
+      ASSERT_EQ(churn.client.drop_node(id), ClientStatus::kOk);
+      held[id] = false;
+    } else {
+      ASSERT_EQ(churn.client.put_node(id, record(id), rb), ClientStatus::kOk);
+      held[id] = true;
+    }
+  }
+  uint32_t count = 0;
+  for (uint32_t id = 0; id < n; ++id) {
+    EXPECT_EQ(churn.client.has_node(id), static_cast<bool>(held[id])) << id;
+    if (held[id]) {
+      ++count;
+      ASSERT_EQ(fresh.client.put_node(id, record(id), rb), ClientStatus::kOk);
+    }
+  }
+  EXPECT_EQ(churn.client.node_count(), count);
+  const Camera cam = camera_for(fresh.client, 30, 20);
+  FrameStats a, b;
+  EXPECT_EQ(draw(churn.client, cam, &a), draw(fresh.client, cam, &b));
+  EXPECT_EQ(a.points, b.points);
+  EXPECT_EQ(a.points_dropped, 0u);
+  EXPECT_GT(a.points, 10000u);
+}
+
+TEST(Client, DrawsNothingBehindTheCameraAndCountsCulls) {
+  const uint32_t n = bunny().view.header.node_count;
+  Harness h(small_config(n));
+  ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+  for (uint32_t id = 0; id < n; ++id) ASSERT_EQ(h.client.put_node(id, record(id), bunny().view.record_bytes), ClientStatus::kOk);
+  Camera cam = camera_for(h.client, 0, 0);
+  // Turn the camera around: the model is behind it.
+  for (int k = 0; k < 3; ++k)
+    for (int r = 0; r < 2; ++r) cam.rotation[r == 0 ? 0 : 2][k] = -cam.rotation[r == 0 ? 0 : 2][k];
+  FrameStats stats;
+  const std::vector<uint8_t> frame = draw(h.client, cam, &stats);
+  EXPECT_EQ(stats.points, 0u);
+  EXPECT_EQ(stats.nodes_culled, n);
+  EXPECT_TRUE(std::all_of(frame.begin(), frame.end(), [](uint8_t v) { return v == 0; }));  // cleared to black
+}
+
+TEST(Client, FrameBudgetDropsPointsAndSaysSo) {
+  ClientConfig c = small_config(bunny().view.header.node_count);
+  c.raster.max_points = 1000;
+  Harness h(c);
+  ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+  for (uint32_t id = 0; id < bunny().view.header.node_count; ++id)
+    ASSERT_EQ(h.client.put_node(id, record(id), bunny().view.record_bytes), ClientStatus::kOk);
+  FrameStats stats;
+  draw(h.client, camera_for(h.client, 0, 0), &stats);
+  EXPECT_LE(stats.points, 1000u);
+  EXPECT_GT(stats.points, 900u);
+  EXPECT_GT(stats.points_dropped, 0u);
+}
+
+// Fixed point against the double reference: same cut, same samples. Ties in
+// the z-buffer flip wherever two points land within rounding of each other,
+// so the bound is on PSNR, per projection mode (docs/fixed_point.md).
+TEST(Client, FixedPointAgainstDoubleReference) {
+  DecodedModel model;
+  std::string error;
+  ASSERT_TRUE(decode_spg("bunny", bunny().file.data(), bunny().file.size(), model, error)) << error;
+  const struct {
+    Projection p;
+    ShadingMode s;
+    double bound;
+  } cases[] = {{Projection::kExact, ShadingMode::kNone, 33},         {Projection::kExact, ShadingMode::kPerPoint, 32.5},
+               {Projection::kReciprocal, ShadingMode::kPerPoint, 32.5}, {Projection::kAffine, ShadingMode::kNone, 32},
+               {Projection::kAffine, ShadingMode::kPerPoint, 30}};
+  for (const auto& k : cases) {
+    for (const char* size : {"240x320", "640x480"}) {
+      ClientConfig c;
+      const bool big = size[0] == '6';
+      c.raster = RasterConfig{static_cast<uint16_t>(big ? 640 : 240), static_cast<uint16_t>(big ? 480 : 320), 5,
+                              big ? PixelFormat::kRgb888 : PixelFormat::kRgb565, 1u << 20};
+      c.projection = k.p;
+      c.shading = k.s;
+      const CutRule rule{CutRule::kProjectedSize, 0, 32};
+      const ViewSpec spec;
+      FixedRender fixed;
+      ASSERT_TRUE(render_fixed(bunny().view, bunny().file.data(), c, rule, spec, fixed, error)) << error;
+      const Image ref = render_reference(model, fixed.cut, c, spec);
+      const double db = image_psnr(fixed.image, ref);
+      const char* projections[] = {"affine", "reciprocal", "exact"};
+      const char* shadings[] = {"point", "node", "none"};
+      std::printf("%s projection %-10s shading %-5s: %.2f dB (%u points)\n", size, projections[static_cast<int>(k.p)],
+                  shadings[static_cast<int>(k.s)], db, fixed.stats.points);
+      EXPECT_GE(db, k.bound);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace stipple

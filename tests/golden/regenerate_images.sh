@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Regenerates the golden images: the bunny (tests/golden/bunny_v1.spg) from
+# three views, 240x320 RGB565 and 640x480 RGB888, drawn by the fixed-point
+# client through `stipple render`. For every image that changes it writes
+# NAME.diff.png beside it (differing pixels in red) and prints what changed.
+# Review the diffs before committing: these bytes are the contract that every
+# platform (x86-64, ARM) must reproduce. tests/CMakeLists.txt lists the same
+# views and sizes.
+#
+# usage: tests/golden/regenerate_images.sh [path/to/stipple]
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+S=${1:-build/release/tools/stipple}
+views=("yaw0:0,0" "yaw90:90,20" "yaw210:210,35")
+configs=("240x320:rgb565" "640x480:rgb888")
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+for v in "${views[@]}"; do
+  for c in "${configs[@]}"; do
+    name="bunny_${v%%:*}_${c%%:*}_${c##*:}"
+    "$S" render tests/golden/bunny_v1.spg --camera "${v##*:},3,35" --size "${c%%:*}" --format "${c##*:}" \
+      -o "$tmp/$name.png" >/dev/null
+    golden="tests/golden/$name.png"
+    if [[ -f "$golden" ]] && "$S" image-diff "$golden" "$tmp/$name.png" -o "tests/golden/$name.diff.png" >/dev/null; then
+      rm -f "tests/golden/$name.diff.png"
+      echo "unchanged  $golden"
+    else
+      [[ -f "$golden" ]] && echo "CHANGED    $golden (see tests/golden/$name.diff.png)" || echo "new        $golden"
+      cp "$tmp/$name.png" "$golden"
+    fi
+  done
+done
