@@ -44,7 +44,8 @@ SpgHeader worst_header(const ClientConfig& c) {
 Layout layout_of(const ClientConfig& c) {
   Layout l{};
   l.decoder_bytes = node_decoder_bytes(worst_header(c));
-  l.record_stride = static_cast<size_t>(paper_layout(c.normals, c.color, 2).record_bytes());
+  l.record_stride = c.cache_decoded ? sizeof(FixedNode)
+                                    : static_cast<size_t>(paper_layout(c.normals, c.color, 2).record_bytes());
   l.hash_entries = 1;
   while (l.hash_entries < c.node_capacity + c.node_capacity / 2) l.hash_entries <<= 1;
   size_t at = 0;
@@ -156,7 +157,8 @@ ClientStatus Client::load_startup(const uint8_t* data, size_t size) {
   if ((h.has_normals() && !config_.normals) || (h.has_color() && !config_.color)) return ClientStatus::kStartupTooLarge;
   for (int c = 0; c < 3; ++c)
     if (h.class_count[c] > config_.max_classes[c]) return ClientStatus::kStartupTooLarge;
-  if (static_cast<size_t>(h.layout.record_bytes()) > record_stride_ || node_decoder_bytes(h) > decoder_bytes_)
+  if ((!config_.cache_decoded && static_cast<size_t>(h.layout.record_bytes()) > record_stride_) ||
+      node_decoder_bytes(h) > decoder_bytes_)
     return ClientStatus::kStartupTooLarge;
   for (Field theta : {Field::kFpTheta, Field::kFnTheta, Field::kFcTheta})
     for (int k = 0; k < 3; ++k)
@@ -198,8 +200,8 @@ ClientStatus Client::put_node(uint32_t id, const uint8_t* record, size_t size) {
   if (size != record_bytes_) return ClientStatus::kBadRecordSize;
   const int pad_bits = static_cast<int>(record_bytes_ * 8) - header_.layout.total_bits();
   if (pad_bits > 0 && (record[record_bytes_ - 1] >> (8 - pad_bits)) != 0) return ClientStatus::kBadRecord;
-  FixedNode check;
-  if (decoder_.decode(record, &check) != DecodeStatus::kOk) return ClientStatus::kBadRecord;
+  FixedNode decoded;
+  if (decoder_.decode(record, &decoded) != DecodeStatus::kOk) return ClientStatus::kBadRecord;
   uint32_t* entry = find(id);
   uint32_t slot;
   if (*entry != 0) {
@@ -211,7 +213,9 @@ ClientStatus Client::put_node(uint32_t id, const uint8_t* record, size_t size) {
     *entry = slot + 1;
   }
   uint8_t* dst = records_ + slot * record_stride_;
-  for (size_t i = 0; i < record_bytes_; ++i) dst[i] = record[i];
+  if (config_.cache_decoded) *reinterpret_cast<FixedNode*>(dst) = decoded;
+  else
+    for (size_t i = 0; i < record_bytes_; ++i) dst[i] = record[i];
   return ClientStatus::kOk;
 }
 
@@ -224,7 +228,7 @@ ClientStatus Client::drop_node(uint32_t id) {
   if (slot != last) {  // keep the cache dense: the last node moves into the hole
     const uint8_t* src = records_ + last * record_stride_;
     uint8_t* dst = records_ + slot * record_stride_;
-    for (size_t i = 0; i < record_bytes_; ++i) dst[i] = src[i];
+    for (size_t i = 0; i < record_stride_; ++i) dst[i] = src[i];
     ids_[slot] = ids_[last];
     *find(ids_[slot]) = slot + 1;
   }
@@ -389,10 +393,14 @@ ClientStatus Client::render(const Camera& camera, uint8_t* frame, size_t stride,
   FrameStats stats;
   stats.nodes = count_;
   raster_.begin_frame();
-  FixedNode node;
-  for (uint32_t s = 0; s < count_; ++s) {
-    if (decoder_.decode(records_ + s * record_stride_, &node) != DecodeStatus::kOk) continue;  // checked at put_node
-    (this->*draw)(f, node, stats);
+  if (config_.cache_decoded) {
+    for (uint32_t s = 0; s < count_; ++s) (this->*draw)(f, *reinterpret_cast<const FixedNode*>(records_ + s * record_stride_), stats);
+  } else {
+    FixedNode node;
+    for (uint32_t s = 0; s < count_; ++s) {
+      if (decoder_.decode(records_ + s * record_stride_, &node) != DecodeStatus::kOk) continue;  // checked at put_node
+      (this->*draw)(f, node, stats);
+    }
   }
   raster_.draw(config_.clear_rgb, frame, stride);
   if (stats_out) *stats_out = stats;

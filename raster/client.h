@@ -12,7 +12,9 @@
 // After init nothing is allocated, nothing is thrown, and the per-frame path
 // (render) uses integer arithmetic only. A record is validated when it is put
 // (class indices against the startup tables, padding bits zero) and cached
-// in its packed form — 9 to 17 bytes a node — then decoded each frame.
+// in its packed form — 9 to 17 bytes a node — then decoded each frame; or,
+// with cache_decoded, decoded once and cached as a FixedNode (116 bytes),
+// which trades memory for the per-frame decode.
 //
 // Per node and frame: the mean and the sigma-scaled axes go to camera space;
 // the projection is linearized at the mean (M, 2 x 3, 1/16 px per sigma),
@@ -43,6 +45,8 @@ enum class ShadingMode : uint8_t { kPerPoint, kPerNode, kNone };
 struct ClientConfig {
   RasterConfig raster;                     // screen, pixel format, tiles, points per frame
   uint32_t node_capacity = 30000;          // nodes the cache holds
+  bool cache_decoded = false;              // keep decoded nodes (sizeof(FixedNode) bytes each) instead of
+                                           // packed records: no per-frame decode, ~7x the cache memory
   bool normals = true, color = true;       // attributes the arena is sized for
   uint16_t max_classes[3] = {4096, 4096, 64};  // sigma_p, sigma_n, sigma_c tables
   uint8_t max_angle_bits = 10;             // widest angle field accepted

@@ -47,9 +47,11 @@ const char kRenderHelp[] =
     "  --pseudo               pseudo-random instead of Sobol samples\n"
     "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
     "  --max-points N         frame budget (default 1048576)\n"
+    "  --cache-decoded        cache decoded nodes (no per-frame decode; ~7x the memory)\n"
     "output:\n"
     "  --reference            draw with the double-precision reference renderer instead\n"
     "  --psnr                 also render the reference and report PSNR against it\n"
+    "  --frames N             draw the frame N times and report the median time\n"
     "  --json                 one JSON line of statistics\n";
 
 const char kPpnHelp[] =
@@ -129,6 +131,7 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
   if (args.flag("--grey")) c.grey = true;
   if (args.flag("--mean-color")) c.sample_color = false;
   if (args.flag("--pseudo")) c.source = GaussianSource::kPseudo;
+  if (args.flag("--cache-decoded")) c.cache_decoded = true;
   if (args.value("--quality", v)) {
     double q = 0;
     if (!cli::parse_double(v, q) || !(q >= 0.01 && q <= 16))
@@ -152,15 +155,19 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
 }
 
 int render_to_png(const std::string& name, const std::vector<uint8_t>& file, const RenderOptions& o,
-                  const std::string& output, bool reference, bool psnr, bool json) {
+                  const std::string& output, bool reference, bool psnr, bool json, int frames) {
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
   if (!r.ok()) return cli::fail(name + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error));
   const double start = monotonic_seconds();
   FixedRender fixed;
   std::string error;
-  if (!render_fixed(view, file.data(), o.config, o.rule, o.view, fixed, error)) return cli::fail(name + ": " + error);
+  if (!render_fixed(view, file.data(), o.config, o.rule, o.view, fixed, error, frames))
+    return cli::fail(name + ": " + error);
   const double fixed_seconds = monotonic_seconds() - start;
+  std::vector<double> sorted = fixed.frame_seconds;
+  std::sort(sorted.begin(), sorted.end());
+  const double frame_median = sorted.empty() ? 0 : sorted[sorted.size() / 2];
   Image ref;
   if (reference || psnr) {
     DecodedModel model;
@@ -179,7 +186,9 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
         .integer("points", fixed.stats.points)
         .integer("points_dropped", fixed.stats.points_dropped)
         .integer("arena_bytes", static_cast<long long>(fixed.arena_bytes))
-        .num("seconds", fixed_seconds);
+        .num("seconds", fixed_seconds)
+        .num("frame_seconds_median", frame_median)
+        .num("points_per_second", frame_median > 0 ? fixed.stats.points / frame_median : 0);
     if (psnr) j.num("psnr_vs_reference", std::isinf(db) ? 999.0 : db);
     if (!output.empty()) j.str("output", output);
     std::printf("%s\n", j.done().c_str());
@@ -191,6 +200,9 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
                 cli::with_commas(fixed.arena_bytes).c_str(), output.empty() ? "" : (" -> " + output).c_str(),
                 reference ? " (reference renderer)" : "");
     if (psnr) std::printf("fixed point vs double reference: PSNR %.2f dB\n", db);
+    if (frames > 1)
+      std::printf("frame: median %.3f ms of %d, %.1f M points/s\n", 1e3 * frame_median, frames,
+                  fixed.stats.points / frame_median / 1e6);
   }
   return 0;
 }
@@ -205,15 +217,19 @@ int cmd_render(int argc, char** argv) {
   std::string error, output;
   if (!args.value("-o", output)) args.value("--output", output);
   const bool reference = args.flag("--reference"), psnr = args.flag("--psnr"), json = args.flag("--json");
+  std::string frames_text;
+  unsigned long long frames = 1;
+  if (args.value("--frames", frames_text) && (!cli::parse_uint(frames_text, 100000, frames) || frames < 1))
+    return cli::fail("render: --frames: expected 1..100000, got '" + frames_text + "'");
   if (!parse_render_options(args, o, error)) return cli::fail("render: " + error);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("render: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("render: unknown option '" + args.unknown_option() + "'");
   if (files.size() != 1) return cli::fail("render: expected one .spg file (see stipple render --help)");
-  if (output.empty() && !psnr) return cli::fail("render: -o IMAGE.png is required");
+  if (output.empty() && !psnr && frames == 1) return cli::fail("render: -o IMAGE.png is required");
   std::vector<uint8_t> file;
   if (!read_file(files[0], file, error)) return cli::fail(error);
-  return render_to_png(files[0], file, o, output, reference, psnr, json);
+  return render_to_png(files[0], file, o, output, reference, psnr, json, static_cast<int>(frames));
 }
 
 int cmd_image_diff(int argc, char** argv) {

@@ -21,6 +21,6 @@ bool parse_render_options(cli::Args& args, RenderOptions& options, std::string& 
 // Renders `file` (a whole .spg named `name`) and writes `output` (PNG) when
 // not empty; prints a summary. Returns the process exit code.
 int render_to_png(const std::string& name, const std::vector<uint8_t>& file, const RenderOptions& options,
-                  const std::string& output, bool reference, bool psnr, bool json);
+                  const std::string& output, bool reference, bool psnr, bool json, int frames = 1);
 
 }  // namespace stipple

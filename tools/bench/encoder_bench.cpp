@@ -16,12 +16,15 @@
 #include "core/node_decoder.h"
 #include "core/spg_format.h"
 #include "platform/file_io.h"
+#include "core/cut.h"
+#include "raster/client.h"
 #include "raster/point_raster.h"
 #include "tools/host/classify.h"
 #include "tools/host/encoder.h"
 #include "tools/host/kdtree.h"
 #include "tools/host/normals.h"
 #include "tools/host/ply_io.h"
+#include "tools/host/render.h"
 
 namespace stipple {
 namespace {
@@ -200,6 +203,66 @@ void BM_RasterFrame(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(pts.size()));
 }
 BENCHMARK(BM_RasterFrame)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// One client frame of the scan at 640 x 480 RGB888 from the default view,
+// the cut's projected-size threshold chosen so that about 30,000 nodes are
+// in view (the setting). Arg 0: projection (0 affine, 1 reciprocal,
+// 2 exact); arg 1: 0 packed cache (decode each frame), 1 decoded cache;
+// arg 2: shading (0 per point, 2 none). Counters: points per frame and
+// points per second; the decode + sample + transform + z-test + write of
+// every point is inside the timed render().
+void BM_ClientFrame(benchmark::State& state) {
+  const std::vector<uint8_t>& spg = encoded_scan();
+  const SpgView view = parsed_scan();
+  ClientConfig c;
+  c.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 21};
+  c.projection = static_cast<Projection>(state.range(0));
+  c.cache_decoded = state.range(1) != 0;
+  c.shading = static_cast<ShadingMode>(state.range(2));
+  c.node_capacity = view.header.node_count;
+  std::vector<uint8_t> storage(node_decoder_bytes(view.header));
+  NodeDecoder decoder;
+  if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk) std::abort();
+  Camera camera;
+  if (!orbit_camera(orbit_view(decoder.extent_mu(), ViewSpec{}), 640, 480, &camera)) std::abort();
+  std::vector<uint8_t> scratch(cut_scratch_bytes(view.header));
+  std::vector<uint32_t> cut(view.header.node_count);
+  // The threshold (1/16 px) whose cut is nearest 30,000 nodes.
+  uint32_t n = 0;
+  for (int32_t q4 = 8; q4 <= 4096; q4 += q4 / 8) {
+    n = simple_cut(view, CutRule{CutRule::kProjectedSize, 0, q4}, &decoder, &camera, scratch.data(), cut.data(),
+                   static_cast<uint32_t>(cut.size()));
+    if (n <= 30000) break;
+  }
+  std::vector<uint64_t> arena(client_arena_bytes(c) / 8 + 1);
+  Client client;
+  if (client.init(c, arena.data(), arena.size() * 8) != ClientStatus::kOk ||
+      client.load_startup(spg.data(), static_cast<size_t>(view.topology - spg.data())) != ClientStatus::kOk)
+    std::abort();
+  for (uint32_t i = 0; i < n; ++i)
+    if (client.put_node(cut[i], view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes) !=
+        ClientStatus::kOk)
+      std::abort();
+  std::vector<uint8_t> frame(640 * 480 * 3);
+  FrameStats stats;
+  for (auto _ : state) {
+    if (client.render(camera, frame.data(), 640 * 3, &stats) != ClientStatus::kOk) std::abort();
+    benchmark::DoNotOptimize(frame.data());
+  }
+  state.counters["nodes"] = stats.nodes;
+  state.counters["points"] = stats.points;
+  state.counters["points_per_s"] = benchmark::Counter(static_cast<double>(stats.points), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["ns_per_point"] = benchmark::Counter(static_cast<double>(stats.points), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert) ;
+}
+BENCHMARK(BM_ClientFrame)
+    ->Args({0, 0, 0})
+    ->Args({0, 1, 0})
+    ->Args({0, 1, 2})
+    ->Args({1, 1, 0})
+    ->Args({2, 1, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
 
 void BM_KdNearest(benchmark::State& state) {
   const PointCloud& c = scan();

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "platform/progress.h"
 #include "tools/host/sampler.h"
 
 namespace stipple {
@@ -96,7 +97,7 @@ double image_psnr(const Image& a, const Image& b) {
 }
 
 bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
-                  const ViewSpec& spec, FixedRender& out, std::string& error) {
+                  const ViewSpec& spec, FixedRender& out, std::string& error, int frames) {
   // The cut: a decoder over the whole file, as the server side will hold.
   std::vector<uint8_t> decoder_storage(node_decoder_bytes(view.header));
   NodeDecoder decoder;
@@ -127,7 +128,12 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     s = client.put_node(cut[i], view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes);
   const size_t stride = static_cast<size_t>(config.raster.width) * bytes_per_pixel(config.raster.format);
   out.frame.assign(stride * config.raster.height, 0);
-  if (s == ClientStatus::kOk) s = client.render(camera, out.frame.data(), stride, &out.stats);
+  out.frame_seconds.clear();
+  for (int f = 0; s == ClientStatus::kOk && f < std::max(frames, 1); ++f) {
+    const double start = monotonic_seconds();
+    s = client.render(camera, out.frame.data(), stride, &out.stats);
+    out.frame_seconds.push_back(monotonic_seconds() - start);
+  }
   if (s != ClientStatus::kOk) {
     error = std::string("client: ") + client_status_text(s);
     return false;

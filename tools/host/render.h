@@ -43,13 +43,15 @@ struct FixedRender {
   FrameStats stats;
   size_t arena_bytes = 0;
   Camera camera;
+  std::vector<double> frame_seconds;  // render() wall time of each frame drawn
 };
 
 // Cuts the validated `view` by `rule` for the camera, feeds the client the
-// startup message and the cut's records, renders one frame. config.node_capacity
-// is raised to the cut's size when smaller.
+// startup message and the cut's records, renders the frame `frames` times
+// (for timing; every frame is the same). config.node_capacity is raised to
+// the cut's size when smaller.
 bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
-                  const ViewSpec& spec, FixedRender& out, std::string& error);
+                  const ViewSpec& spec, FixedRender& out, std::string& error, int frames = 1);
 
 // The same frame in double precision: the same cut, the same samples (Sobol
 // through libm) and points-per-node table, exact perspective per point,
