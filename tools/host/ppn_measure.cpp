@@ -40,7 +40,7 @@ double ppn_coverage(double sigma1, double sigma2, uint32_t n, const PpnMeasureOp
   config.width = config.height = static_cast<uint16_t>(size);
   config.tile_log2 = 5;
   config.format = PixelFormat::kRgb888;
-  config.max_points = std::max<uint32_t>(n, 1);
+  config.max_points = 4 * n + 4;  // room for every point's tile entries: none is dropped
   std::vector<uint64_t> arena(point_raster_bytes(config) / 8 + 1);
   PointRaster raster;
   if (raster.init(config, arena.data(), arena.size() * 8) != RasterStatus::kOk) return 0;

@@ -1,0 +1,226 @@
+// The parts the client is made of: the fixed-point camera, the simple cut,
+// the shading tables and the points-per-node table (re-measured here).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/cut.h"
+#include "platform/file_io.h"
+#include "raster/points_per_node.h"
+#include "raster/shading.h"
+#include "test_util.h"
+#include "tools/host/ppn_measure.h"
+#include "tools/host/spg_model.h"
+
+namespace stipple {
+namespace {
+
+TEST(Camera, OrbitIsOrthonormalAndLooksAtTheTarget) {
+  for (uint32_t yaw = 0; yaw < 0xF0000000u; yaw += 0x13579BDFu)
+    for (int32_t pitch_deg : {-80, -30, 0, 45, 89}) {
+      OrbitView o;
+      o.target_mu[0] = 1 << 23;
+      o.target_mu[1] = 3 << 21;
+      o.target_mu[2] = -(1 << 20);
+      o.distance_mu = 3 << 24;
+      o.yaw = yaw;
+      o.pitch = static_cast<uint32_t>(static_cast<int64_t>(pitch_deg) * 11930465);
+      Camera c;
+      ASSERT_TRUE(orbit_camera(o, 640, 480, &c));
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          int64_t dot = 0;
+          for (int k = 0; k < 3; ++k) dot += int64_t{c.rotation[i][k]} * c.rotation[j][k];
+          EXPECT_NEAR(static_cast<double>(dot) / (1 << 28), i == j ? 1.0 : 0.0, 4e-4) << i << j;
+        }
+      // The target is straight ahead at the orbit distance, within the Q14
+      // rotation's precision (1e-4 of the distance: 0.08 px at f = 760 px).
+      int32_t t[3];
+      camera_space(c, o.target_mu, t);
+      EXPECT_LE(std::abs(t[0]), o.distance_mu >> 13);
+      EXPECT_LE(std::abs(t[1]), o.distance_mu >> 13);
+      EXPECT_NEAR(t[2], o.distance_mu, o.distance_mu >> 13);
+      // +y of the model is up on screen (camera y points down) unless looking straight down.
+      const int32_t up[3] = {0, 1 << 14, 0};
+      int32_t v[3];
+      camera_rotate(c, up, v);
+      EXPECT_LT(v[1], 0);
+    }
+}
+
+TEST(Camera, FocalLengthAndRefusals) {
+  OrbitView o;
+  o.fov = 0x40000000u;  // 90 degrees: f = h / 2
+  Camera c;
+  ASSERT_TRUE(orbit_camera(o, 640, 480, &c));
+  EXPECT_NEAR(c.focal_q4, 240 * 16, 1);
+  EXPECT_EQ(c.center_q4[0], 320 * 16);
+  EXPECT_EQ(c.center_q4[1], 240 * 16);
+  Camera untouched = c;
+  o.distance_mu = 100;
+  EXPECT_FALSE(orbit_camera(o, 640, 480, &untouched));
+  o.distance_mu = 1 << 25;
+  o.fov = 0;
+  EXPECT_FALSE(orbit_camera(o, 640, 480, &untouched));
+  o.fov = 0x40000000u;
+  o.target_mu[1] = (1 << 26) + 1;
+  EXPECT_FALSE(orbit_camera(o, 640, 480, &untouched));
+  EXPECT_FALSE(orbit_camera(OrbitView{}, 0, 480, &untouched));
+}
+
+struct Tree {
+  std::vector<uint8_t> file;
+  SpgView view;
+  DecodedModel model;
+  std::vector<uint8_t> storage;
+  NodeDecoder decoder;
+};
+
+const Tree& tree() {
+  static Tree* t = [] {
+    auto* out = new Tree;
+    std::string error;
+    EXPECT_TRUE(read_file(test::source_path("tests/golden/bunny_v1.spg"), out->file, error));
+    EXPECT_TRUE(spg_parse(out->file.data(), out->file.size(), &out->view).ok());
+    EXPECT_TRUE(decode_spg("bunny", out->file.data(), out->file.size(), out->model, error));
+    out->storage.resize(node_decoder_bytes(out->view.header));
+    EXPECT_EQ(out->decoder.init(out->view, out->storage.data(), out->storage.size()), DecodeStatus::kOk);
+    return out;
+  }();
+  return *t;
+}
+
+TEST(Cut, LevelCutMatchesTheReferenceDecoder) {
+  const Tree& t = tree();
+  std::vector<uint8_t> scratch(cut_scratch_bytes(t.view.header));
+  std::vector<uint32_t> out(t.view.header.node_count);
+  for (int level = 0; level <= t.view.header.depth + 1; ++level) {
+    const uint32_t n = simple_cut(t.view, CutRule{CutRule::kLevel, static_cast<uint16_t>(level), 0}, nullptr, nullptr,
+                                  scratch.data(), out.data(), static_cast<uint32_t>(out.size()));
+    out.resize(n);
+    EXPECT_EQ(out, level_cut(t.model, level)) << level;
+    out.resize(t.view.header.node_count);
+  }
+  // A short output buffer: the count is still the whole cut's.
+  uint32_t two[2];
+  EXPECT_EQ(simple_cut(t.view, CutRule{CutRule::kLevel, 5, 0}, nullptr, nullptr, scratch.data(), two, 2),
+            level_cut(t.model, 5).size());
+}
+
+// Every root-to-leaf path crosses a projected-size cut exactly once when
+// nothing is behind the camera, and every kept inner node is small enough.
+TEST(Cut, ProjectedSizeCutIsACutAndRespectsTheThreshold) {
+  const Tree& t = tree();
+  std::vector<uint8_t> scratch(cut_scratch_bytes(t.view.header));
+  std::vector<uint32_t> out(t.view.header.node_count);
+  OrbitView o;
+  for (int a = 0; a < 3; ++a) o.target_mu[a] = t.decoder.extent_mu()[a] / 2;
+  o.distance_mu = 3 << 24;
+  Camera cam;
+  ASSERT_TRUE(orbit_camera(o, 640, 480, &cam));
+  for (int32_t q4 : {16, 32, 128, 1024}) {
+    const uint32_t n = simple_cut(t.view, CutRule{CutRule::kProjectedSize, 0, q4}, &t.decoder, &cam, scratch.data(),
+                                  out.data(), static_cast<uint32_t>(out.size()));
+    std::vector<int> in_cut(t.view.header.node_count, 0);
+    for (uint32_t i = 0; i < n; ++i) in_cut[out[i]] = 1;
+    // Count cut nodes on the path from each leaf to the root.
+    std::vector<uint32_t> parent(t.model.nodes.size(), 0);
+    for (uint32_t i = 0; i < t.model.nodes.size(); ++i)
+      for (uint32_t c = 0; c < t.model.nodes[i].child_count; ++c) parent[t.model.nodes[i].first_child + c] = i;
+    for (uint32_t i = 0; i < t.model.nodes.size(); ++i) {
+      if (!t.model.nodes[i].leaf()) continue;
+      int crossings = 0;
+      for (uint32_t v = i;; v = parent[v]) {
+        crossings += in_cut[v];
+        if (v == 0) break;
+      }
+      ASSERT_EQ(crossings, 1) << "leaf " << i << " at " << q4;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+      if (t.model.nodes[out[i]].leaf()) continue;
+      FixedNode node;
+      ASSERT_EQ(t.decoder.decode(t.view.records + out[i] * t.view.record_bytes, &node), DecodeStatus::kOk);
+      int32_t c[3];
+      camera_space(cam, node.mean, c);
+      EXPECT_LE(int64_t{node_radius_mu(node)} * cam.focal_q4, int64_t{q4} * c[2]);
+    }
+  }
+}
+
+TEST(Shading, CosSincTableAgainstLibm) {
+  ShadingTables tables;
+  ASSERT_TRUE(build_shading_tables(Lighting{}, &tables));
+  double worst = 0;
+  for (int i = 0; i < kCosSincEntries; ++i) {
+    const double theta = std::sqrt((i + 0.5) / 128.0);  // the cell's middle, theta^2 in steps of 2^-7
+    worst = std::max(worst, std::abs(tables.cos_sinc[i].cos / 16384.0 - std::cos(theta)));
+    worst = std::max(worst, std::abs(tables.cos_sinc[i].sinc / 16384.0 - std::sin(theta) / theta));
+  }
+  EXPECT_LE(worst, 6.0 / 16384);  // measured 5.3 LSB: theta to a binary angle, sincos_q14, one division
+  // Light normalized; the half vector between it and the eye.
+  const double l = std::hypot(std::hypot(4096.0, 6144.0), 14336.0);
+  EXPECT_NEAR(tables.light_q14[2], -14336 / l * 16384, 1);
+  EXPECT_LT(tables.half_q14[2], tables.light_q14[2]);
+}
+
+TEST(Shading, IntensitiesAreLambertAndPhongPowers) {
+  Lighting light;
+  light.ambient_q8 = 64;
+  light.specular_q8 = 128;
+  light.shininess = 8;
+  ShadingTables t;
+  ASSERT_TRUE(build_shading_tables(light, &t));
+  EXPECT_EQ(t.diffuse[intensity_index(-16384)], 64);  // facing away: ambient
+  EXPECT_EQ(t.diffuse[intensity_index(0)], 64);
+  EXPECT_EQ(t.diffuse[intensity_index(16384)], 256);  // full light
+  EXPECT_EQ(t.diffuse[intensity_index(8192)], 64 + 96);
+  EXPECT_EQ(t.specular[intensity_index(16384)], 128);  // 255 * 0.5, rounded
+  EXPECT_EQ(t.specular[intensity_index(8192)], 0);     // 0.5^8 * 127.5 = 0.498
+  EXPECT_EQ(t.specular[intensity_index(0)], 0);
+  Lighting bad;
+  bad.shininess = 0;
+  EXPECT_FALSE(build_shading_tables(bad, &t));
+}
+
+TEST(PointsPerNode, IndexIsScaleFreeInAspect) {
+  // A circle of any size has aspect 0; thinner ellipses have larger aspect.
+  for (int64_t s2 = 64; s2 < (int64_t{1} << 28); s2 *= 3) EXPECT_LE(ppn_index(s2, 0, s2).aspect, 1) << s2;
+  EXPECT_GT(ppn_index(1 << 20, 0, 1 << 10).aspect, ppn_index(1 << 20, 0, 1 << 16).aspect);
+  EXPECT_EQ(ppn_index(int64_t{1} << 40, 0, 1).size, kPpnSizes - 1);
+  EXPECT_EQ(half_octave(1), 0);
+  EXPECT_EQ(half_octave(2), 2);
+  EXPECT_EQ(half_octave(3), 3);
+  EXPECT_EQ(half_octave(4), 4);
+  EXPECT_EQ(half_octave(6), 5);
+}
+
+// The committed table is what the tool measures (Sobol, 2 px points: the
+// default; the other five tables come from the same code).
+TEST(PointsPerNode, CommittedTableIsTheMeasuredOne) {
+  PpnMeasureOptions o;
+  o.point_size = 2;
+  PpnTable measured;
+  measure_ppn_table(o, measured);
+  const PpnTable& committed = ppn_table(GaussianSource::kSobol, 2);
+  for (int t = 0; t < kPpnSizes; ++t)
+    for (int d = 0; d < kPpnAspects; ++d) EXPECT_EQ(committed[t][d], measured[t][d]) << t << "," << d;
+  // Counts grow with size and quasi-random needs fewer points than pseudo-random for large nodes.
+  const PpnIndex big = ppn_index(256 * 16, 0, 256 * 16);  // sigma = 4 px
+  EXPECT_LT(ppn_table(GaussianSource::kSobol, 2)[big.size][big.aspect], ppn_table(GaussianSource::kPseudo, 2)[big.size][big.aspect]);
+}
+
+TEST(PointsPerNode, QualityScalesAndClamps) {
+  const PpnTable& t = ppn_table(GaussianSource::kSobol, 2);
+  const PpnIndex i = ppn_index(256 * 4, 0, 256 * 4);
+  const uint32_t base = points_per_node(t, i, 256, 1024);
+  EXPECT_EQ(base, t[i.size][i.aspect]);
+  EXPECT_EQ(points_per_node(t, i, 512, 1024), std::min<uint32_t>(2 * base, 1024));
+  EXPECT_EQ(points_per_node(t, i, 1, 1024), 1u);
+  EXPECT_EQ(points_per_node(t, ppn_index(int64_t{1} << 40, 0, 1), 256, 100), 100u);
+}
+
+}  // namespace
+}  // namespace stipple
