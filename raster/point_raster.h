@@ -1,9 +1,12 @@
 // stipple raster — tile-based z-buffer point rasterizer.
 //
 // Points arrive in screen space: x, y in 1/16 pixel (Q4), a depth where
-// smaller is nearer, and an RGB888 colour. `add` bins each point into the
-// tiles its square (1-3 px a side) touches; `draw` walks the tiles, keeping
-// one tile's depth+colour words hot, and writes the finished frame.
+// smaller is nearer, and an RGB888 colour. `add` clips each point's square
+// (1-3 px a side) to the screen and files it, already split at tile edges
+// and in tile-local coordinates, into the bins of the tiles it touches: each
+// tile owns a chain of fixed-size chunks taken from one pool, so binning is
+// a single pass with no sort. `draw` walks the tiles, keeping one tile's
+// depth+colour words hot, draws its bins and writes the finished tile out.
 //
 // Depth and colour share one word — depth in the high bits, colour in the
 // low — so a point costs one load, one compare and one store, and equal
@@ -57,10 +60,31 @@ class PointRaster {
   // Starts a frame: forgets all points.
   void begin_frame();
   // Bins a point of `size_px` (1..3). Returns false when the frame's budget
-  // is full — max_points points, or max_points * 5/4 tile entries (a point
-  // straddling tile edges takes 2 or 4) — and the point is dropped; a point
-  // entirely off screen is accepted and ignored.
-  bool add(const ScreenPoint& p, int size_px);
+  // is full — max_points points, or the chunk pool (sized for max_points
+  // * 5/4 entries — a point straddling tile edges takes 2 or 4 — plus one
+  // partial chunk per tile) — and the point is dropped; a point entirely off
+  // screen is accepted and ignored.
+  bool add(const ScreenPoint& p, int size_px) {
+    if (count_ >= config_.max_points || free_chunk_ + 4 > chunk_count_) return false;
+    const int s = size_px < 1 ? 1 : size_px > 3 ? 3 : size_px;
+    // First covered pixel: floor(x - (s - 1) / 2) with x in Q4; arithmetic shift floors.
+    int32_t x0 = (p.x_q4 - (s - 1) * 8) >> 4, y0 = (p.y_q4 - (s - 1) * 8) >> 4;
+    int32_t x1 = x0 + s, y1 = y0 + s;  // exclusive
+    if (x1 <= 0 || y1 <= 0 || x0 >= config_.width || y0 >= config_.height) return true;  // off screen
+    const uint32_t color = config_.format == PixelFormat::kRgb565 ? rgb565(p.rgb) : (p.rgb & 0xFFFFFFu);
+    const int sh = config_.tile_log2, mask = (1 << sh) - 1;
+    ++count_;
+    // Fast path: inside the screen and one tile.
+    if (x0 >= 0 && y0 >= 0 && x1 <= config_.width && y1 <= config_.height && (x0 & mask) + s <= mask + 1 &&
+        (y0 & mask) + s <= mask + 1) {
+      push((y0 >> sh) * tiles_x_ + (x0 >> sh),
+           Entry{p.depth, color | static_cast<uint32_t>(s) << 24 | static_cast<uint32_t>(s) << 28,
+                 static_cast<uint32_t>(((y0 & mask) << sh) | (x0 & mask))});
+      return true;
+    }
+    split(x0, y0, x1, y1, p.depth, color);
+    return true;
+  }
   // Draws the binned points over `clear_rgb` into `frame` (height rows of
   // `stride` bytes, pixels in the configured format, little-endian RGB565).
   void draw(uint32_t clear_rgb, uint8_t* frame, size_t stride) const;
@@ -68,23 +92,36 @@ class PointRaster {
   uint32_t points() const { return count_; }
 
  private:
-  struct Binned {
-    uint16_t x0, y0;  // first covered pixel (clipped to the screen)
+  static constexpr uint32_t kChunkLog2 = 6;  // 64 entries a chunk
+  struct Entry {
     uint32_t depth;
-    uint32_t rgb_wh;  // 0xRRGGBB, covered width << 24, height << 28 (after clipping, 1..3)
+    uint32_t color_wh;  // pixel-format colour, covered width << 24, height << 28 (1..3, within the tile)
+    uint32_t offset;    // first covered pixel, (y << tile_log2) + x within the tile
   };
+  void push(uint32_t tile, const Entry& e) {
+    const uint32_t fill = tile_fill_[tile];
+    if ((fill & ((1u << kChunkLog2) - 1)) == 0) {  // the tile's chunk is full (or it has none)
+      const uint32_t c = free_chunk_++;
+      if (fill == 0) tile_head_[tile] = c;
+      else chunk_next_[tile_tail_[tile]] = c;
+      tile_tail_[tile] = c;
+    }
+    entries_[(tile_tail_[tile] << kChunkLog2) + (fill & ((1u << kChunkLog2) - 1))] = e;
+    tile_fill_[tile] = fill + 1;
+  }
+  void split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t depth, uint32_t color);
   template <class Word>
   void draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride) const;
 
   RasterConfig config_{};
   int tiles_x_ = 0, tiles_y_ = 0;
-  Binned* points_ = nullptr;
-  uint32_t* tile_start_ = nullptr;  // per tile, after draw's prefix sum
-  uint32_t* tile_count_ = nullptr;
-  uint32_t* tile_index_ = nullptr;  // point indices grouped by tile
+  Entry* entries_ = nullptr;       // chunk_count_ chunks of 64
+  uint32_t* chunk_next_ = nullptr; // per chunk
+  uint32_t* tile_head_ = nullptr;  // per tile: first and last chunk, entries
+  uint32_t* tile_tail_ = nullptr;
   uint32_t* tile_fill_ = nullptr;
-  void* tile_words_ = nullptr;      // one tile of depth+colour words
-  uint32_t count_ = 0, bins_ = 0, bin_capacity_ = 0;
+  void* tile_words_ = nullptr;     // one tile of depth+colour words
+  uint32_t count_ = 0, free_chunk_ = 0, chunk_count_ = 0;
 };
 
 }  // namespace stipple
