@@ -1,5 +1,8 @@
 // Fuzz harness: core's .spg validator, then the host reference decoder on
-// whatever it accepts. Must never crash, overrun or hang. Each input is
+// whatever it accepts, and the handheld client on the same bytes: the
+// input's startup message, then the bytes after it cut into records for
+// put_node (accepted or refused), then one frame. Must never crash, overrun
+// or hang. Each input is
 // checked as it is and again with its last four bytes replaced by the right
 // CRC-32, so mutations reach the structural checks behind the checksum.
 #include <cstddef>
@@ -7,10 +10,47 @@
 #include <string>
 #include <vector>
 
+#include "core/camera.h"
 #include "core/spg_format.h"
+#include "raster/client.h"
 #include "tools/host/spg_model.h"
 
 namespace {
+
+// A small client, made once: hostile startups must not need a new one.
+struct FuzzClient {
+  stipple::ClientConfig config;
+  std::vector<uint64_t> arena;
+  stipple::Client client;
+  std::vector<uint8_t> frame;
+  FuzzClient() {
+    config.raster = stipple::RasterConfig{64, 48, 5, stipple::PixelFormat::kRgb565, 4096};
+    config.node_capacity = 256;
+    config.samples = 64;
+    arena.resize(stipple::client_arena_bytes(config) / 8 + 1);
+    frame.resize(64 * 48 * 2);
+    if (client.init(config, arena.data(), arena.size() * 8) != stipple::ClientStatus::kOk) __builtin_trap();
+  }
+};
+
+void check_client(const uint8_t* data, size_t size) {
+  static FuzzClient f;
+  stipple::SpgView startup;
+  size_t used = 0;
+  if (!stipple::spg_parse_startup(data, size, &startup, &used).ok()) {
+    if (f.client.load_startup(data, size) != stipple::ClientStatus::kBadStartup) __builtin_trap();
+    return;
+  }
+  if (f.client.load_startup(data, used) != stipple::ClientStatus::kOk) return;  // beyond the configuration
+  const size_t rb = f.client.record_bytes();
+  for (size_t at = used, id = 0; at + rb <= size && id < 256; at += rb, ++id)
+    (void)f.client.put_node(static_cast<uint32_t>(id * 2654435761u), data + at, rb);
+  stipple::OrbitView orbit;
+  for (int a = 0; a < 3; ++a) orbit.target_mu[a] = f.client.decoder().extent_mu()[a] / 2;
+  stipple::Camera camera;
+  if (!stipple::orbit_camera(orbit, 64, 48, &camera)) __builtin_trap();
+  if (f.client.render(camera, f.frame.data(), 128) != stipple::ClientStatus::kOk) __builtin_trap();
+}
 
 void check(const uint8_t* data, size_t size) {
   stipple::SpgView view;
@@ -22,6 +62,7 @@ void check(const uint8_t* data, size_t size) {
   } else if (r.offset > size) {
     __builtin_trap();  // an error offset is always inside (or at the end of) the input
   }
+  check_client(data, size);
 }
 
 }  // namespace
