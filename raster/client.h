@@ -128,8 +128,6 @@ class Client {
   SpgHeader header_{};
   size_t record_bytes_ = 0, record_stride_ = 0, decoder_bytes_ = 0;
   void* decoder_storage_ = nullptr;
-  uint8_t* startup_copy_ = nullptr;  // class tables, little-endian float32 as received
-  size_t startup_capacity_ = 0;
   uint8_t* records_ = nullptr;  // node_capacity x record_stride_
   uint32_t* ids_ = nullptr;     // per slot
   uint32_t* hash_ = nullptr;    // slot + 1, 0 = empty; linear probing
