@@ -2,7 +2,8 @@
 # Installs everything stipple needs to build and test on Debian 12, from
 # Debian's packages. Runs apt-get directly as root, through sudo otherwise.
 set -euo pipefail
-packages=(cmake ninja-build g++ pkg-config libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev)
+packages=(cmake ninja-build g++ pkg-config libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev
+  g++-arm-linux-gnueabi qemu-user)  # the ARMv5 cross build and its emulator
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

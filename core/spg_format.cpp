@@ -173,13 +173,15 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
 
   // §3 topology: BFS order, siblings adjacent, children after their parent.
   const uint32_t bits_per_node = h.tree_arity == 2 ? 1u : 4u;
-  view.topology_bytes = (static_cast<uint64_t>(h.node_count) * bits_per_node + 7) / 8;
+  // At most node_count / 2 + 1 bytes, below the record bytes already bounded
+  // by the file size: fits size_t on 32-bit targets too.
+  view.topology_bytes = static_cast<size_t>((static_cast<uint64_t>(h.node_count) * bits_per_node + 7) / 8);
   if (in.remaining() < view.topology_bytes) return fail(SpgError::kTruncated, size);
   view.topology = data + in.pos;
   {
     uint32_t next_child = 1, leaves = 0, level_end = 1, depth = 0;
     for (uint32_t i = 0; i < h.node_count; ++i) {
-      const size_t at = in.pos + (static_cast<uint64_t>(i) * bits_per_node) / 8;
+      const size_t at = in.pos + static_cast<size_t>((static_cast<uint64_t>(i) * bits_per_node) / 8);
       if (i > 0 && i >= next_child) return fail(SpgError::kBadTree, at);  // orphan node
       if (i == level_end) {
         level_end = next_child;
