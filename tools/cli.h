@@ -60,4 +60,5 @@ int cmd_levels(int argc, char** argv);
 int cmd_render(int argc, char** argv);
 int cmd_ppn_table(int argc, char** argv);
 int cmd_image_diff(int argc, char** argv);
+int cmd_image_crc(int argc, char** argv);
 }  // namespace stipple

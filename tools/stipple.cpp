@@ -22,6 +22,7 @@ const char kUsage[] =
     "  render    draw a .spg with the fixed-point handheld client -> .png\n"
     "  ppn-table measure the points-per-node table with the client's rasterizer\n"
     "  image-diff compare two PNG images byte for byte, write a diff image\n"
+    "  image-crc CRC-32 of PNG images' pixels (what stipple-handheld --crc prints)\n"
     "\n"
     "`stipple <command> --help` describes each command.\n";
 
@@ -42,6 +43,7 @@ int main(int argc, char** argv) {
   if (!std::strcmp(command, "render")) return stipple::cmd_render(argc, argv);
   if (!std::strcmp(command, "ppn-table")) return stipple::cmd_ppn_table(argc, argv);
   if (!std::strcmp(command, "image-diff")) return stipple::cmd_image_diff(argc, argv);
+  if (!std::strcmp(command, "image-crc")) return stipple::cmd_image_crc(argc, argv);
   std::fprintf(stderr, "stipple: unknown command '%s'\n\n%s", command, kUsage);
   return 2;
 }

@@ -4,8 +4,8 @@
 # client through `stipple render`. For every image that changes it writes
 # NAME.diff.png beside it (differing pixels in red) and prints what changed.
 # Review the diffs before committing: these bytes are the contract that every
-# platform (x86-64, ARM) must reproduce. tests/CMakeLists.txt lists the same
-# views and sizes.
+# platform (x86-64, ARM) must reproduce. tests/golden/views.cmake lists the
+# same views and sizes for the tests.
 #
 # usage: tests/golden/regenerate_images.sh [path/to/stipple]
 set -euo pipefail
@@ -30,3 +30,7 @@ for v in "${views[@]}"; do
     fi
   done
 done
+# The CRC-32 of each image's pixels: what the cross builds' handheld program
+# must print (tests/handheld/CMakeLists.txt), checked against the PNGs natively.
+"$S" image-crc tests/golden/bunny_yaw*_*.png | sed 's|tests/golden/||' > tests/golden/images.crc
+echo "wrote tests/golden/images.crc"

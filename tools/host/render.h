@@ -1,57 +1,14 @@
-// stipple host — rendering a `.spg` in process: the fixed-point client fed
-// from a simple cut (the embedded default), and the double-precision
-// reference renderer the client is measured against.
+// stipple host — the double-precision reference renderer the fixed-point
+// client (tools/handheld/embedded.h) is measured against.
 #pragma once
 
 #include <cstdint>
-#include <string>
 #include <vector>
 
-#include "core/camera.h"
-#include "core/cut.h"
-#include "core/spg_format.h"
-#include "raster/client.h"
+#include "tools/handheld/embedded.h"
 #include "tools/host/spg_model.h"
 
 namespace stipple {
-
-// An orbit camera in user units: degrees, and the distance from the model's
-// centre in units of the model's largest extent.
-struct ViewSpec {
-  double yaw = 30, pitch = 20, distance = 3, fov = 35;
-};
-
-// "yaw,pitch[,distance[,fov]]"; error names the bad part.
-bool parse_view(const std::string& text, ViewSpec& out, std::string& error);
-
-// The integer orbit for a model whose box spans extent_mu (the decoder's MU).
-OrbitView orbit_view(const int32_t extent_mu[3], const ViewSpec& spec);
-
-// An RGB888 picture (RGB565 frames are expanded by bit replication, which
-// keeps every bit of the frame).
-struct Image {
-  int width = 0, height = 0;
-  std::vector<uint8_t> rgb;
-};
-Image frame_to_image(const std::vector<uint8_t>& frame, const RasterConfig& config);
-double image_psnr(const Image& a, const Image& b);  // over all channels; +inf when equal
-
-struct FixedRender {
-  std::vector<uint8_t> frame;  // config format, tightly packed rows
-  Image image;
-  std::vector<uint32_t> cut;   // node ids drawn, breadth-first
-  FrameStats stats;
-  size_t arena_bytes = 0;
-  Camera camera;
-  std::vector<double> frame_seconds;  // render() wall time of each frame drawn
-};
-
-// Cuts the validated `view` by `rule` for the camera, feeds the client the
-// startup message and the cut's records, renders the frame `frames` times
-// (for timing; every frame is the same). config.node_capacity is raised to
-// the cut's size when smaller.
-bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
-                  const ViewSpec& spec, FixedRender& out, std::string& error, int frames = 1);
 
 // The same frame in double precision: the same cut, the same samples (Sobol
 // through libm) and points-per-node table, exact perspective per point,
