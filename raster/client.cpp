@@ -236,6 +236,16 @@ ClientStatus Client::drop_node(uint32_t id) {
   return ClientStatus::kOk;
 }
 
+struct Client::PointSetup {
+  NodeProjection proj;
+  uint32_t count;
+  int32_t near;
+  int shift, size;
+  uint32_t base_r, base_g, base_b, node_rgb, node_intensity, node_specular;
+  int32_t sn0, sn1, l0, l1, l2, h0, h1, h2;
+  int64_t ca[3][3];  // colour axes, 8-bit levels per sigma in Q8
+};
+
 struct Client::FrameSetup {
   Camera camera;
   int32_t width_q4, height_q4;
@@ -246,7 +256,8 @@ struct Client::FrameSetup {
 
 template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
 void Client::draw_node(const FrameSetup& f, const FixedNode& node, FrameStats& stats) {
-  NodeProjection proj;
+  PointSetup setup;  // filled in place: draw_points reads it by reference
+  NodeProjection& proj = setup.proj;
   if (!proj.setup(f.camera, node)) {
     ++stats.nodes_culled;
     return;
@@ -298,7 +309,7 @@ void Client::draw_node(const FrameSetup& f, const FixedNode& node, FrameStats& s
     node_rgb = shade(base_r, base_g, base_b, node_intensity, node_specular);
   }
   // Colour axes in 8-bit levels per sigma, Q8 (saturated: sigma_c comes from the file).
-  int64_t ca[3][3] = {};
+  int64_t(&ca)[3][3] = setup.ca;
   if (kColorPoints)
     for (int k = 0; k < 3; ++k)
       for (int ch = 0; ch < 3; ++ch) {
@@ -306,9 +317,32 @@ void Client::draw_node(const FrameSetup& f, const FixedNode& node, FrameStats& s
         ca[k][ch] = v > (1 << 24) ? (1 << 24) : v < -(1 << 24) ? -(1 << 24) : v;
       }
 
-  const int32_t near = f.camera.near_mu;
-  const int shift = f.depth_shift;
-  const int size = config_.point_size;
+  setup.count = count;
+  setup.near = f.camera.near_mu;
+  setup.shift = f.depth_shift;
+  setup.size = config_.point_size;
+  setup.base_r = base_r, setup.base_g = base_g, setup.base_b = base_b;
+  setup.node_rgb = node_rgb, setup.node_intensity = node_intensity, setup.node_specular = node_specular;
+  setup.sn0 = sn0, setup.sn1 = sn1, setup.l0 = l0, setup.l1 = l1, setup.l2 = l2;
+  setup.h0 = h0, setup.h1 = h1, setup.h2 = h2;
+  stats.points += draw_points<P, kShadePoints, kColorPoints, kSpecular>(setup, stats);
+  ++stats.nodes_drawn;
+}
+
+// The per-point path: its own function, never inlined, so that the ARMv5
+// build can be checked symbol by symbol for run-time helper calls
+// (tests/handheld/per_point_helpers.cmake).
+template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+uint32_t Client::draw_points(const PointSetup& s, FrameStats& stats) {
+  const NodeProjection& proj = s.proj;
+  const uint32_t count = s.count;
+  const uint32_t base_r = s.base_r, base_g = s.base_g, base_b = s.base_b;
+  const uint32_t node_rgb = s.node_rgb, node_intensity = s.node_intensity, node_specular = s.node_specular;
+  const int32_t sn0 = s.sn0, sn1 = s.sn1, l0 = s.l0, l1 = s.l1, l2 = s.l2, h0 = s.h0, h1 = s.h1, h2 = s.h2;
+  const int64_t(&ca)[3][3] = s.ca;
+  const int32_t near = s.near;
+  const int shift = s.shift;
+  const int size = s.size;
   uint32_t drawn = 0;
   for (uint32_t j = 0; j < count; ++j) {
     ScreenSample p;
@@ -345,8 +379,7 @@ void Client::draw_node(const FrameSetup& f, const FixedNode& node, FrameStats& s
     if (raster_.add(ScreenPoint{x, y, depth, rgb}, size)) ++drawn;
     else ++stats.points_dropped;
   }
-  stats.points += drawn;
-  ++stats.nodes_drawn;
+  return drawn;
 }
 
 ClientStatus Client::render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats_out) {

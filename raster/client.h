@@ -115,8 +115,11 @@ class Client {
 
  private:
   struct FrameSetup;
+  struct PointSetup;
   template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
   void draw_node(const FrameSetup& f, const FixedNode& node, FrameStats& stats);
+  template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+  [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
   uint32_t* find(uint32_t id) const;
   void erase_hash(uint32_t* entry);
 
