@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Builds and runs every test: the Release build, the ASan + UBSan build, then
-# the ARMv5TE soft-float cross build (core, raster and their tests under
-# qemu-arm). Exits non-zero on the first failure.
+# the cross builds for ARMv5TE soft-float, ARMv7-A and AArch64 (core, raster,
+# the handheld program and their tests under qemu-user). Exits non-zero on
+# the first failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-for preset in release asan armv5; do
+for preset in release asan armv5 armv7 aarch64; do
   echo "== $preset =="
   cmake --preset "$preset" >/dev/null
   cmake --build --preset "$preset"
