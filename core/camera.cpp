@@ -6,10 +6,6 @@
 namespace stipple {
 namespace {
 
-int32_t mul_q14(int32_t a, int32_t b) {
-  return static_cast<int32_t>((static_cast<int64_t>(a) * b + (1 << 13)) >> 14);
-}
-
 int32_t dot_q14(const int32_t row[3], const int64_t v[3]) {
   const int64_t s = row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
   return static_cast<int32_t>((s + (1 << 13)) >> 14);

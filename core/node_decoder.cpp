@@ -59,10 +59,6 @@ size_t frame_table_bytes(const RecordLayout& l, Field theta) {
   return bytes;
 }
 
-int32_t mul_q14(int32_t a_q14, int32_t b) {
-  return static_cast<int32_t>((static_cast<int64_t>(a_q14) * b + (1 << 13)) >> 14);
-}
-
 }  // namespace
 
 size_t node_decoder_bytes(const SpgHeader& h) {

@@ -138,17 +138,19 @@ ClientStatus Client::init(const ClientConfig& config, void* arena, size_t bytes)
   if (!build_shading_tables(config.lighting, shading_)) return ClientStatus::kBadConfig;
   build_reciprocal_table(reciprocal_);
   ppn_ = &ppn_table(config.source, config.point_size);
+  forget_nodes();
+  return ClientStatus::kOk;
+}
+
+void Client::forget_nodes() {
   ready_ = false;
   count_ = 0;
   for (uint32_t i = 0; i <= hash_mask_; ++i) hash_[i] = 0;
-  return ClientStatus::kOk;
 }
 
 ClientStatus Client::load_startup(const uint8_t* data, size_t size) {
   if (records_ == nullptr) return ClientStatus::kBadConfig;
-  ready_ = false;
-  count_ = 0;
-  for (uint32_t i = 0; i <= hash_mask_; ++i) hash_[i] = 0;
+  forget_nodes();
   SpgView view;
   size_t used = 0;
   startup_error_ = spg_parse_startup(data, size, &view, &used);
@@ -170,9 +172,13 @@ ClientStatus Client::load_startup(const uint8_t* data, size_t size) {
   return ClientStatus::kOk;
 }
 
+uint32_t Client::home_slot(uint32_t id) const {
+  const int shift = 32 - __builtin_popcount(hash_mask_);  // the table has hash_mask_ + 1 = 2^k entries
+  return shift >= 32 ? 0 : hash_of(id) >> shift;
+}
+
 uint32_t* Client::find(uint32_t id) const {
-  const int shift = 32 - __builtin_popcount(hash_mask_);
-  for (uint32_t i = shift >= 32 ? 0 : hash_of(id) >> shift;; i = (i + 1) & hash_mask_) {
+  for (uint32_t i = home_slot(id);; i = (i + 1) & hash_mask_) {
     if (hash_[i] == 0 || ids_[hash_[i] - 1] == id) return &hash_[i];
   }
 }
@@ -181,10 +187,9 @@ bool Client::has_node(uint32_t id) const { return ready_ && *find(id) != 0; }
 
 void Client::erase_hash(uint32_t* entry) {
   // Backward-shift deletion keeps every probe sequence unbroken.
-  const int shift = 32 - __builtin_popcount(hash_mask_);
   uint32_t hole = static_cast<uint32_t>(entry - hash_);
   for (uint32_t j = (hole + 1) & hash_mask_; hash_[j] != 0; j = (j + 1) & hash_mask_) {
-    const uint32_t home = shift >= 32 ? 0 : hash_of(ids_[hash_[j] - 1]) >> shift;
+    const uint32_t home = home_slot(ids_[hash_[j] - 1]);
     // Move j into the hole unless its home lies cyclically in (hole, j].
     const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
     if (!stays) {
@@ -280,51 +285,42 @@ void Client::draw_node(const FrameSetup& f, const FixedNode& node, FrameStats& s
     return;
   }
   // a, c: (1/16 px)^2 = 1/256 px^2, below 3 * 2^48.
-  const uint32_t count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
+  setup.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
+  setup.near = f.camera.near_mu;
+  setup.shift = f.depth_shift;
+  setup.size = config_.point_size;
 
   // Base colour and per-node shading terms.
-  uint32_t base_r, base_g, base_b;
-  if (f.model_color) {
-    base_r = node.color[0];
-    base_g = node.color[1];
-    base_b = node.color[2];
-  } else {
-    base_r = (config_.grey_rgb >> 16) & 0xFF;
-    base_g = (config_.grey_rgb >> 8) & 0xFF;
-    base_b = config_.grey_rgb & 0xFF;
-  }
+  const uint32_t base = f.model_color ? (uint32_t{node.color[0]} << 16) | (uint32_t{node.color[1]} << 8) | node.color[2]
+                                      : config_.grey_rgb & 0xFFFFFFu;
+  setup.base_r = base >> 16;
+  setup.base_g = (base >> 8) & 0xFF;
+  setup.base_b = base & 0xFF;
   const int32_t sn0 = node.sigma_n[0] < kMaxSigmaN ? node.sigma_n[0] : kMaxSigmaN;
   const int32_t sn1 = node.sigma_n[1] < kMaxSigmaN ? node.sigma_n[1] : kMaxSigmaN;
-  const int32_t l0 = dot_q14(node.normal_frame[2], f.light);
-  const int32_t l1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.light)} * sn0) >> 12);
-  const int32_t l2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.light)} * sn1) >> 12);
-  const int32_t h0 = dot_q14(node.normal_frame[2], f.half);
-  const int32_t h1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.half)} * sn0) >> 12);
-  const int32_t h2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.half)} * sn1) >> 12);
-  uint32_t node_rgb = (base_r << 16) | (base_g << 8) | base_b;
-  uint32_t node_intensity = 256, node_specular = 0;
+  setup.sn0 = sn0;
+  setup.sn1 = sn1;
+  setup.l0 = dot_q14(node.normal_frame[2], f.light);
+  setup.l1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.light)} * sn0) >> 12);
+  setup.l2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.light)} * sn1) >> 12);
+  setup.h0 = dot_q14(node.normal_frame[2], f.half);
+  setup.h1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.half)} * sn0) >> 12);
+  setup.h2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.half)} * sn1) >> 12);
+  setup.node_rgb = base;
+  setup.node_intensity = 256;
+  setup.node_specular = 0;
   if (config_.shading != ShadingMode::kNone && header_.has_normals()) {
-    node_intensity = shading_->diffuse[intensity_index(l0)];
-    if (kSpecular) node_specular = shading_->specular[intensity_index(h0)];
-    node_rgb = shade(base_r, base_g, base_b, node_intensity, node_specular);
+    setup.node_intensity = shading_->diffuse[intensity_index(setup.l0)];
+    if (kSpecular) setup.node_specular = shading_->specular[intensity_index(setup.h0)];
+    setup.node_rgb = shade(setup.base_r, setup.base_g, setup.base_b, setup.node_intensity, setup.node_specular);
   }
   // Colour axes in 8-bit levels per sigma, Q8 (saturated: sigma_c comes from the file).
-  int64_t(&ca)[3][3] = setup.ca;
   if (kColorPoints)
     for (int k = 0; k < 3; ++k)
       for (int ch = 0; ch < 3; ++ch) {
         const int64_t v = (int64_t{node.color_axis[k][ch]} * 255) >> 4;
-        ca[k][ch] = v > (1 << 24) ? (1 << 24) : v < -(1 << 24) ? -(1 << 24) : v;
+        setup.ca[k][ch] = v > (1 << 24) ? (1 << 24) : v < -(1 << 24) ? -(1 << 24) : v;
       }
-
-  setup.count = count;
-  setup.near = f.camera.near_mu;
-  setup.shift = f.depth_shift;
-  setup.size = config_.point_size;
-  setup.base_r = base_r, setup.base_g = base_g, setup.base_b = base_b;
-  setup.node_rgb = node_rgb, setup.node_intensity = node_intensity, setup.node_specular = node_specular;
-  setup.sn0 = sn0, setup.sn1 = sn1, setup.l0 = l0, setup.l1 = l1, setup.l2 = l2;
-  setup.h0 = h0, setup.h1 = h1, setup.h2 = h2;
   stats.points += draw_points<P, kShadePoints, kColorPoints, kSpecular>(setup, stats);
   ++stats.nodes_drawn;
 }

@@ -121,7 +121,9 @@ class Client {
   template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
   [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
   uint32_t* find(uint32_t id) const;
+  uint32_t home_slot(uint32_t id) const;  // where id's probe sequence starts
   void erase_hash(uint32_t* entry);
+  void forget_nodes();
 
   ClientConfig config_{};
   PointRaster raster_;

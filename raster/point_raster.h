@@ -52,6 +52,11 @@ size_t point_raster_bytes(const RasterConfig& config);
 constexpr uint16_t rgb565(uint32_t rgb) {
   return static_cast<uint16_t>(((rgb >> 8) & 0xF800u) | ((rgb >> 5) & 0x07E0u) | ((rgb >> 3) & 0x001Fu));
 }
+// 0xRRGGBB of an RGB565 value, by bit replication (rgb565 of it gives v back).
+constexpr uint32_t rgb888_from_565(uint16_t v) {
+  const uint32_t r = v >> 11, g = (v >> 5) & 63u, b = v & 31u;
+  return (((r << 3) | (r >> 2)) << 16) | (((g << 2) | (g >> 4)) << 8) | ((b << 3) | (b >> 2));
+}
 
 class PointRaster {
  public:

@@ -72,11 +72,10 @@ Image frame_to_image(const std::vector<uint8_t>& frame, const RasterConfig& conf
     if (config.format == PixelFormat::kRgb888) {
       for (int c = 0; c < 3; ++c) img.rgb[3 * i + c] = frame[3 * i + c];
     } else {
-      const unsigned v = frame[2 * i] | (frame[2 * i + 1] << 8);
-      const unsigned r = v >> 11, g = (v >> 5) & 63, b = v & 31;
-      img.rgb[3 * i] = static_cast<uint8_t>((r << 3) | (r >> 2));
-      img.rgb[3 * i + 1] = static_cast<uint8_t>((g << 2) | (g >> 4));
-      img.rgb[3 * i + 2] = static_cast<uint8_t>((b << 3) | (b >> 2));
+      const uint32_t v = rgb888_from_565(static_cast<uint16_t>(frame[2 * i] | (frame[2 * i + 1] << 8)));
+      img.rgb[3 * i] = static_cast<uint8_t>(v >> 16);
+      img.rgb[3 * i + 1] = static_cast<uint8_t>(v >> 8);
+      img.rgb[3 * i + 2] = static_cast<uint8_t>(v);
     }
   }
   return img;

@@ -137,11 +137,7 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
   img.rgb.resize(static_cast<size_t>(w) * h * 3);
   for (size_t i = 0; i < color_buf.size(); ++i) {
     uint32_t v = color_buf[i];
-    if (config.raster.format == PixelFormat::kRgb565) {
-      const uint16_t q = rgb565(v);
-      const unsigned r = q >> 11, g = (q >> 5) & 63, b = q & 31;
-      v = (((r << 3) | (r >> 2)) << 16) | (((g << 2) | (g >> 4)) << 8) | ((b << 3) | (b >> 2));
-    }
+    if (config.raster.format == PixelFormat::kRgb565) v = rgb888_from_565(rgb565(v));
     img.rgb[3 * i] = static_cast<uint8_t>(v >> 16);
     img.rgb[3 * i + 1] = static_cast<uint8_t>(v >> 8);
     img.rgb[3 * i + 2] = static_cast<uint8_t>(v);
