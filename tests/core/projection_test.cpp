@@ -11,9 +11,8 @@
 
 #include "core/camera.h"
 #include "core/node_decoder.h"
-#include "platform/file_io.h"
 #include "raster/projection.h"
-#include "test_util.h"
+#include "tests/core/test_files.h"
 
 namespace stipple {
 namespace {
@@ -47,9 +46,7 @@ struct Measured {
 };
 
 Measured measure() {
-  std::vector<uint8_t> file;
-  std::string error;
-  EXPECT_TRUE(read_file(test::source_path("tests/golden/bunny_v1.spg"), file, error)) << error;
+  const std::vector<uint8_t> file = test::fixture("tests/golden/bunny_v1.spg");
   SpgView view;
   EXPECT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
   std::vector<uint8_t> storage(node_decoder_bytes(view.header));
@@ -115,14 +112,6 @@ TEST(Projection, ReciprocalTableIsRoundedInverse) {
     const double exact = 67108864.0 / (1024 + i + 0.5);
     EXPECT_LE(std::abs(recip[i] - exact), 0.5) << i;
   }
-}
-
-TEST(Projection, FloorDivisionRoundsTowardMinusInfinity) {
-  EXPECT_EQ(floor_div(7, 2), 3);
-  EXPECT_EQ(floor_div(-7, 2), -4);
-  EXPECT_EQ(floor_div(-8, 2), -4);
-  EXPECT_EQ(floor_div(0, 5), 0);
-  EXPECT_EQ(floor_div(-1, 1000000007), -1);
 }
 
 }  // namespace

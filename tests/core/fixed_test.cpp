@@ -1,5 +1,6 @@
-// Fixed-point trigonometry, Q14 frame decoding and binary32 conversion,
-// each against a double-precision oracle (libm and the reference decoder).
+// Fixed-point trigonometry and binary32 conversion against double-precision
+// oracles (libm; the Q14 frame decode is checked against the reference
+// decoder in tests/node_decoder_test.cpp).
 #include <gtest/gtest.h>
 
 #include <cfloat>
@@ -9,7 +10,6 @@
 #include <numbers>
 
 #include "core/fixed_trig.h"
-#include "tools/host/quantize.h"
 
 namespace stipple {
 namespace {
@@ -65,37 +65,6 @@ TEST(FixedTrig, AngleTablesCheckTheirBounds) {
   EXPECT_FALSE(build_angle_table(AngleKind::kPhi, 0, table, 256));
   EXPECT_FALSE(build_angle_table(AngleKind::kPhi, kMaxAngleBits + 1, table, 256));
   EXPECT_EQ(table[64].sin, kQ14One);  // phi = pi/2
-}
-
-TEST(FixedTrig, FrameDecodeMatchesTheReferenceDecoder) {
-  struct Layout {
-    int theta, phi, psi;
-    bool hemisphere;
-  };
-  for (const Layout l : {Layout{8, 10, 6, false}, Layout{4, 3, 3, true}}) {
-    const AngleKind theta_kind = l.hemisphere ? AngleKind::kThetaHemisphere : AngleKind::kThetaSphere;
-    std::vector<SinCosQ14> t(angle_table_entries(l.theta)), p(angle_table_entries(l.phi)), s(angle_table_entries(l.psi));
-    ASSERT_TRUE(build_angle_table(theta_kind, l.theta, t.data(), t.size()));
-    ASSERT_TRUE(build_angle_table(AngleKind::kPhi, l.phi, p.data(), p.size()));
-    ASSERT_TRUE(build_angle_table(AngleKind::kPsi, l.psi, s.data(), s.size()));
-    const FrameTables tables{t.data(), p.data(), s.data()};
-    const AngleBits bits{l.theta, l.phi, l.psi, l.hemisphere};
-    int worst = 0;
-    for (uint32_t a = 0; a < t.size(); ++a)
-      for (uint32_t b = 0; b < p.size(); b += (l.phi > 6 ? 7 : 1))
-        for (uint32_t c = 0; c < s.size(); c += (l.psi > 4 ? 5 : 1)) {
-          const FrameQ14 f = decode_frame_q14(tables, a, b, c);
-          const Mat3 ref = decode_frame({static_cast<uint16_t>(a), static_cast<uint16_t>(b), static_cast<uint16_t>(c)}, bits);
-          for (int axis = 0; axis < 3; ++axis)
-            for (int k = 0; k < 3; ++k) {
-              const int err = std::abs(f.axis[axis][k] - static_cast<int>(std::lround(ref(k, axis) * kQ14One)));
-              worst = std::max(worst, err);
-              // Measured worst: 3 LSB for 8-10-6 frames, 1 LSB for 4-3-3.
-              ASSERT_LE(err, 4) << "theta " << a << " phi " << b << " psi " << c << " axis " << axis;
-            }
-        }
-    RecordProperty(l.hemisphere ? "worst_lsb_colour" : "worst_lsb_position", worst);
-  }
 }
 
 uint32_t bits_of(float f) {

@@ -1,6 +1,7 @@
 // The handheld client's API (raster/client.h): arena sizing, startup and
 // record validation, the node cache, and what it draws — against the double
-// reference renderer and against itself under cache churn.
+// reference renderer (tests/render_reference_test.cpp) and against itself
+// under cache churn.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,10 +11,9 @@
 #include <vector>
 
 #include "core/cut.h"
-#include "platform/file_io.h"
 #include "raster/client.h"
-#include "test_util.h"
-#include "tools/host/render.h"
+#include "tests/core/test_files.h"
+#include "tools/handheld/embedded.h"
 
 namespace stipple {
 namespace {
@@ -27,8 +27,7 @@ struct Model {
 const Model& bunny() {
   static const Model m = [] {
     Model out;
-    std::string error;
-    EXPECT_TRUE(read_file(test::source_path("tests/golden/bunny_v1.spg"), out.file, error)) << error;
+    out.file = test::fixture("tests/golden/bunny_v1.spg");
     EXPECT_TRUE(spg_parse(out.file.data(), out.file.size(), &out.view).ok());
     out.startup_bytes = static_cast<size_t>(out.view.topology - out.file.data());
     return out;
@@ -235,43 +234,6 @@ TEST(Client, FrameBudgetDropsPointsAndSaysSo) {
   EXPECT_LE(stats.points, 1000u);
   EXPECT_GT(stats.points, 900u);
   EXPECT_GT(stats.points_dropped, 0u);
-}
-
-// Fixed point against the double reference: same cut, same samples. Ties in
-// the z-buffer flip wherever two points land within rounding of each other,
-// so the bound is on PSNR, per projection mode (docs/fixed_point.md).
-TEST(Client, FixedPointAgainstDoubleReference) {
-  DecodedModel model;
-  std::string error;
-  ASSERT_TRUE(decode_spg("bunny", bunny().file.data(), bunny().file.size(), model, error)) << error;
-  const struct {
-    Projection p;
-    ShadingMode s;
-    double bound;
-  } cases[] = {{Projection::kExact, ShadingMode::kNone, 33},         {Projection::kExact, ShadingMode::kPerPoint, 32.5},
-               {Projection::kReciprocal, ShadingMode::kPerPoint, 32.5}, {Projection::kAffine, ShadingMode::kNone, 32},
-               {Projection::kAffine, ShadingMode::kPerPoint, 30}};
-  for (const auto& k : cases) {
-    for (const char* size : {"240x320", "640x480"}) {
-      ClientConfig c;
-      const bool big = size[0] == '6';
-      c.raster = RasterConfig{static_cast<uint16_t>(big ? 640 : 240), static_cast<uint16_t>(big ? 480 : 320), 5,
-                              big ? PixelFormat::kRgb888 : PixelFormat::kRgb565, 1u << 20};
-      c.projection = k.p;
-      c.shading = k.s;
-      const CutRule rule{CutRule::kProjectedSize, 0, 32};
-      const ViewSpec spec;
-      FixedRender fixed;
-      ASSERT_TRUE(render_fixed(bunny().view, bunny().file.data(), c, rule, spec, fixed, error)) << error;
-      const Image ref = render_reference(model, fixed.cut, c, spec);
-      const double db = image_psnr(fixed.image, ref);
-      const char* projections[] = {"affine", "reciprocal", "exact"};
-      const char* shadings[] = {"point", "node", "none"};
-      std::printf("%s projection %-10s shading %-5s: %.2f dB (%u points)\n", size, projections[static_cast<int>(k.p)],
-                  shadings[static_cast<int>(k.s)], db, fixed.stats.points);
-      EXPECT_GE(db, k.bound);
-    }
-  }
 }
 
 }  // namespace

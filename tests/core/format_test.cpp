@@ -1,0 +1,200 @@
+// Node records and the .spg container: exact packing, and every kind of
+// damaged or hostile file refused with its field and byte.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+
+#include "core/node_format.h"
+#include "core/spg_format.h"
+#include "tests/core/test_files.h"
+
+namespace stipple {
+namespace {
+
+TEST(NodeFormat, PaperBudget) {
+  EXPECT_EQ(paper_layout(true, false, 0).record_bytes(), 13);
+  EXPECT_EQ(paper_layout(true, true, 1).record_bytes(), 17);
+  EXPECT_EQ(paper_layout(false, false, 2).total_bits(), 68);
+  const RecordLayout l = paper_layout(true, true, 1);
+  EXPECT_EQ(l.width(Field::kPosY), 10);
+  EXPECT_EQ(l.width(Field::kPosX), 11);
+  EXPECT_EQ(l.total_bits(), 136);
+}
+
+TEST(NodeFormat, PackUnpackExact) {
+  const RecordLayout l = paper_layout(true, true, 2);
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 2000; ++trial) {
+    NodeFields f;
+    for (int k = 0; k < kFieldCount; ++k) {
+      const uint32_t max = (1u << l.bits[k]) - 1;
+      f.v[k] = static_cast<uint16_t>(trial == 0 ? max : trial == 1 ? 0 : rng() & max);
+    }
+    ASSERT_TRUE(fields_fit(l, f));
+    uint8_t buf[kMaxRecordBytes];
+    pack_record(l, f, buf);
+    const NodeFields back = unpack_record(l, buf);
+    for (int k = 0; k < kFieldCount; ++k) ASSERT_EQ(back.v[k], f.v[k]) << "field " << k;
+  }
+}
+
+TEST(NodeFormat, FrozenBitLayout) {
+  // A record whose bytes were worked out by hand from docs/format.md §5:
+  // pos x = 0x7FF (11 bits), y = 1, z = 0 (10 bits); theta = 0xAB; the rest 0.
+  const RecordLayout l = paper_layout(false, false, 2);
+  NodeFields f;
+  f[Field::kPosX] = 0x7FF;
+  f[Field::kPosY] = 1;
+  f[Field::kFpTheta] = 0xAB;
+  uint8_t buf[16] = {};
+  pack_record(l, f, buf);
+  // bits 0-10: x; bit 11: y's LSB; bits 32-39: theta.
+  const uint8_t expect[9] = {0xFF, 0x0F, 0x00, 0x00, 0xAB, 0x00, 0x00, 0x00, 0x00};
+  for (int i = 0; i < 9; ++i) EXPECT_EQ(buf[i], expect[i]) << "byte " << i;
+  NodeFields too_big = f;
+  too_big[Field::kFpPsi] = 64;  // 6 bits
+  EXPECT_FALSE(fields_fit(l, too_big));
+}
+
+TEST(Crc32, KnownValue) {
+  const uint8_t text[] = {'1', '2', '3', '4', '5', '6', '7', '8', '9'};
+  EXPECT_EQ(crc32(text, 9), 0xCBF43926u);
+}
+
+// The encoder's output for a 600-point sphere in each variant, committed so
+// that these tests need no encoder (tests/format_test.cpp checks the files
+// are still what the encoder writes).
+struct Variant {
+  const char* name;
+  bool normals, colors, octree;
+};
+constexpr Variant kVariants[] = {
+    {"normals", true, false, false}, {"plain", false, false, false}, {"colour", true, true, false}, {"octree", true, false, true}};
+
+std::vector<uint8_t> sphere_spg(const char* variant) {
+  return test::fixture(std::string("tests/data/sphere600_") + variant + ".spg");
+}
+
+void fix_crc(std::vector<uint8_t>& f) {
+  const uint32_t c = crc32(f.data(), f.size() - 4);
+  for (int i = 0; i < 4; ++i) f[f.size() - 4 + static_cast<size_t>(i)] = static_cast<uint8_t>(c >> (8 * i));
+}
+
+SpgError parse_error(const std::vector<uint8_t>& f) {
+  SpgView v;
+  return spg_parse(f.data(), f.size(), &v).error;
+}
+
+TEST(SpgFormat, EveryVariantParses) {
+  for (const Variant& variant : kVariants) {
+    const std::vector<uint8_t> f = sphere_spg(variant.name);
+    SpgView v;
+    const SpgResult r = spg_parse(f.data(), f.size(), &v);
+    ASSERT_TRUE(r.ok()) << variant.name << ": " << spg_error_text(r.error) << " at " << r.offset;
+    EXPECT_EQ(v.header.point_count, 600u);
+    EXPECT_EQ(v.header.has_normals(), variant.normals);
+    EXPECT_EQ(v.header.has_color(), variant.colors);
+    EXPECT_EQ(v.header.tree_arity, variant.octree ? 8 : 2);
+    EXPECT_EQ(v.record_bytes, variant.colors ? 17u : variant.normals ? 13u : 9u);
+  }
+}
+
+TEST(SpgFormat, EveryTruncatedPrefixIsRejected) {
+  const std::vector<uint8_t> f = sphere_spg("colour");
+  for (size_t n = 0; n < f.size(); ++n) {
+    std::vector<uint8_t> prefix(f.begin(), f.begin() + static_cast<ptrdiff_t>(n));
+    const SpgError e = parse_error(prefix);
+    ASSERT_NE(e, SpgError::kOk) << "prefix " << n;
+  }
+  std::vector<uint8_t> longer = f;
+  longer.push_back(0);
+  EXPECT_EQ(parse_error(longer), SpgError::kTrailingBytes);
+}
+
+TEST(SpgFormat, EverySingleBitFlipIsRejected) {
+  const std::vector<uint8_t> f = sphere_spg("normals");
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::vector<uint8_t> g = f;
+    g[rng() % g.size()] ^= static_cast<uint8_t>(1u << (rng() % 8));
+    ASSERT_NE(parse_error(g), SpgError::kOk) << "trial " << trial;
+  }
+}
+
+TEST(SpgFormat, HostileHeadersAreRefusedByField) {
+  const std::vector<uint8_t> f = sphere_spg("normals");
+  struct Case {
+    size_t offset;
+    std::vector<uint8_t> value;
+    SpgError expect;
+  };
+  const Case cases[] = {
+      {0, {'S', 'T', 'P', 'X'}, SpgError::kBadMagic},
+      {4, {2, 0}, SpgError::kBadVersion},
+      {6, {4, 0}, SpgError::kBadFlags},
+      {8, {3}, SpgError::kBadArity},
+      {9, {17}, SpgError::kBadLayout},
+      {10, {17}, SpgError::kBadLayout},                   // a field of 17 bits
+      {10 + 11, {5}, SpgError::kBadLayout},               // colour field present without the flag
+      {28, {0xFF, 0xFF, 0xFF, 0xFF}, SpgError::kBadCounts},  // 4 billion nodes
+      {32, {0, 0, 0, 0}, SpgError::kBadCounts},
+      {36, {1, 0, 0, 0}, SpgError::kBadCounts},
+      {40, {99, 0}, SpgError::kBadDepth},
+      {42, {1, 0}, SpgError::kBadLayout},
+      {44, {0, 0, 0xC0, 0x7F}, SpgError::kBadFloat},      // NaN bbox
+      {44, {0, 0, 0x80, 0x7F}, SpgError::kBadFloat},      // +inf
+      {44, {0, 0, 0x80, 0x4F}, SpgError::kBadBoundingBox},  // min x = 4.3e9 > max x
+      {68, {0, 0}, SpgError::kBadClassCount},
+      {68, {0x01, 0x10}, SpgError::kBadClassCount},       // 4097 classes in 12 bits
+      {76, {0, 0, 0xC0, 0xFF}, SpgError::kBadFloat},      // NaN sigma
+      {76, {0, 0, 0x80, 0xBF}, SpgError::kBadFloat},      // negative sigma
+  };
+  for (const Case& c : cases) {
+    std::vector<uint8_t> g = f;
+    std::copy(c.value.begin(), c.value.end(), g.begin() + static_cast<ptrdiff_t>(c.offset));
+    fix_crc(g);
+    SpgView v;
+    const SpgResult r = spg_parse(g.data(), g.size(), &v);
+    EXPECT_EQ(r.error, c.expect) << "offset " << c.offset << ": got " << spg_error_text(r.error);
+  }
+}
+
+TEST(SpgFormat, RecordClassIndexBeyondTable) {
+  std::vector<uint8_t> f = sphere_spg("normals");
+  SpgView v;
+  ASSERT_TRUE(spg_parse(f.data(), f.size(), &v).ok());
+  const size_t records_at = static_cast<size_t>(v.records - f.data());
+  const uint16_t classes = v.header.class_count[0];
+  ASSERT_LT(classes, 4096);
+  NodeFields fields = unpack_record(v.header.layout, v.records);
+  fields[Field::kSigmaP] = classes;  // one past the end
+  pack_record(v.header.layout, fields, f.data() + records_at);
+  fix_crc(f);
+  const SpgResult r = spg_parse(f.data(), f.size(), &v);
+  EXPECT_EQ(r.error, SpgError::kBadRecord);
+  EXPECT_EQ(r.offset, records_at);
+}
+
+TEST(SpgFormat, TopologyAndLeafCountDamage) {
+  const std::vector<uint8_t> f = sphere_spg("normals");
+  SpgView v;
+  ASSERT_TRUE(spg_parse(f.data(), f.size(), &v).ok());
+  const size_t topo = static_cast<size_t>(v.topology - f.data());
+  const size_t leaves = static_cast<size_t>(v.leaf_counts - f.data());
+  std::vector<uint8_t> g = f;
+  g[topo] = 0;  // the root becomes a leaf: orphans follow
+  fix_crc(g);
+  EXPECT_EQ(parse_error(g), SpgError::kBadTree);
+  g = f;
+  g[leaves] = 0;  // a leaf of zero points
+  fix_crc(g);
+  EXPECT_EQ(parse_error(g), SpgError::kBadLeafCount);
+  g = f;
+  g[leaves] = static_cast<uint8_t>(g[leaves] + 1);  // sum no longer matches point_count
+  fix_crc(g);
+  EXPECT_EQ(parse_error(g), SpgError::kBadLeafCount);
+}
+
+}  // namespace
+}  // namespace stipple
