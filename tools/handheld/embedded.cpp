@@ -93,7 +93,7 @@ double image_psnr(const Image& a, const Image& b) {
 }
 
 bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
-                  const ViewSpec& spec, FixedRender& out, std::string& error, int frames) {
+                  const ViewSpec& spec, FixedRender& out, std::string& error, int frames, size_t (*heap_probe)()) {
   // The cut: a decoder over the whole file, as the server side will hold.
   std::vector<uint8_t> decoder_storage(node_decoder_bytes(view.header));
   NodeDecoder decoder;
@@ -130,6 +130,7 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     s = client.render(camera, out.frame.data(), stride, &out.stats);
     out.frame_seconds.push_back(monotonic_seconds() - start);
   }
+  out.heap_bytes = heap_probe ? heap_probe() : 0;
   if (s != ClientStatus::kOk) {
     error = std::string("client: ") + client_status_text(s);
     return false;

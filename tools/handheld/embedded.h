@@ -45,13 +45,17 @@ struct FixedRender {
   size_t arena_bytes = 0;
   Camera camera;
   std::vector<double> frame_seconds;  // render() wall time of each frame drawn
+  size_t heap_bytes = 0;  // heap_probe's answer after the frames (0 without a probe)
 };
 
 // Cuts the validated `view` by `rule` for the camera, feeds the client the
 // startup message and the cut's records, renders the frame `frames` times
 // (for timing; every frame is the same). config.node_capacity is raised to
-// the cut's size when smaller.
+// the cut's size when smaller. `heap_probe`, when given, is asked for the
+// bytes of heap in use once the frames are drawn, while every buffer of the
+// run (the file's decoder, the cut, the client's arena, the frame) is alive.
 bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
-                  const ViewSpec& spec, FixedRender& out, std::string& error, int frames = 1);
+                  const ViewSpec& spec, FixedRender& out, std::string& error, int frames = 1,
+                  size_t (*heap_probe)() = nullptr);
 
 }  // namespace stipple

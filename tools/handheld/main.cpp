@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <malloc.h>
+
 #include "platform/file_io.h"
 #include "tools/handheld/embedded.h"
 #include "tools/handheld/frame_sink.h"
@@ -30,14 +32,27 @@ const char kUsage[] =
     "  --max-size PX          cut: split nodes wider than PX pixels (default 2)\n"
     "  --level L              cut: tree level L instead\n"
     "  --max-points N         frame budget (default 1048576)\n"
+    "  --cache N              nodes the client's cache holds (default 30000, raised\n"
+    "                         to the cut's size)\n"
+    "  --projection affine|reciprocal|exact\n"
+    "                         per-point projection (default affine)\n"
     "  --frames N             draw N frames (timing; default 1)\n"
     "  -o FRAME.ppm           write the frame (headless)\n"
     "  --fbdev DEVICE         show the frame on a framebuffer (e.g. /dev/fb0)\n"
-    "  --crc                  print the CRC-32 of the frame's RGB888 bytes\n";
+    "  --crc                  print the CRC-32 of the frame's RGB888 bytes\n"
+    "  --memory               print the memory the run holds: the client's arena,\n"
+    "                         the frame, the model file, and the heap in use while\n"
+    "                         drawing (glibc's mallinfo2)\n";
 
 int fail(const std::string& message) {
   std::fprintf(stderr, "stipple-handheld: %s\n", message.c_str());
   return 1;
+}
+
+// Bytes the C library's allocator has handed out and not taken back.
+size_t heap_in_use() {
+  const struct mallinfo2 m = mallinfo2();
+  return m.uordblks + m.hblkhd;
 }
 
 bool parse_uint(const char* text, unsigned long max, unsigned long& out) {
@@ -57,7 +72,7 @@ int main(int argc, char** argv) {
   CutRule rule{CutRule::kProjectedSize, 0, 32};
   ViewSpec view;
   std::string model, output, fbdev, error;
-  bool crc = false;
+  bool crc = false, memory = false;
   unsigned long frames = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -95,6 +110,18 @@ int main(int argc, char** argv) {
       if (!parse_uint(next, 1ul << 26, u) || u == 0) return fail(std::string("--max-points: expected 1..67108864, got '") + next + "'");
       config.raster.max_points = static_cast<uint32_t>(u);
       ++i;
+    } else if (a == "--cache" && next) {
+      if (!parse_uint(next, 1ul << 24, u) || u == 0) return fail(std::string("--cache: expected 1..16777216 nodes, got '") + next + "'");
+      config.node_capacity = static_cast<uint32_t>(u);
+      ++i;
+    } else if (a == "--projection" && next) {
+      if (!std::strcmp(next, "affine")) config.projection = Projection::kAffine;
+      else if (!std::strcmp(next, "reciprocal")) config.projection = Projection::kReciprocal;
+      else if (!std::strcmp(next, "exact")) config.projection = Projection::kExact;
+      else return fail(std::string("--projection: expected affine, reciprocal or exact, got '") + next + "'");
+      ++i;
+    } else if (a == "--memory") {
+      memory = true;
     } else if (a == "--frames" && next) {
       if (!parse_uint(next, 100000, frames) || frames == 0) return fail(std::string("--frames: expected 1..100000, got '") + next + "'");
       ++i;
@@ -122,11 +149,16 @@ int main(int argc, char** argv) {
   const SpgResult r = spg_parse(file.data(), file.size(), &spg);
   if (!r.ok()) return fail(model + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error));
   FixedRender frame;
-  if (!render_fixed(spg, file.data(), config, rule, view, frame, error, static_cast<int>(frames))) return fail(model + ": " + error);
+  if (!render_fixed(spg, file.data(), config, rule, view, frame, error, static_cast<int>(frames),
+                    memory ? heap_in_use : nullptr))
+    return fail(model + ": " + error);
   std::vector<double> t = frame.frame_seconds;
   std::sort(t.begin(), t.end());
   std::printf("%s: %zu nodes, %u points, arena %zu bytes, frame %.3f ms (median of %lu)\n", model.c_str(), frame.cut.size(),
               frame.stats.points, frame.arena_bytes, 1e3 * t[t.size() / 2], frames);
+  if (memory)
+    std::printf("memory: client arena %zu bytes, frame %zu bytes, model file %zu bytes; heap in use while drawing %zu bytes\n",
+                frame.arena_bytes, frame.frame.size(), file.size(), frame.heap_bytes);
   if (crc) std::printf("crc32 %08x\n", crc32(frame.image.rgb.data(), frame.image.rgb.size()));
   if (!output.empty() && !write_ppm(output, frame.image, error)) return fail(error);
   if (!fbdev.empty()) {
