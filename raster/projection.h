@@ -9,6 +9,8 @@
 //   kReciprocal  x = cx + f X_p r / 2^(e+16), 1/Z_p ~ r 2^-(e+16) from a
 //                1024-entry table indexed by the 10 bits below Z_p's top bit
 //   kExact       x = cx + floor(f X_p / Z_p)                two divisions
+//                (floor_div: without a divide instruction when the build
+//                has STIPPLE_HW_DIVIDE off, core/divide.h)
 // with X_p = X + (A g)_x / 2^12 (likewise Y_p, Z_p). Every position is
 // floored to 1/16 px. Ranges (camera.h): |X|, |Y| <= 8 Z, Z <= 2^30, the
 // near plane >= 2^12 MU, so u < 2^35, |X/Z| < 2^19 in Q16, and every product
@@ -20,6 +22,7 @@
 #include <cstdint>
 
 #include "core/camera.h"
+#include "core/divide.h"
 #include "core/gaussian_table.h"
 #include "core/node_decoder.h"
 
@@ -35,11 +38,6 @@ void build_reciprocal_table(uint16_t out[1 << kReciprocalBits]);
 
 inline int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
 
-// floor(n / d) for d > 0.
-inline int64_t floor_div(int64_t n, int64_t d) {
-  const int64_t q = n / d;
-  return q * d > n ? q - 1 : q;
-}
 
 struct ScreenSample {
   int32_t x_q4, y_q4;

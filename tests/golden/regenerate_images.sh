@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates the golden images: the bunny (tests/golden/bunny_v1.spg) from
-# three views, 240x320 RGB565 and 640x480 RGB888, drawn by the fixed-point
-# client through `stipple render`. For every image that changes it writes
+# three views, 240x320 RGB565 and 640x480 RGB888 with the affine projection
+# and 240x320 RGB565 with the exact one, drawn by the fixed-point client
+# through `stipple render`. For every image that changes it writes
 # NAME.diff.png beside it (differing pixels in red) and prints what changed.
 # Review the diffs before committing: these bytes are the contract that every
 # platform (x86-64, ARM) must reproduce. tests/golden/views.cmake lists the
@@ -12,14 +13,16 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 S=${1:-build/release/tools/stipple}
 views=("yaw0:0,0" "yaw90:90,20" "yaw210:210,35")
-configs=("240x320:rgb565" "640x480:rgb888")
+configs=("240x320:rgb565:affine" "640x480:rgb888:affine" "240x320:rgb565:exact")
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 for v in "${views[@]}"; do
   for c in "${configs[@]}"; do
-    name="bunny_${v%%:*}_${c%%:*}_${c##*:}"
-    "$S" render tests/golden/bunny_v1.spg --camera "${v##*:},3,35" --size "${c%%:*}" --format "${c##*:}" \
-      -o "$tmp/$name.png" >/dev/null
+    IFS=: read -r size format projection <<<"$c"
+    name="bunny_${v%%:*}_${size}_${format}"
+    [[ $projection == affine ]] || name+="_$projection"
+    "$S" render tests/golden/bunny_v1.spg --camera "${v##*:},3,35" --size "$size" --format "$format" \
+      --projection "$projection" -o "$tmp/$name.png" >/dev/null
     golden="tests/golden/$name.png"
     if [[ -f "$golden" ]] && "$S" image-diff "$golden" "$tmp/$name.png" -o "tests/golden/$name.diff.png" >/dev/null; then
       rm -f "tests/golden/$name.diff.png"

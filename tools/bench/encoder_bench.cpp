@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <random>
 
+#include "core/divide.h"
 #include "core/gaussian_table.h"
 #include "core/node_decoder.h"
 #include "core/spg_format.h"
@@ -181,6 +182,33 @@ void BM_GaussianTable(benchmark::State& state) {
 BENCHMARK(BM_GaussianTable)->Arg(1024)->Unit(benchmark::kMicrosecond);
 
 // Rasterize 30 K points (sizes 1-3) into a 240x320 RGB565 or 640x480 RGB888 frame.
+// The exact projection's floored divisions (f X_p / Z_p): Arg 0 divides
+// with the instruction (or the compiler's helper), Arg 1 by multiplication
+// (core/divide.h, what STIPPLE_HW_DIVIDE=OFF builds use).
+void BM_FloorDiv(benchmark::State& state) {
+  std::mt19937_64 rng(5);
+  std::vector<int64_t> n(4096), d(4096);
+  for (size_t i = 0; i < n.size(); ++i) {
+    d[i] = 4096 + static_cast<int64_t>(rng() >> 34);
+    n[i] = (static_cast<int64_t>(rng() % 16384) - 8192) * (d[i] >> 4) + static_cast<int64_t>(rng() % 1000);
+  }
+  const bool soft = state.range(0) != 0;
+  int64_t sum = 0;
+  for (auto _ : state) {
+    for (size_t i = 0; i < n.size(); ++i) {
+      if (soft) {
+        sum += floor_div_soft(n[i], d[i]);
+      } else {
+        const int64_t q = n[i] / d[i];
+        sum += q * d[i] > n[i] ? q - 1 : q;
+      }
+    }
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(n.size()));
+}
+BENCHMARK(BM_FloorDiv)->Arg(0)->Arg(1);
+
 void BM_RasterFrame(benchmark::State& state) {
   const bool large = state.range(0) != 0;
   const RasterConfig c{static_cast<uint16_t>(large ? 640 : 240), static_cast<uint16_t>(large ? 480 : 320), 5,
