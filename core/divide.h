@@ -7,7 +7,7 @@
 // quotient from multiplications: a 256-entry reciprocal seed (relative
 // error 2^-9), two Newton steps (2^-30), the quotient from a split 64-bit
 // product, and a correction by the remainder that makes it exact. Its fast
-// path needs 0 < d < 2^32 and a quotient below 2^31 — the projection's
+// path needs 0 < d < 2^32 and a quotient below 2^30 — the projection's
 // divisions (raster/projection.h) always are — and anything else takes an
 // exact shift-and-subtract loop, so every input gets the exact result.
 //
@@ -55,11 +55,11 @@ inline int64_t floor_div_soft(int64_t n, int64_t d) {
   const uint64_t ud = static_cast<uint64_t>(d);
   uint64_t q, r;
   const int e = 63 - __builtin_clzll(ud);  // 2^e <= d < 2^(e+1)
-  if (e < 32 && (a >> e) < (uint64_t{1} << 30)) {  // quotient below 2^31
+  if (e < 32 && (a >> e) < (uint64_t{1} << 30)) {  // quotient below 2^30
     const uint32_t dn = static_cast<uint32_t>(ud << (31 - e));  // in [2^31, 2^32)
     uint64_t x = divide_detail::kSeeds.v[(dn >> 23) & 255];     // ~ 2^62 / dn
     for (int step = 0; step < 2; ++step) {                       // x += x (2^62 - dn x) / 2^62
-      const int64_t err = static_cast<int64_t>((uint64_t{1} << 62) - dn * x);  // |err| < 2^54
+      const int64_t err = static_cast<int64_t>((uint64_t{1} << 62) - dn * x);  // |err| <= 2^53: (err >> 22) x < 2^62
       x = static_cast<uint64_t>(static_cast<int64_t>(x) + (((err >> 22) * static_cast<int64_t>(x)) >> 40));
     }
     // q ~ a x / 2^(31 + e) from the halves of a (a < 2^(e + 30) < 2^62).

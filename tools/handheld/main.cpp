@@ -25,7 +25,7 @@ const char kUsage[] =
     "The handheld client: fixed point, one arena, no heap after start-up. Draws\n"
     "a simple cut of MODEL.spg for an orbit camera.\n"
     "\n"
-    "  --size WxH             screen (default 240x320)\n"
+    "  --size WxH             screen (default 240x320, or the framebuffer's size)\n"
     "  --format rgb565|rgb888 pixel format (default rgb565)\n"
     "  --camera Y,P[,D[,F]]   yaw, pitch (degrees), distance (model extents), field\n"
     "                         of view (degrees); default 30,20,3,35\n"
@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
   CutRule rule{CutRule::kProjectedSize, 0, 32};
   ViewSpec view;
   std::string model, output, fbdev, error;
-  bool crc = false, memory = false;
+  bool crc = false, memory = false, sized = false;
   unsigned long frames = 1;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -88,6 +88,7 @@ int main(int argc, char** argv) {
         return fail(std::string("--size: expected WIDTHxHEIGHT within 1..4096, got '") + next + "'");
       config.raster.width = static_cast<uint16_t>(w);
       config.raster.height = static_cast<uint16_t>(h);
+      sized = true;
       ++i;
     } else if (a == "--format" && next) {
       if (!std::strcmp(next, "rgb565")) config.raster.format = PixelFormat::kRgb565;
@@ -143,6 +144,17 @@ int main(int argc, char** argv) {
   }
   if (model.empty()) return fail("expected a .spg file (see --help)");
 
+  // The framebuffer first: a missing device fails before any work, and its
+  // size is the frame's unless --size says otherwise.
+  Framebuffer fb;
+  if (!fbdev.empty()) {
+    if (!fb.open(fbdev, error)) return fail(error);
+    if (!sized) {
+      config.raster.width = static_cast<uint16_t>(std::min(fb.width(), 4096));
+      config.raster.height = static_cast<uint16_t>(std::min(fb.height(), 4096));
+    }
+  }
+
   std::vector<uint8_t> file;
   if (!read_file(model, file, error)) return fail(error);
   SpgView spg;
@@ -161,10 +173,6 @@ int main(int argc, char** argv) {
                 frame.arena_bytes, frame.frame.size(), file.size(), frame.heap_bytes);
   if (crc) std::printf("crc32 %08x\n", crc32(frame.image.rgb.data(), frame.image.rgb.size()));
   if (!output.empty() && !write_ppm(output, frame.image, error)) return fail(error);
-  if (!fbdev.empty()) {
-    Framebuffer fb;
-    if (!fb.open(fbdev, error)) return fail(error);
-    fb.show(frame.image);
-  }
+  if (!fbdev.empty()) fb.show(frame.image);
   return 0;
 }
