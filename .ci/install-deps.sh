@@ -2,7 +2,7 @@
 # Installs everything stipple needs to build and test on Debian 12, from
 # Debian's packages. Runs apt-get directly as root, through sudo otherwise.
 set -euo pipefail
-packages=(cmake ninja-build g++ pkg-config libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev
+packages=(cmake ninja-build g++ pkg-config libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev clang
   g++-arm-linux-gnueabi g++-arm-linux-gnueabihf g++-aarch64-linux-gnu qemu-user)  # cross builds, their emulator
 missing=()
 for p in "${packages[@]}"; do
