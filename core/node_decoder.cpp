@@ -20,8 +20,11 @@ Dyadic dyadic_of(uint32_t bits) {
   return d;
 }
 
-// a - b. When the exponents differ by more than 38 the smaller operand is
-// below 2^-37 of the larger and is dropped (keeps every shift inside int64).
+// a - b for two binary32 values (|m| < 2^24). When the exponents differ by
+// more than 38 the smaller operand is below 2^-37 of the larger and is
+// dropped; otherwise the larger mantissa shifts by at most 38 bits, so the
+// result's |m| < 2^62. Only for binary32 operands: a difference fed back in
+// could overflow the shift (compare() orders differences).
 Dyadic subtract(Dyadic a, Dyadic b) {
   if (a.m == 0) return Dyadic{-b.m, b.e};
   if (b.m == 0) return a;
@@ -29,6 +32,16 @@ Dyadic subtract(Dyadic a, Dyadic b) {
   if (b.e - a.e > 38) return Dyadic{-b.m, b.e};
   if (a.e > b.e) return Dyadic{(a.m << (a.e - b.e)) - b.m, b.e};
   return Dyadic{a.m - (b.m << (b.e - a.e)), a.e};
+}
+
+// Whether a > b, for a, b >= 0 with any mantissa below 2^63: both are
+// normalized to a mantissa in [2^62, 2^63) by left shifts (exact), then
+// ordered by exponent, then mantissa. No shift can overflow.
+bool greater(Dyadic a, Dyadic b) {
+  if (a.m <= 0 || b.m <= 0) return a.m > b.m;
+  while (a.m < (int64_t{1} << 62)) a.m <<= 1, --a.e;
+  while (b.m < (int64_t{1} << 62)) b.m <<= 1, --b.e;
+  return a.e != b.e ? a.e > b.e : a.m > b.m;
 }
 
 // round(num / den * 2^frac) for num >= 0, den > 0, saturated to [0, limit].
@@ -98,7 +111,7 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
   Dyadic extent[3], largest;
   for (int a = 0; a < 3; ++a) {
     extent[a] = subtract(dyadic_of(header_.bbox_bits[3 + a]), dyadic_of(header_.bbox_bits[a]));
-    if (subtract(extent[a], largest).m > 0) largest = extent[a];
+    if (greater(extent[a], largest)) largest = extent[a];
   }
   if (largest.m <= 0) largest = Dyadic{1, 0};  // a single point: every offset is 0 anyway
   for (int a = 0; a < 3; ++a) {

@@ -18,9 +18,12 @@ int half_octave(uint64_t x) {
 }
 
 PpnIndex ppn_index(int64_t a, int64_t b, int64_t c) {
+  constexpr int64_t kBig = int64_t{1} << 31;
+  if (a >= kBig || c >= kBig || a + c >= kBig) return PpnIndex{kPpnSizes - 1, 0};  // sigma far beyond the table
   const int64_t tr = a + c;
-  if (tr >= (int64_t{1} << 31)) return PpnIndex{kPpnSizes - 1, 0};  // sigma far beyond the table
-  const int64_t det = a * c - b * b;  // a, c < 2^31: no overflow
+  // a, c < 2^31: no overflow. |b| >= 2^31 > sqrt(a c) only off a covariance
+  // (rounding, hostile input): as degenerate as it gets.
+  const int64_t det = b >= kBig || b <= -kBig ? -1 : a * c - b * b;
   const int t = half_octave(static_cast<uint64_t>(tr));
   const int d = det <= 0 ? kPpnAspects - 1 : 2 * t - half_octave(4 * static_cast<uint64_t>(det));
   return PpnIndex{static_cast<uint8_t>(t > kPpnSizes - 1 ? kPpnSizes - 1 : t),

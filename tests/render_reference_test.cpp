@@ -90,6 +90,26 @@ TEST(Cut, LevelCutMatchesTheReferenceDecoder) {
             level_cut(t.model, 5).size());
 }
 
+// Nodes whose sigma is huge relative to the box (a hostile or degenerate
+// file): the screen covariance passes 2^63 in 1/256 px^2. The points-per-node
+// index must saturate (it overflowed a signed add before, seen by UBSan) and
+// the frame still be drawn: such nodes get the most points the table allows.
+TEST(Reference, HugeSigmaSaturatesThePointsPerNodeIndex) {
+  DecodedModel model = bunny().model;
+  ClientConfig c;
+  c.raster = RasterConfig{64, 48, 5, PixelFormat::kRgb888, 1u << 20};
+  c.samples = 64;
+  const std::vector<uint32_t> cut = level_cut(model, 4);
+  for (uint32_t id : cut) model.nodes[id].position.sigma *= 1e12;
+  const Image huge = render_reference(model, cut, c, ViewSpec{});
+  ASSERT_EQ(huge.rgb.size(), 64u * 48 * 3);
+  size_t lit = 0;
+  for (uint8_t v : huge.rgb) lit += v != 0;
+  EXPECT_GT(lit, 0u);
+  EXPECT_EQ(ppn_index(INT64_MAX, 0, INT64_MAX).size, kPpnSizes - 1);
+  EXPECT_EQ(ppn_index(1, INT64_MAX, 1).aspect, kPpnAspects - 1);
+}
+
 // The committed table is what the tool measures (Sobol, 2 px points: the
 // default; the other five tables come from the same code).
 TEST(PointsPerNode, CommittedTableIsTheMeasuredOne) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
 #include "core/node_decoder.h"
@@ -81,6 +82,57 @@ TEST(NodeDecoder, RejectsBadRecordsAndSmallStorage) {
   SpgView wide = view;
   wide.header.layout.bits[static_cast<int>(Field::kFpPhi)] = kMaxAngleBits + 1;
   EXPECT_EQ(decoder.init(wide, storage.data(), need), DecodeStatus::kBadLayout);
+}
+
+uint32_t bits_of(float f) {
+  uint32_t b;
+  std::memcpy(&b, &f, 4);
+  return b;
+}
+
+// A box whose x axis spans many binary orders of magnitude (from -1.5e-9 to
+// 507: exponents 2^-30 and 2^8) while y starts away from zero (10 to 5000).
+// Comparing the extents used to shift an already-shifted difference past 63
+// bits (a signed overflow before C++20; since then a silent wrap that can
+// pick the wrong axis as the largest and shrink the render). Every axis must get its extent in
+// model units: the largest 2^24 MU, the others in proportion.
+TEST(NodeDecoder, BoxesSpanningManyOrdersOfMagnitude) {
+  const std::vector<uint8_t> spg = test::fixture("tests/golden/bunny_v1.spg");
+  SpgView view;
+  ASSERT_TRUE(spg_parse(spg.data(), spg.size(), &view).ok());
+  const struct {
+    float min[3], max[3];
+    int32_t extent_mu[3];
+  } cases[] = {
+      {{-1.5e-9f, 10.0f, 0.0f}, {507.0f, 5000.0f, 1.0f}, {1704619, 1 << 24, 3362}},
+      // Found by a search over random boxes: the wrapped shift made z look the largest.
+      {{-0.000935058575f, 0.042750001f, -4.89410013e-10f}, {114.111061f, 49905.707f, 0.694999993f}, {38362, 1 << 24, 234}},
+      {{10.0f, -1.5e-9f, 3.0f}, {5000.0f, 507.0f, 4.0f}, {1 << 24, 1704619, 3362}},
+      {{-1.5e-9f, 10.0f, 0.0f}, {507.0f, 600.0f, 1.0f}, {14417031, 1 << 24, 28436}},
+      {{-1.5e-9f, 10.0f, 0.0f}, {507.0f, 20.0f, 1.0f}, {1 << 24, 330912, 33091}},
+      {{1e-38f, -1e-38f, 1e30f}, {2e-38f, 1e-38f, 3e30f}, {0, 0, 1 << 24}},  // subnormal extents beside a huge one
+      {{-3e38f, -1e-45f, 0.0f}, {3e38f, 1e-45f, 0.0f}, {1 << 24, 0, 0}},     // the widest finite box
+      {{5.0f, 5.0f, 5.0f}, {5.0f, 5.0f, 5.0f}, {0, 0, 0}},                   // a single point
+  };
+  for (const auto& c : cases) {
+    SpgView v = view;
+    for (int a = 0; a < 3; ++a) {
+      v.header.bbox_bits[a] = bits_of(c.min[a]);
+      v.header.bbox_bits[3 + a] = bits_of(c.max[a]);
+    }
+    std::vector<uint32_t> storage(node_decoder_bytes(v.header) / 4);
+    NodeDecoder decoder;
+    ASSERT_EQ(decoder.init(v, storage.data(), storage.size() * 4), DecodeStatus::kOk);
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(decoder.extent_mu()[a], c.extent_mu[a]) << c.min[0] << " axis " << a;
+    FixedNode n;
+    for (uint32_t i = 0; i < v.header.node_count; ++i) {
+      ASSERT_EQ(decoder.decode(v.records + i * v.record_bytes, &n), DecodeStatus::kOk);
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_GE(n.mean[a], 0);
+        EXPECT_LE(n.mean[a], decoder.extent_mu()[a]);
+      }
+    }
+  }
 }
 
 }  // namespace

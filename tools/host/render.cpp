@@ -93,8 +93,10 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
     const double ex = 3.5 * M.row(0).cwiseAbs().sum(), ey = 3.5 * M.row(1).cwiseAbs().sum();
     if (sx0 + ex < 0 || sx0 - ex >= w || sy0 + ey < 0 || sy0 - ey >= h) continue;
     const Eigen::Matrix2d S = M * M.transpose() * 256.0;  // 1/256 px^2
-    const uint32_t count = points_per_node(table, ppn_index(std::llround(S(0, 0)), std::llround(S(0, 1)), std::llround(S(1, 1))),
-                                           config.quality_q8, config.samples);
+    // Saturated to +-2^40, NaN to +2^40 (the index saturates far below):
+    // llround of a value beyond 2^63 has no defined result.
+    const auto q = [](double v) { return std::llround(v < -0x1p40 ? -0x1p40 : v < 0x1p40 ? v : 0x1p40); };
+    const uint32_t count = points_per_node(table, ppn_index(q(S(0, 0)), q(S(0, 1)), q(S(1, 1))), config.quality_q8, config.samples);
     const Vec3 base = color ? Vec3(node.color.mean * 255.0) : grey;
     const Vec3 n0 = node.normal_frame.col(2);
     for (uint32_t j = 0; j < count; ++j) {
