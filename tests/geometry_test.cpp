@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cstdio>
 #include <numbers>
 
 #include "core/sobol.h"
@@ -215,6 +217,38 @@ TEST(KdTree, MatchesBruteForce) {
     ASSERT_EQ(knn.size(), 10u);
     for (size_t k = 0; k < 10; ++k) EXPECT_EQ(knn[k], all[k].second);
   }
+}
+
+// Coincident points (a float32 scan far from the origin collapses onto one
+// lattice value): every query at the shared value ties with all of them. The
+// search must stop once k ties are found instead of visiting each one (it
+// visited the whole tree before: quadratic, normal estimation never
+// finished). Bounded cost per query, exact distances; the wall time of the
+// whole estimate is BM_NormalsCoincident in stipple_bench.
+TEST(KdTree, CoincidentPointsCostLogarithmicTime) {
+  std::vector<Vec3> pts(200000, Vec3(1e7, 1e7, 5.0));
+  for (size_t i = 0; i < 1000; ++i) pts[i * 200] = Vec3(1e7 + static_cast<double>(i), 1e7, 5.0);  // a few others
+  const KdTree tree(pts);
+  std::vector<uint32_t> knn;
+  size_t worst = 0;
+  for (size_t i = 1; i < pts.size(); i += 997) {
+    if (i % 200 == 0) continue;  // one of the distinct points
+    size_t visited = 0;
+    tree.knearest(pts[i], 12, knn, &visited);
+    ASSERT_EQ(knn.size(), 12u);
+    std::vector<uint32_t> sorted = knn;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(std::unique(sorted.begin(), sorted.end()), sorted.end());
+    for (uint32_t j : knn) EXPECT_EQ((pts[j] - pts[i]).squaredNorm(), 0.0);
+    worst = std::max(worst, visited);
+  }
+  std::printf("coincident points: at most %zu of 200000 points compared per 12-NN query\n", worst);
+  EXPECT_LE(worst, 400u);
+  PointCloud c;
+  c.positions = pts;
+  estimate_normals(c, 12);
+  ASSERT_EQ(c.normals.size(), pts.size());
+  for (const Vec3& n : c.normals) ASSERT_NEAR(n.norm(), 1.0, 1e-9);
 }
 
 TEST(Normals, KnnNormalsOnASphereAreConsistentlyOriented) {

@@ -304,6 +304,19 @@ void BM_KdNearest(benchmark::State& state) {
 }
 BENCHMARK(BM_KdNearest);
 
+// Normal estimation (k-NN, PCA, orientation) over N coincident points: the
+// case that went quadratic on distance ties (issue 10).
+void BM_NormalsCoincident(benchmark::State& state) {
+  for (auto _ : state) {
+    PointCloud c;
+    c.positions.assign(static_cast<size_t>(state.range(0)), Vec3(1e7, 1e7, 5.0));
+    estimate_normals(c, 12);
+    benchmark::DoNotOptimize(c.normals.data());
+  }
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+BENCHMARK(BM_NormalsCoincident)->Arg(200000)->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3);
+
 void BM_PlyParse(benchmark::State& state) {
   std::vector<uint8_t> bytes;
   std::string error;

@@ -15,9 +15,11 @@ constexpr uint32_t kBucket = 8;
 struct KdTree::Best {
   size_t k;
   size_t count = 0;
+  size_t visited = 0;  // points offered: the query's cost
   std::pair<double, uint32_t> items[kMaxK] = {};
   double worst() const { return count < k ? std::numeric_limits<double>::infinity() : items[count - 1].first; }
   void offer(double d2, uint32_t index) {
+    ++visited;
     const std::pair<double, uint32_t> item{d2, index};
     if (count == k) {
       if (!(item < items[count - 1])) return;
@@ -68,25 +70,29 @@ void KdTree::search(uint32_t lo, uint32_t hi, const Vec3& q, Best& best) const {
   const int axis = axis_[mid];
   const double delta = q[axis] - points_[index][axis];
   best.offer((points_[index] - q).squaredNorm(), index);
+  // The far side is searched only if it could hold a strictly closer point.
+  // With "<=" a tie at the splitting plane sent the search into both halves,
+  // so k-NN among many coincident points visited whole subtrees (quadratic).
   if (delta < 0) {
     search(lo, mid, q, best);
-    if (delta * delta <= best.worst()) search(mid + 1, hi, q, best);
+    if (delta * delta < best.worst()) search(mid + 1, hi, q, best);
   } else {
     search(mid + 1, hi, q, best);
-    if (delta * delta <= best.worst()) search(lo, mid, q, best);
+    if (delta * delta < best.worst()) search(lo, mid, q, best);
   }
 }
 
 uint32_t KdTree::nearest(const Vec3& q, double* dist2) const {
-  Best best{1, 0, {}};
+  Best best{1, 0, 0, {}};
   search(0, static_cast<uint32_t>(order_.size()), q, best);
   if (dist2) *dist2 = best.count == 0 ? 0.0 : best.items[0].first;
   return best.count == 0 ? 0u : best.items[0].second;
 }
 
-void KdTree::knearest(const Vec3& q, size_t k, std::vector<uint32_t>& out) const {
-  Best best{std::min(k, kMaxK), 0, {}};
+void KdTree::knearest(const Vec3& q, size_t k, std::vector<uint32_t>& out, size_t* visited) const {
+  Best best{std::min(k, kMaxK), 0, 0, {}};
   search(0, static_cast<uint32_t>(order_.size()), q, best);
+  if (visited) *visited = best.visited;
   out.clear();
   for (size_t i = 0; i < best.count; ++i) out.push_back(best.items[i].second);
 }

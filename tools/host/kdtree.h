@@ -2,8 +2,12 @@
 //
 // Built once over a point array (which must outlive the tree) in
 // O(n log n); queries are exact and read-only, so several threads may query
-// one tree at once. Ties are broken by the smaller point index, so results
-// do not depend on the build order or the thread count.
+// one tree at once. Among candidates the search meets, ties are broken by the
+// smaller point index; a subtree is searched only when it could hold a
+// strictly closer point, so among many equidistant points (duplicates) the
+// query costs O(k + log n), not a visit of every tie. Which of several
+// equidistant points are returned is a function of the points alone: not of
+// the thread count or the order of queries.
 #pragma once
 
 #include <cstdint>
@@ -23,8 +27,9 @@ class KdTree {
   uint32_t nearest(const Vec3& q, double* dist2 = nullptr) const;
 
   // The `k` nearest points to `q` (k at most kMaxK), closest first (fewer if
-  // the tree is smaller).
-  void knearest(const Vec3& q, size_t k, std::vector<uint32_t>& out) const;
+  // the tree is smaller). `visited`, when given, receives the number of
+  // points the query compared: its cost.
+  void knearest(const Vec3& q, size_t k, std::vector<uint32_t>& out, size_t* visited = nullptr) const;
 
   size_t size() const { return order_.size(); }
 
