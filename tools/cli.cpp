@@ -128,4 +128,8 @@ int fail(const std::string& message) {
   return 1;
 }
 
+void warn(const std::vector<std::string>& messages) {
+  for (const std::string& m : messages) std::fprintf(stderr, "stipple: warning: %s\n", m.c_str());
+}
+
 }  // namespace stipple::cli

@@ -47,6 +47,7 @@ class Json {
 std::string with_commas(unsigned long long v);
 
 int fail(const std::string& message);  // prints "stipple: <message>" to stderr, returns 1
+void warn(const std::vector<std::string>& messages);  // prints "stipple: warning: <message>" for each
 
 }  // namespace stipple::cli
 

@@ -176,6 +176,8 @@ int cmd_encode(int argc, char** argv) {
   progress.update(0.0, "reading");
   PointCloud cloud;
   if (!read_point_cloud(inputs[0], cloud, error)) return cli::fail(error);
+  if (!cloud.warnings.empty()) progress.finish();  // the warnings get lines of their own
+  cli::warn(cloud.warnings);
   if (every > 1) keep_every(cloud, every, options);
   std::vector<uint8_t> spg;
   EncodeReport report;
@@ -210,6 +212,7 @@ int cmd_demo(int argc, char** argv) {
   ProgressBar progress("encode", !quiet);
   PointCloud cloud;
   if (!read_point_cloud(scan, cloud, error)) return cli::fail(error);
+  cli::warn(cloud.warnings);
   std::vector<uint8_t> spg;
   EncodeReport report;
   if (!encode_cloud(cloud, options, spg, report, error, &progress)) return cli::fail(error);

@@ -182,6 +182,8 @@ int cmd_metrics(int argc, char** argv) {
   std::string error;
   if (!read_point_cloud(files[0], original, error) || !read_point_cloud(files[1], generated, error))
     return cli::fail(error);
+  cli::warn(original.warnings);
+  cli::warn(generated.warnings);
   double bpp = -1;
   if (has_spg) {
     DecodedModel model;

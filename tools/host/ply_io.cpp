@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <sstream>
@@ -462,10 +463,41 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, Point
 
 }  // namespace
 
+size_t count_duplicate_positions(const std::vector<Vec3>& points) {
+  std::vector<uint32_t> order(points.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  const auto less = [&](uint32_t a, uint32_t b) {
+    const Vec3 &p = points[a], &q = points[b];
+    return p.x() != q.x() ? p.x() < q.x() : p.y() != q.y() ? p.y() < q.y() : p.z() < q.z();
+  };
+  std::sort(order.begin(), order.end(), less);
+  size_t duplicates = 0;
+  for (size_t i = 1; i < order.size(); ++i) duplicates += points[order[i]] == points[order[i - 1]];
+  return duplicates;
+}
+
 bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
                        std::string& error) {
-  if (size >= 3 && std::memcmp(data, "ply", 3) == 0) return parse_ply(name, data, size, cloud, error);
-  return parse_text(name, data, size, cloud, error);
+  const bool ok = size >= 3 && std::memcmp(data, "ply", 3) == 0 ? parse_ply(name, data, size, cloud, error)
+                                                                 : parse_text(name, data, size, cloud, error);
+  if (!ok) return false;
+  // Many points on one value: float32 coordinates far from the origin round
+  // onto a coarse lattice (at 1e7, steps of 1), and the scan collapses.
+  const size_t duplicates = count_duplicate_positions(cloud.positions);
+  if (duplicates >= 100 && duplicates * 100 >= cloud.size()) {
+    const Box3 box = bounding_box(cloud.positions);
+    const double far = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff());
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "%s: %zu of %zu points (%.1f %%) repeat another point's position exactly%s", name.c_str(),
+                  duplicates, cloud.size(), 100.0 * static_cast<double>(duplicates) / static_cast<double>(cloud.size()),
+                  far > 1e5 * std::max(box.diagonal(), 1e-300)
+                      ? "; the coordinates are far from the origin for their extent: float32 values there round onto a "
+                        "coarse lattice (subtract an offset before storing them as float)"
+                      : "");
+    cloud.warnings.push_back(text);
+  }
+  return true;
 }
 
 bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& error) {

@@ -16,7 +16,10 @@
 // <where> names the header line, element index, property or byte offset.
 // Nothing is sized from a header count before the count is checked against
 // the bytes that remain, so a hostile header cannot cause a huge allocation.
-// Non-finite coordinates, normals or colours are rejected.
+// Non-finite coordinates, normals or colours are rejected. A scan where at
+// least 1 % of the points (and 100 or more) repeat another point's position
+// exactly gets a warning in `cloud.warnings` (float32 collapse far from the
+// origin is the usual cause).
 #pragma once
 
 #include <string>
@@ -29,6 +32,9 @@ bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& e
 // Parses an in-memory file; `name` is used in error messages.
 bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
                        std::string& error);
+
+// Points whose position equals an earlier point's (exact comparison).
+size_t count_duplicate_positions(const std::vector<Vec3>& points);
 
 // Writes binary little-endian PLY: float x y z, then float nx ny nz and uchar
 // red green blue when present.

@@ -19,6 +19,7 @@ struct PointCloud {
   std::vector<Vec3> normals;  // empty, or one unit (or zero) vector per point
   std::vector<Vec3> colors;   // empty, or one RGB per point in [0, 1]
   std::vector<std::array<uint32_t, 3>> triangles;  // faces, fan-triangulated
+  std::vector<std::string> warnings;  // what the reader noticed or guessed, "<file>: <what>", for the user
 
   size_t size() const { return positions.size(); }
   bool has_normals() const { return !normals.empty(); }
