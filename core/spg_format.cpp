@@ -88,56 +88,62 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   // §1 fixed header.
   if (size < 4) return fail(SpgError::kTruncated, size);
   for (int i = 0; i < 4; ++i)
-    if (data[i] != kSpgMagic[i]) return fail(SpgError::kBadMagic, 0);
+    if (data[spg_offset::kMagic + i] != kSpgMagic[i]) return fail(SpgError::kBadMagic, spg_offset::kMagic);
   if (size < kSpgFixedHeaderBytes) return fail(SpgError::kTruncated, size);
-  h.version = load_u16le(data + 4);
-  if (h.version != kSpgVersion) return fail(SpgError::kBadVersion, 4);
-  h.flags = load_u16le(data + 6);
-  if ((h.flags & ~kAttrKnownMask) != 0) return fail(SpgError::kBadFlags, 6);
-  h.tree_arity = data[8];
-  if (h.tree_arity != 2 && h.tree_arity != 8) return fail(SpgError::kBadArity, 8);
-  if (data[9] != kFieldCount) return fail(SpgError::kBadLayout, 9);
-  for (int f = 0; f < kFieldCount; ++f) {
-    h.layout.bits[f] = data[10 + f];
-    if (h.layout.bits[f] > kMaxFieldBits) return fail(SpgError::kBadLayout, 10 + static_cast<size_t>(f));
+  using namespace spg_offset;
+  h.version = load_u16le(data + kVersion);
+  if (h.version != kSpgVersion) return fail(SpgError::kBadVersion, kVersion);
+  h.flags = load_u16le(data + kFlags);
+  if ((h.flags & ~kAttrKnownMask) != 0) return fail(SpgError::kBadFlags, kFlags);
+  h.tree_arity = data[kArity];
+  if (h.tree_arity != 2 && h.tree_arity != 8) return fail(SpgError::kBadArity, kArity);
+  if (data[spg_offset::kFieldCount] != stipple::kFieldCount) return fail(SpgError::kBadLayout, spg_offset::kFieldCount);
+  for (int f = 0; f < stipple::kFieldCount; ++f) {
+    h.layout.bits[f] = data[kFieldBits + f];
+    if (h.layout.bits[f] > kMaxFieldBits) return fail(SpgError::kBadLayout, kFieldBits + static_cast<size_t>(f));
   }
   const bool normals = h.has_normals();
   const bool color = h.has_color();
-  for (int f = 0; f < kFieldCount; ++f) {
+  for (int f = 0; f < stipple::kFieldCount; ++f) {
     const bool normal_field = f >= static_cast<int>(Field::kFnTheta) && f <= static_cast<int>(Field::kSigmaN);
     const bool color_field = f >= static_cast<int>(Field::kColorR);
     const bool present = normal_field ? normals : color_field ? color : true;
-    if (present != (h.layout.bits[f] != 0)) return fail(SpgError::kBadLayout, 10 + static_cast<size_t>(f));
+    if (present != (h.layout.bits[f] != 0)) return fail(SpgError::kBadLayout, kFieldBits + static_cast<size_t>(f));
   }
-  if (h.layout.record_bytes() > kMaxRecordBytes) return fail(SpgError::kBadLayout, 10);
-  h.node_count = load_u32le(data + 28);
-  h.leaf_count = load_u32le(data + 32);
-  h.point_count = load_u32le(data + 36);
-  h.depth = load_u16le(data + 40);
-  if (h.node_count == 0) return fail(SpgError::kBadCounts, 28);
-  if (h.leaf_count == 0 || h.leaf_count > h.node_count) return fail(SpgError::kBadCounts, 32);
-  if (h.point_count < h.leaf_count) return fail(SpgError::kBadCounts, 36);
-  if (load_u16le(data + 42) != 0) return fail(SpgError::kBadLayout, 42);
+  if (h.layout.record_bytes() > kMaxRecordBytes) return fail(SpgError::kBadLayout, kFieldBits);
+  h.node_count = load_u32le(data + kNodeCount);
+  h.leaf_count = load_u32le(data + kLeafCount);
+  h.point_count = load_u32le(data + kPointCount);
+  h.depth = load_u16le(data + kDepth);
+  if (h.node_count == 0) return fail(SpgError::kBadCounts, kNodeCount);
+  if (h.leaf_count == 0 || h.leaf_count > h.node_count) return fail(SpgError::kBadCounts, kLeafCount);
+  if (h.point_count < h.leaf_count) return fail(SpgError::kBadCounts, kPointCount);
+  // View hint: two axis codes below kSpgAxisCount, the other bits zero.
+  const uint16_t hint = load_u16le(data + kViewHint);
+  if ((hint & 7u) >= kSpgAxisCount || ((hint >> 3) & 7u) >= kSpgAxisCount || (hint >> 6) != 0)
+    return fail(SpgError::kBadLayout, kViewHint);
+  h.view_hint.up = static_cast<SpgAxis>(hint & 7u);
+  h.view_hint.sensor_side = static_cast<SpgAxis>((hint >> 3) & 7u);
   // Every node needs a record and every leaf at least one LEB128 byte: bound
   // the counts by the file size before anything is sized from them.
   const uint64_t min_body = static_cast<uint64_t>(h.node_count) * h.layout.record_bytes() + h.leaf_count + 4;
-  if (whole_file && min_body > size - kSpgFixedHeaderBytes) return fail(SpgError::kBadCounts, 28);
+  if (whole_file && min_body > size - kSpgFixedHeaderBytes) return fail(SpgError::kBadCounts, kNodeCount);
   for (int i = 0; i < 6; ++i) {
-    h.bbox_bits[i] = load_u32le(data + 44 + 4 * i);
-    if (!f32_finite(h.bbox_bits[i])) return fail(SpgError::kBadFloat, 44 + 4 * static_cast<size_t>(i));
+    h.bbox_bits[i] = load_u32le(data + kBboxMin + 4 * i);
+    if (!f32_finite(h.bbox_bits[i])) return fail(SpgError::kBadFloat, kBboxMin + 4 * static_cast<size_t>(i));
   }
   for (int a = 0; a < 3; ++a)
     if (f32_order_key(h.bbox_bits[a]) > f32_order_key(h.bbox_bits[3 + a]))
-      return fail(SpgError::kBadBoundingBox, 44 + 4 * static_cast<size_t>(a));
-  for (int c = 0; c < 3; ++c) h.class_count[c] = load_u16le(data + 68 + 2 * c);
-  if (!class_field_ok(h.layout.width(Field::kSigmaP), h.class_count[0], true)) return fail(SpgError::kBadClassCount, 68);
-  if (!class_field_ok(h.layout.width(Field::kSigmaN), h.class_count[1], normals)) return fail(SpgError::kBadClassCount, 70);
-  if (!class_field_ok(h.layout.width(Field::kSigmaC), h.class_count[2], color)) return fail(SpgError::kBadClassCount, 72);
-  if (load_u16le(data + 74) != 0) return fail(SpgError::kBadLayout, 74);
+      return fail(SpgError::kBadBoundingBox, kBboxMin + 4 * static_cast<size_t>(a));
+  for (int c = 0; c < 3; ++c) h.class_count[c] = load_u16le(data + kClassCounts + 2 * c);
+  if (!class_field_ok(h.layout.width(Field::kSigmaP), h.class_count[0], true)) return fail(SpgError::kBadClassCount, kClassCounts);
+  if (!class_field_ok(h.layout.width(Field::kSigmaN), h.class_count[1], normals)) return fail(SpgError::kBadClassCount, kClassCounts + 2);
+  if (!class_field_ok(h.layout.width(Field::kSigmaC), h.class_count[2], color)) return fail(SpgError::kBadClassCount, kClassCounts + 4);
+  if (load_u16le(data + kReserved) != 0) return fail(SpgError::kBadLayout, kReserved);
   in.pos = kSpgFixedHeaderBytes;
 
   // §2 class tables: non-negative finite float32.
-  const size_t table_floats = 3u * h.class_count[0] + 2u * h.class_count[1] + 3u * h.class_count[2];
+  const size_t table_floats = (spg_startup_bytes(h.class_count) - kSpgFixedHeaderBytes) / 4;
   if (in.remaining() < table_floats * 4) return fail(SpgError::kTruncated, size);
   view.sigma_p = data + in.pos;
   view.sigma_n = view.sigma_p + 12u * h.class_count[0];
@@ -202,8 +208,8 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
     const uint64_t used_bits = static_cast<uint64_t>(h.node_count) * bits_per_node;
     if (used_bits % 8 != 0 && (view.topology[view.topology_bytes - 1] >> (used_bits % 8)) != 0)
       return fail(SpgError::kBadTree, in.pos + view.topology_bytes - 1);
-    if (leaves != h.leaf_count) return fail(SpgError::kBadCounts, 32);
-    if (depth != h.depth) return fail(SpgError::kBadDepth, 40);
+    if (leaves != h.leaf_count) return fail(SpgError::kBadCounts, spg_offset::kLeafCount);
+    if (depth != h.depth) return fail(SpgError::kBadDepth, spg_offset::kDepth);
   }
   in.pos += view.topology_bytes;
 

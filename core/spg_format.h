@@ -22,6 +22,48 @@ inline constexpr uint8_t kSpgMagic[4] = {'S', 'T', 'P', 'G'};
 inline constexpr uint16_t kSpgVersion = 1;
 inline constexpr size_t kSpgFixedHeaderBytes = 76;
 
+// Byte offsets of the fixed header's fields (docs/format.md §1): the reader,
+// the writer (core/spg_writer.h) and every tool use these names.
+namespace spg_offset {
+inline constexpr size_t kMagic = 0;          // 4 bytes "STPG"
+inline constexpr size_t kVersion = 4;        // u16
+inline constexpr size_t kFlags = 6;          // u16: kAttrNormals | kAttrColor
+inline constexpr size_t kArity = 8;          // u8: 2 or 8
+inline constexpr size_t kFieldCount = 9;     // u8: kFieldCount
+inline constexpr size_t kFieldBits = 10;     // kFieldCount x u8
+inline constexpr size_t kNodeCount = 28;     // u32
+inline constexpr size_t kLeafCount = 32;     // u32
+inline constexpr size_t kPointCount = 36;    // u32
+inline constexpr size_t kDepth = 40;         // u16
+inline constexpr size_t kViewHint = 42;      // u16: up axis and sensor side (SpgViewHint)
+inline constexpr size_t kBboxMin = 44;       // 3 x float32
+inline constexpr size_t kBboxMax = 56;       // 3 x float32
+inline constexpr size_t kClassCounts = 68;   // 3 x u16: sigma_p, sigma_n, sigma_c
+inline constexpr size_t kReserved = 74;      // u16, 0
+static_assert(kReserved + 2 == kSpgFixedHeaderBytes);
+}  // namespace spg_offset
+
+// An axis direction as the view hint stores it in 3 bits: 0 none, then
+// +x, -x, +y, -y, +z, -z.
+enum class SpgAxis : uint8_t { kNone = 0, kPosX, kNegX, kPosY, kNegY, kPosZ, kNegZ };
+inline constexpr uint8_t kSpgAxisCount = 7;
+
+// How the scan wants to be seen (docs/format.md §1, offset 42): which way is
+// up, and the side the sensor saw it from (the default view looks from
+// there). Both kNone in files without a hint: the viewer chooses.
+struct SpgViewHint {
+  SpgAxis up = SpgAxis::kNone;
+  SpgAxis sensor_side = SpgAxis::kNone;
+  uint16_t encode() const { return static_cast<uint16_t>(static_cast<uint16_t>(up) | (static_cast<uint16_t>(sensor_side) << 3)); }
+};
+
+// The startup message, defined once: the fixed header and the class tables
+// (§1-§2), the prefix a client needs before any node record. Its length for
+// a header's class counts.
+inline size_t spg_startup_bytes(const uint16_t class_count[3]) {
+  return kSpgFixedHeaderBytes + 4 * (3 * size_t{class_count[0]} + 2 * size_t{class_count[1]} + 3 * size_t{class_count[2]});
+}
+
 enum class SpgError : uint8_t {
   kOk = 0,
   kTruncated,          // the file ends inside a section
@@ -54,6 +96,7 @@ struct SpgHeader {
   uint32_t leaf_count = 0;
   uint32_t point_count = 0;  // original points the tree was built from
   uint16_t depth = 0;        // deepest level; the root is level 0
+  SpgViewHint view_hint;     // up axis and sensor side, or none
   uint32_t bbox_bits[6] = {};  // float32 bit patterns: min x y z, max x y z
   uint16_t class_count[3] = {};  // sigma_p, sigma_n, sigma_c
 

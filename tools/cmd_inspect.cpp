@@ -284,8 +284,7 @@ int cmd_levels(int argc, char** argv) {
     for (int l = 0; l <= model.header.depth; ++l) levels.push_back(l);
   }
   const SpgHeader& h = model.header;
-  const double startup_bytes = static_cast<double>(kSpgFixedHeaderBytes) +
-                               4.0 * (3 * h.class_count[0] + 2 * h.class_count[1] + 3 * h.class_count[2]);
+  const double startup_bytes = static_cast<double>(spg_startup_bytes(h.class_count));
   const KdTree original_tree(original.positions);  // built once, shared by every level
   ProgressBar progress("levels");
   std::string rows;

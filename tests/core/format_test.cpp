@@ -141,7 +141,9 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
       {32, {0, 0, 0, 0}, SpgError::kBadCounts},
       {36, {1, 0, 0, 0}, SpgError::kBadCounts},
       {40, {99, 0}, SpgError::kBadDepth},
-      {42, {1, 0}, SpgError::kBadLayout},
+      {42, {7, 0}, SpgError::kBadLayout},                 // view hint: up axis code 7
+      {42, {0x38, 0}, SpgError::kBadLayout},              // sensor side code 7
+      {42, {0x40, 0}, SpgError::kBadLayout},              // a hint bit beyond both codes
       {44, {0, 0, 0xC0, 0x7F}, SpgError::kBadFloat},      // NaN bbox
       {44, {0, 0, 0x80, 0x7F}, SpgError::kBadFloat},      // +inf
       {44, {0, 0, 0x80, 0x4F}, SpgError::kBadBoundingBox},  // min x = 4.3e9 > max x

@@ -265,7 +265,7 @@ void BM_ClientFrame(benchmark::State& state) {
   std::vector<uint64_t> arena(client_arena_bytes(c) / 8 + 1);
   Client client;
   if (client.init(c, arena.data(), arena.size() * 8) != ClientStatus::kOk ||
-      client.load_startup(spg.data(), static_cast<size_t>(view.topology - spg.data())) != ClientStatus::kOk)
+      client.load_startup(spg.data(), spg_startup_bytes(view.header.class_count)) != ClientStatus::kOk)
     std::abort();
   for (uint32_t i = 0; i < n; ++i)
     if (client.put_node(cut[i], view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes) !=

@@ -1,4 +1,4 @@
-// stipple host — encoder pipeline and `.spg` writer (docs/format.md).
+// stipple host — encoder pipeline; the file is written by core/spg_writer (docs/format.md).
 #include "tools/host/encoder.h"
 
 #include <algorithm>
@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "core/spg_format.h"
+#include "core/spg_writer.h"
 #include "tools/host/classify.h"
 #include "tools/host/normals.h"
 #include "tools/host/quantize.h"
@@ -13,17 +14,10 @@
 namespace stipple {
 namespace {
 
-void put_u16(std::vector<uint8_t>& out, uint16_t v) {
-  out.push_back(static_cast<uint8_t>(v));
-  out.push_back(static_cast<uint8_t>(v >> 8));
-}
-void put_u32(std::vector<uint8_t>& out, uint32_t v) {
-  for (int i = 0; i < 4; ++i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
-}
-void put_f32(std::vector<uint8_t>& out, float f) {
+uint32_t f32_bits(float f) {
   uint32_t bits;
   std::memcpy(&bits, &f, 4);
-  put_u32(out, bits);
+  return bits;
 }
 
 }  // namespace
@@ -119,48 +113,35 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   const uint16_t flags = static_cast<uint16_t>((normals ? kAttrNormals : 0) | (colors ? kAttrColor : 0));
 
   if (progress) progress->update(0.95, "writing");
-  spg.clear();
-  spg.insert(spg.end(), kSpgMagic, kSpgMagic + 4);
-  put_u16(spg, kSpgVersion);
-  put_u16(spg, flags);
-  spg.push_back(tree.octree ? 8 : 2);
-  spg.push_back(kFieldCount);
-  spg.insert(spg.end(), layout.bits, layout.bits + kFieldCount);
-  put_u32(spg, static_cast<uint32_t>(n));
-  put_u32(spg, static_cast<uint32_t>(report.leaves));
-  put_u32(spg, static_cast<uint32_t>(cloud.size()));
-  put_u16(spg, static_cast<uint16_t>(tree.depth));
-  put_u16(spg, 0);
-  for (float v : bmin) put_f32(spg, v);
-  for (float v : bmax) put_f32(spg, v);
-  put_u16(spg, static_cast<uint16_t>(cp.centers.size()));
-  put_u16(spg, static_cast<uint16_t>(cn.centers.size()));
-  put_u16(spg, static_cast<uint16_t>(cc.centers.size()));
-  put_u16(spg, 0);
-  for (const Vec3& c : cp.centers)
-    for (int d = 0; d < 3; ++d) put_f32(spg, static_cast<float>(c[d]));
-  for (const Vec3& c : cn.centers)
-    for (int d = 0; d < 2; ++d) put_f32(spg, static_cast<float>(c[d]));
-  for (const Vec3& c : cc.centers)
-    for (int d = 0; d < 3; ++d) put_f32(spg, static_cast<float>(c[d]));
-
-  // Topology: child counts in BFS order.
-  const int bits_per_node = tree.octree ? 4 : 1;
-  std::vector<uint8_t> topology((n * static_cast<size_t>(bits_per_node) + 7) / 8, 0);
-  for (size_t i = 0; i < n; ++i) {
-    const uint32_t c = tree.nodes[i].child_count;
-    if (tree.octree) topology[i >> 1] = static_cast<uint8_t>(topology[i >> 1] | (c << ((i & 1) * 4)));
-    else if (c) topology[i >> 3] = static_cast<uint8_t>(topology[i >> 3] | (1u << (i & 7)));
+  SpgHeader header;
+  header.version = kSpgVersion;
+  header.flags = flags;
+  header.tree_arity = tree.octree ? 8 : 2;
+  header.layout = layout;
+  header.node_count = static_cast<uint32_t>(n);
+  header.leaf_count = static_cast<uint32_t>(report.leaves);
+  header.point_count = static_cast<uint32_t>(cloud.size());
+  header.depth = static_cast<uint16_t>(tree.depth);
+  header.view_hint = o.view_hint;
+  for (int a = 0; a < 3; ++a) {
+    header.bbox_bits[a] = f32_bits(bmin[a]);
+    header.bbox_bits[3 + a] = f32_bits(bmax[a]);
   }
-  spg.insert(spg.end(), topology.begin(), topology.end());
-  for (const TreeNode& node : tree.nodes) {
-    if (!node.leaf()) continue;
-    uint32_t v = node.count();
-    do {
-      const uint8_t byte = v & 0x7F;
-      v >>= 7;
-      spg.push_back(static_cast<uint8_t>(byte | (v ? 0x80 : 0)));
-    } while (v);
+  header.class_count[0] = static_cast<uint16_t>(cp.centers.size());
+  header.class_count[1] = static_cast<uint16_t>(cn.centers.size());
+  header.class_count[2] = static_cast<uint16_t>(cc.centers.size());
+  std::vector<uint32_t> sigma_p, sigma_n, sigma_c;
+  for (const Vec3& c : cp.centers)
+    for (int d = 0; d < 3; ++d) sigma_p.push_back(f32_bits(static_cast<float>(c[d])));
+  for (const Vec3& c : cn.centers)
+    for (int d = 0; d < 2; ++d) sigma_n.push_back(f32_bits(static_cast<float>(c[d])));
+  for (const Vec3& c : cc.centers)
+    for (int d = 0; d < 3; ++d) sigma_c.push_back(f32_bits(static_cast<float>(c[d])));
+  std::vector<uint8_t> child_counts(n);
+  std::vector<uint32_t> leaf_points;
+  for (size_t i = 0; i < n; ++i) {
+    child_counts[i] = static_cast<uint8_t>(tree.nodes[i].child_count);
+    if (tree.nodes[i].leaf()) leaf_points.push_back(static_cast<uint32_t>(tree.nodes[i].count()));
   }
 
   // Records.
@@ -168,8 +149,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   const AngleBits fn_bits = frame_bits(layout, Field::kFnTheta, false);
   const AngleBits fc_bits = frame_bits(layout, Field::kFcTheta, true);
   const size_t record_bytes = static_cast<size_t>(layout.record_bytes());
-  const size_t records_at = spg.size();
-  spg.resize(records_at + n * record_bytes);
+  std::vector<uint8_t> records(n * record_bytes);
   for (size_t i = 0; i < n; ++i) {
     const NodeStats& s = tree.nodes[i].stats;
     NodeFields f;
@@ -196,9 +176,18 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
       f[Field::kFcPsi] = fc.psi;
       f[Field::kSigmaC] = cc.index[i];
     }
-    pack_record(layout, f, spg.data() + records_at + i * record_bytes);
+    pack_record(layout, f, records.data() + i * record_bytes);
   }
-  put_u32(spg, crc32(spg.data(), spg.size()));
+  const SpgContent content{header, SpgClassTables{sigma_p.data(), sigma_n.data(), sigma_c.data()}, child_counts.data(),
+                           leaf_points.data(), records.data()};
+  spg.assign(spg_write_bound(header), 0);
+  size_t written = 0;
+  const SpgWriteStatus status = spg_write(content, spg.data(), spg.size(), &written);
+  if (status != SpgWriteStatus::kOk) {
+    error = std::string("encoder: ") + spg_write_status_text(status);
+    return false;
+  }
+  spg.resize(written);
 
   report.bytes = spg.size();
   report.record_bytes = record_bytes;

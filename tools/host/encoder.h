@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/spg_format.h"
 #include "platform/progress.h"
 #include "tools/host/hierarchy.h"
 
@@ -20,6 +21,7 @@ struct EncodeOptions {
   bool normals = true;  // store normals (computed when the scan has none)
   bool colors = true;   // store colours when the scan has them
   int normal_neighbours = 12;
+  SpgViewHint view_hint;  // stored in the file's header: up axis and sensor side (none by default)
 };
 
 struct EncodeReport {

@@ -8,8 +8,7 @@
 
 namespace stipple {
 namespace {
-double f32_at(const uint8_t* p) {
-  const uint32_t bits = load_u32le(p);
+double f32_of(uint32_t bits) {
   float f;
   std::memcpy(&f, &bits, 4);
   return f;
@@ -28,17 +27,17 @@ bool decode_spg(const std::string& name, const uint8_t* data, size_t size, Decod
   const SpgHeader& h = view.header;
   model.header = h;
   for (int a = 0; a < 3; ++a) {
-    model.bbox_min[a] = f32_at(data + 44 + 4 * a);
-    model.bbox_max[a] = f32_at(data + 56 + 4 * a);
+    model.bbox_min[a] = f32_of(h.bbox_bits[a]);
+    model.bbox_max[a] = f32_of(h.bbox_bits[3 + a]);
   }
   for (uint32_t c = 0; c < h.class_count[0]; ++c)
-    model.sigma_p.emplace_back(f32_at(view.sigma_p + 12 * c), f32_at(view.sigma_p + 12 * c + 4),
-                               f32_at(view.sigma_p + 12 * c + 8));
+    model.sigma_p.emplace_back(f32_of(load_u32le(view.sigma_p + 12 * c)), f32_of(load_u32le(view.sigma_p + 12 * c + 4)),
+                               f32_of(load_u32le(view.sigma_p + 12 * c + 8)));
   for (uint32_t c = 0; c < h.class_count[1]; ++c)
-    model.sigma_n.emplace_back(f32_at(view.sigma_n + 8 * c), f32_at(view.sigma_n + 8 * c + 4));
+    model.sigma_n.emplace_back(f32_of(load_u32le(view.sigma_n + 8 * c)), f32_of(load_u32le(view.sigma_n + 8 * c + 4)));
   for (uint32_t c = 0; c < h.class_count[2]; ++c)
-    model.sigma_c.emplace_back(f32_at(view.sigma_c + 12 * c), f32_at(view.sigma_c + 12 * c + 4),
-                               f32_at(view.sigma_c + 12 * c + 8));
+    model.sigma_c.emplace_back(f32_of(load_u32le(view.sigma_c + 12 * c)), f32_of(load_u32le(view.sigma_c + 12 * c + 4)),
+                               f32_of(load_u32le(view.sigma_c + 12 * c + 8)));
 
   const RecordLayout& layout = h.layout;
   const AngleBits fp_bits = frame_bits(layout, Field::kFpTheta, false);
