@@ -7,6 +7,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <string>
 
 namespace stipple {
@@ -34,5 +35,7 @@ class ProgressBar {
 double monotonic_seconds();
 // Peak resident set size of this process so far, in bytes (0 if unknown).
 size_t peak_rss_bytes();
+// Physical memory of this host, in bytes (0 if unknown).
+uint64_t physical_memory_bytes();
 
 }  // namespace stipple

@@ -111,6 +111,28 @@ struct BadCase {
   const char* message;  // must appear in the error
 };
 
+// A float32 scan 1e7 from the origin: its points collapse onto a lattice of
+// whole units, and most become duplicates. The reader says so (and why);
+// an ordinary scan gets no warning.
+TEST(Ply, WarnsWhenPointsCollapseOntoOneValue) {
+  std::string text, spread;
+  for (int i = 0; i < 2000; ++i) {
+    const float x = static_cast<float>(1e7 + 0.001 * (i % 50)), y = static_cast<float>(1e7 + 0.001 * (i / 50));
+    text += std::to_string(x) + " " + std::to_string(y) + " 3.5\n";
+    spread += std::to_string(0.001 * (i % 50)) + " " + std::to_string(0.001 * (i / 50)) + " 3.5\n";
+  }
+  PointCloud cloud;
+  std::string error;
+  ASSERT_TRUE(parse_point_cloud("far.xyz", reinterpret_cast<const uint8_t*>(text.data()), text.size(), cloud, error)) << error;
+  ASSERT_EQ(cloud.warnings.size(), 1u);
+  EXPECT_NE(cloud.warnings[0].find("far.xyz: 1999 of 2000 points (100.0 %) repeat another point's position exactly"),
+            std::string::npos) << cloud.warnings[0];
+  EXPECT_NE(cloud.warnings[0].find("far from the origin"), std::string::npos) << cloud.warnings[0];
+  PointCloud near;
+  ASSERT_TRUE(parse_point_cloud("near.xyz", reinterpret_cast<const uint8_t*>(spread.data()), spread.size(), near, error));
+  EXPECT_TRUE(near.warnings.empty());
+}
+
 TEST(Ply, MalformedInputsGiveClearErrors) {
   const std::string hdr = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
   const std::string bin = "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n";

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include "platform/file_io.h"
 #include "platform/png_io.h"
 #include "platform/progress.h"
 #include "tools/cli.h"
@@ -39,7 +40,9 @@ const char kSampleHelp[] =
     "                        the paper's PSNR experiment)\n"
     "  --per-node N          N points per node\n"
     "  --max-points M        refuse cuts that would generate more than M points\n"
-    "                        (default 268,435,456: a file's counts are only claims)\n";
+    "                        (default: what a quarter of this host's memory holds at\n"
+    "                        100 bytes a point, at most 268,435,456: a file's point\n"
+    "                        counts are only claims)\n";
 
 const char kMetricsHelp[] =
     "usage: stipple metrics ORIGINAL GENERATED [--spg MODEL.spg] [--json]\n"
@@ -63,21 +66,34 @@ int cmd_info(int argc, char** argv) {
   const std::vector<std::string> files = args.positionals();
   if (!args.unknown_option().empty()) return cli::fail("info: unknown option '" + args.unknown_option() + "'");
   if (files.size() != 1) return cli::fail("info: expected one .spg file (see stipple info --help)");
-  DecodedModel model;
+  // The file and 4 bytes a node: the Gaussians are not decoded (a valid
+  // file of 1-byte records would need ~350 bytes a node as a DecodedModel).
+  std::vector<uint8_t> file;
   std::string error;
-  if (!load_spg(files[0], model, error)) return cli::fail(error);
-  const SpgHeader& h = model.header;
+  if (!read_file(files[0], file, error)) return cli::fail(error);
+  SpgView view;
+  const SpgResult parsed = spg_parse(file.data(), file.size(), &view);
+  if (!parsed.ok())
+    return cli::fail(files[0] + ": byte " + std::to_string(parsed.offset) + ": " + spg_error_text(parsed.error));
+  const SpgHeader& h = view.header;
+  const std::vector<uint32_t> point_count = spg_point_counts(view);
+  const auto sigma1_of = [&](uint32_t node) {
+    const NodeFields f = unpack_record(h.layout, view.records + size_t{node} * view.record_bytes);
+    return f32_value(load_u32le(view.sigma_p + 12 * size_t{f[Field::kSigmaP]}));
+  };
   PartitionRatioAccumulator acc;
   double counts[8], sigma1[8];
-  for (const DecodedNode& node : model.nodes) {
-    for (uint32_t c = 0; c < node.child_count; ++c) {
-      counts[c] = model.nodes[node.first_child + c].point_count;
-      sigma1[c] = model.nodes[node.first_child + c].position.sigma[0];
+  for (uint32_t i = 0, next_child = 1; i < h.node_count; ++i) {
+    const uint32_t children = spg_child_count(view, i);
+    for (uint32_t c = 0; c < children; ++c) {
+      counts[c] = point_count[next_child + c];
+      sigma1[c] = sigma1_of(next_child + c);
     }
-    acc.add_family(node.position.sigma[0], counts, sigma1, node.child_count);
+    if (children) acc.add_family(sigma1_of(i), counts, sigma1, children);
+    next_child += children;
   }
   const PartitionRatios ratios = acc.result();
-  const double bpp = 8.0 * static_cast<double>(model.file_bytes) / h.point_count;
+  const double bpp = 8.0 * static_cast<double>(file.size()) / h.point_count;
   const uint64_t record_total = static_cast<uint64_t>(h.node_count) * static_cast<uint64_t>(h.layout.record_bytes());
   if (json) {
     cli::Json j;
@@ -91,7 +107,7 @@ int cmd_info(int argc, char** argv) {
         .integer("leaves", h.leaf_count)
         .integer("depth", h.depth)
         .integer("record_bytes", h.layout.record_bytes())
-        .integer("bytes", static_cast<long long>(model.file_bytes))
+        .integer("bytes", static_cast<long long>(file.size()))
         .integer("records_total_bytes", static_cast<long long>(record_total))
         .num("bits_per_point", bpp)
         .integer("classes_p", h.class_count[0])
@@ -111,15 +127,15 @@ int cmd_info(int argc, char** argv) {
               cli::with_commas(h.leaf_count).c_str(), h.depth);
   std::printf("  records      %d bytes each, %s bytes in all\n", h.layout.record_bytes(),
               cli::with_commas(record_total).c_str());
-  std::printf("  file         %s bytes, %.2f bits per original point\n", cli::with_commas(model.file_bytes).c_str(), bpp);
+  std::printf("  file         %s bytes, %.2f bits per original point\n", cli::with_commas(file.size()).c_str(), bpp);
   std::printf("  classes      sigma_p %u, sigma_n %u, sigma_c %u\n", h.class_count[0], h.class_count[1],
               h.class_count[2]);
   std::printf("  APR %.3f, cAPR %.3f (TOG05 Table II; cAPR from class-quantized sigma1, %llu of %llu families\n"
               "               with a degenerate child left out)\n",
               ratios.apr, ratios.capr, static_cast<unsigned long long>(ratios.capr_excluded),
               static_cast<unsigned long long>(ratios.families));
-  std::printf("  bbox         (%g, %g, %g) - (%g, %g, %g)\n", model.bbox_min.x(), model.bbox_min.y(),
-              model.bbox_min.z(), model.bbox_max.x(), model.bbox_max.y(), model.bbox_max.z());
+  std::printf("  bbox         (%g, %g, %g) - (%g, %g, %g)\n", f32_value(h.bbox_bits[0]), f32_value(h.bbox_bits[1]),
+              f32_value(h.bbox_bits[2]), f32_value(h.bbox_bits[3]), f32_value(h.bbox_bits[4]), f32_value(h.bbox_bits[5]));
   return 0;
 }
 
@@ -147,7 +163,7 @@ int cmd_sample(int argc, char** argv) {
     return cli::fail("sample: --level: expected a non-negative integer, got '" + level_text + "'");
   if (per_node_text != "original" && (!cli::parse_uint(per_node_text, 1u << 20, per_node) || per_node == 0))
     return cli::fail("sample: --per-node: expected 'original' or a positive integer, got '" + per_node_text + "'");
-  unsigned long long max_points = kDefaultMaxSamples;
+  unsigned long long max_points = default_max_samples(physical_memory_bytes());
   if (has_max && !cli::parse_uint(max_text, ~0ull, max_points))
     return cli::fail("sample: --max-points: expected a non-negative integer, got '" + max_text + "'");
   DecodedModel model;
@@ -157,7 +173,7 @@ int cmd_sample(int argc, char** argv) {
   const uint64_t count = cut_sample_count(model, cut, static_cast<uint32_t>(per_node));
   if (count > max_points)
     return cli::fail(files[0] + ": the cut would generate " + cli::with_commas(count) + " points, more than --max-points " +
-                     cli::with_commas(max_points));
+                     cli::with_commas(max_points) + (has_max ? "" : " (the default for this host's memory)"));
   const PointCloud points = sample_cut(model, cut, static_cast<uint32_t>(per_node));
   if (!write_ply(output, points, error)) return cli::fail(error);
   std::printf("%s: %s nodes in the cut, %s points -> %s\n", files[0].c_str(), cli::with_commas(cut.size()).c_str(),
@@ -293,9 +309,10 @@ int cmd_levels(int argc, char** argv) {
   for (size_t i = 0; i < levels.size(); ++i) {
     progress.update(static_cast<double>(i) / static_cast<double>(levels.size()), "level " + std::to_string(levels[i]));
     const std::vector<uint32_t> cut = level_cut(model, levels[i]);
-    if (cut_sample_count(model, cut, 0) > kDefaultMaxSamples)
+    const uint64_t limit = default_max_samples(physical_memory_bytes());
+    if (cut_sample_count(model, cut, 0) > limit)
       return cli::fail(files[0] + ": level " + std::to_string(levels[i]) + " would generate more than " +
-                       cli::with_commas(kDefaultMaxSamples) + " points");
+                       cli::with_commas(limit) + " points (the limit for this host's memory)");
     const CloudMetrics m = compare_clouds(original, original_tree, sample_cut(model, cut, 0));
     const double bits = 8.0 * (startup_bytes + static_cast<double>(cut.size()) * h.layout.record_bytes()) /
                         static_cast<double>(original.size());

@@ -5,6 +5,8 @@
 // (`--crc` prints their CRC-32, which the golden-image tests check).
 #include <algorithm>
 #include <cstdio>
+#include <exception>
+#include <new>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -65,7 +67,9 @@ bool parse_uint(const char* text, unsigned long max, unsigned long& out) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   using namespace stipple;
   ClientConfig config;
   config.raster = RasterConfig{240, 320, 5, PixelFormat::kRgb565, 1u << 20};
@@ -175,4 +179,19 @@ int main(int argc, char** argv) {
   if (!output.empty() && !write_ppm(output, frame.image, error)) return fail(error);
   if (!fbdev.empty()) fb.show(frame.image);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Nothing below throws by design; what still escapes (out of memory) ends
+  // with a message naming the input, never an abort.
+  try {
+    return run(argc, argv);
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "stipple-handheld: %s: out of memory\n", argc > 1 ? argv[1] : "");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stipple-handheld: %s: %s\n", argc > 1 ? argv[1] : "", e.what());
+  }
+  return 1;
 }

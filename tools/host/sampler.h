@@ -36,7 +36,17 @@ PointCloud sample_cut(const DecodedModel& model, const std::vector<uint32_t>& cu
 // claims: check this against a limit before sampling an untrusted file.
 uint64_t cut_sample_count(const DecodedModel& model, const std::vector<uint32_t>& cut, uint32_t per_node);
 
-// The default limit of the command-line tools (~6 GB of points with normals).
-inline constexpr uint64_t kDefaultMaxSamples = uint64_t{1} << 28;
+// Host memory one generated point takes: position, normal and colour in
+// doubles (72 bytes) and its binary PLY record (27), rounded up.
+inline constexpr uint64_t kBytesPerSample = 100;
+
+// The default limit of the command-line tools: what a quarter of the host's
+// memory holds (a file's point counts are only claims), within [2^20, 2^28];
+// 2^24 when the memory is unknown.
+inline uint64_t default_max_samples(uint64_t memory_bytes) {
+  if (memory_bytes == 0) return uint64_t{1} << 24;
+  const uint64_t n = memory_bytes / 4 / kBytesPerSample;
+  return n < (uint64_t{1} << 20) ? uint64_t{1} << 20 : n > (uint64_t{1} << 28) ? uint64_t{1} << 28 : n;
+}
 
 }  // namespace stipple

@@ -90,6 +90,34 @@ bool decode_spg(const std::string& name, const uint8_t* data, size_t size, Decod
   return true;
 }
 
+double f32_value(uint32_t bits) { return f32_of(bits); }
+
+std::vector<uint32_t> spg_point_counts(const SpgView& view) {
+  const uint32_t n = view.header.node_count;
+  std::vector<uint32_t> count(n, 0);
+  const uint8_t* leb = view.leaf_counts;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (spg_child_count(view, i) != 0) continue;
+    uint32_t v = 0;
+    for (int shift = 0;; shift += 7) {  // validated by spg_parse
+      const uint8_t b = *leb++;
+      v |= static_cast<uint32_t>(b & 0x7F) << shift;
+      if (!(b & 0x80)) break;
+    }
+    count[i] = v;
+  }
+  // Children come after every node before their parent's level, in the order
+  // of their parents: walking back from the end, the last unclaimed nodes are
+  // the children of the current internal node. Sums fit: the file's total is u32.
+  uint32_t end = n;
+  for (uint32_t i = n; i-- > 0;) {
+    const uint32_t c = spg_child_count(view, i);
+    for (uint32_t k = end - c; k < end; ++k) count[i] += count[k];
+    end -= c;
+  }
+  return count;
+}
+
 bool load_spg(const std::string& path, DecodedModel& model, std::string& error) {
   std::vector<uint8_t> bytes;
   if (!read_file(path, bytes, error)) return false;

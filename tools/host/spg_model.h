@@ -39,6 +39,15 @@ struct DecodedModel {
 bool decode_spg(const std::string& name, const uint8_t* data, size_t size, DecodedModel& model, std::string& error);
 bool load_spg(const std::string& path, DecodedModel& model, std::string& error);
 
+// Original point count of every node of a validated view (leaves from the
+// file, internal nodes as the sum of their children), breadth-first: 4 bytes
+// a node, where a DecodedModel takes about 350. For tools that need the
+// tree's shape but not its Gaussians (`stipple info`).
+std::vector<uint32_t> spg_point_counts(const SpgView& view);
+
+// A float32 bit pattern as a double.
+double f32_value(uint32_t bits);
+
 // The cut made of the nodes at `level`, plus the leaves above it.
 std::vector<uint32_t> level_cut(const DecodedModel& model, int level);
 // All leaves.
