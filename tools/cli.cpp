@@ -128,6 +128,19 @@ int fail(const std::string& message) {
   return 1;
 }
 
+bool parse_vec3(const std::string& s, double out[3]) {
+  size_t start = 0;
+  for (int k = 0; k < 3; ++k) {
+    const size_t comma = k < 2 ? s.find(',', start) : std::string::npos;
+    if (k < 2 && comma == std::string::npos) return false;
+    if (!parse_double(s.substr(start, comma == std::string::npos ? std::string::npos : comma - start), out[k]) ||
+        !std::isfinite(out[k]))
+      return false;
+    start = comma + 1;
+  }
+  return true;
+}
+
 void warn(const std::vector<std::string>& messages) {
   for (const std::string& m : messages) std::fprintf(stderr, "stipple: warning: %s\n", m.c_str());
 }

@@ -27,6 +27,8 @@ class Args {
 
 bool parse_uint(const std::string& s, unsigned long long max, unsigned long long& out);
 bool parse_double(const std::string& s, double& out);
+// "X,Y,Z": three finite numbers.
+bool parse_vec3(const std::string& s, double out[3]);
 
 // A flat JSON object writer: {"key": value, ...}.
 class Json {

@@ -1,4 +1,5 @@
 // stipple encode / stipple demo.
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -36,6 +37,14 @@ const char kEncodeHelp[] =
     "  --shrink ETA0,ETA1    curvature shrink of the thin axis (default 0.25,2)\n"
     "  --no-shrink           no curvature shrink\n"
     "  --neighbours K        k for normals of bare point clouds (default 12)\n"
+    "  --orient MODE         which way estimated normals face: auto (default: from\n"
+    "                        the data, docs/encoder.md), sensor (toward --viewpoint,\n"
+    "                        the origin by default), up (toward --up), outward (away\n"
+    "                        from the centroid, propagated over neighbours)\n"
+    "  --viewpoint X,Y,Z     where the sensor stood (implies --orient sensor unless\n"
+    "                        --orient says otherwise)\n"
+    "  --up AXIS             the scan's up axis: +x -x +y -y +z -z (stored for\n"
+    "                        viewers; --orient up faces it)\n"
     "  --threads N           worker threads (default 2)\n"
     "  --every K             keep every K-th point (after normals are derived from\n"
     "                        the full mesh): quick previews and scaling studies\n"
@@ -93,6 +102,21 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
     if (!cli::parse_uint(v, 256, u) || u < 1) return error = "--threads: expected 1..256, got '" + v + "'", false;
     o.tree.threads = static_cast<int>(u);
   }
+  if (args.value("--orient", v)) {
+    const OrientMode modes[] = {OrientMode::kAuto, OrientMode::kSensor, OrientMode::kUp, OrientMode::kOutward};
+    bool found = false;
+    for (OrientMode m : modes)
+      if (v == orient_mode_name(m)) o.orient.mode = m, found = true;
+    if (!found) return error = "--orient: expected auto, sensor, up or outward, got '" + v + "'", false;
+  }
+  if (args.value("--viewpoint", v)) {
+    double xyz[3];
+    if (!cli::parse_vec3(v, xyz)) return error = "--viewpoint: expected X,Y,Z (three finite numbers), got '" + v + "'", false;
+    o.orient.has_viewpoint = true;
+    o.orient.viewpoint = Vec3(xyz[0], xyz[1], xyz[2]);
+  }
+  if (args.value("--up", v) && !parse_axis(v, o.orient.up))
+    return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
   if (args.flag("--no-shrink")) o.tree.stats.shrink_eta0 = 1.0;
   o.tree.octree = args.flag("--octree");
   o.normals = !args.flag("--no-normals");
@@ -116,6 +140,10 @@ std::string summary_json(const std::string& scan, const EncodeReport& r, double 
       .num("seconds", seconds)
       .num("peak_mb", peak_mb)
       .str("normals", r.normals_source)
+      .str("scan_kind", scan_kind_name(r.frame.kind))
+      .str("orient", orient_mode_name(r.frame.orient))
+      .str("view_up", axis_name(r.frame.hint.up))
+      .str("view_sensor_side", axis_name(r.frame.hint.sensor_side))
       .boolean("colors", r.colors)
       .integer("classes_p", r.classes[0])
       .integer("classes_n", r.classes[1])
@@ -134,12 +162,15 @@ void print_summary(const std::string& scan, const EncodeReport& r, double second
               scan.c_str(), cli::with_commas(r.points).c_str(), cli::with_commas(r.nodes).c_str(),
               cli::with_commas(r.leaves).c_str(), r.depth, cli::with_commas(r.bytes).c_str(),
               static_cast<unsigned long long>(r.record_bytes), r.bits_per_point, seconds, peak_mb);
+  std::printf("  %s; normals %s%s; view: up %s, sensor side %s\n", r.frame.reason.c_str(), r.normals_source.c_str(),
+              r.normals_source == "k-NN" ? (std::string(", facing ") + orient_mode_name(r.frame.orient)).c_str() : "",
+              axis_name(r.frame.hint.up), axis_name(r.frame.hint.sensor_side));
 }
 
 // Keeps every k-th point. Normals are derived first, from the full mesh, since
 // the subset's triangles would be meaningless.
 void keep_every(PointCloud& cloud, unsigned long long k, const EncodeOptions& o) {
-  if (o.normals) estimate_normals(cloud, o.normal_neighbours);
+  if (o.normals) estimate_normals(cloud, o.normal_neighbours, analyse_scan(cloud.positions, o.orient));
   PointCloud out;
   for (size_t i = 0; i < cloud.size(); i += k) {
     out.positions.push_back(cloud.positions[i]);

@@ -11,6 +11,7 @@
 #include "tools/host/hierarchy.h"
 #include "tools/host/kdtree.h"
 #include "tools/host/metrics.h"
+#include "tools/host/orientation.h"
 #include "tools/host/plot.h"
 #include "tools/host/ply_io.h"
 #include "tools/host/sampler.h"
@@ -20,12 +21,18 @@ namespace stipple {
 namespace {
 
 const char kInfoHelp[] =
-    "usage: stipple info MODEL.spg [--json]\n"
+    "usage: stipple info MODEL.spg [--json] [--facing-point X,Y,Z | --facing-up AXIS]\n"
     "\n"
     "Validates a .spg file (every check of docs/format.md) and prints its nodes,\n"
     "leaves, depth, record size, bytes, bits per original point, class counts and\n"
     "the partition ratios of TOG05 Table II: APR (average over internal nodes of\n"
-    "the largest / smallest child point count) and cAPR (the same for sigma1).\n";
+    "the largest / smallest child point count) and cAPR (the same for sigma1),\n"
+    "and the view hint (up axis, sensor side).\n"
+    "\n"
+    "  --facing-point X,Y,Z  the share of leaves whose mean normal faces the point\n"
+    "                        (n . (X - mean) > 0): normals toward a sensor\n"
+    "  --facing-up AXIS      the share whose mean normal has a positive AXIS\n"
+    "                        component (+x -x +y -y +z -z): normals toward the sky\n";
 
 const char kSampleHelp[] =
     "usage: stipple sample MODEL.spg (--level L | --leaves) [--per-node original|N] -o POINTS.ply\n"
@@ -63,9 +70,19 @@ int cmd_info(int argc, char** argv) {
     return 0;
   }
   const bool json = args.flag("--json");
+  std::string point_text, up_text;
+  const bool facing_point = args.value("--facing-point", point_text), facing_up = args.value("--facing-up", up_text);
   const std::vector<std::string> files = args.positionals();
+  if (args.bad()) return cli::fail("info: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("info: unknown option '" + args.unknown_option() + "'");
   if (files.size() != 1) return cli::fail("info: expected one .spg file (see stipple info --help)");
+  double target[3] = {0, 0, 0};
+  SpgAxis up_axis = SpgAxis::kNone;
+  if (facing_point && facing_up) return cli::fail("info: give one of --facing-point and --facing-up");
+  if (facing_point && !cli::parse_vec3(point_text, target))
+    return cli::fail("info: --facing-point: expected X,Y,Z (three finite numbers), got '" + point_text + "'");
+  if (facing_up && !parse_axis(up_text, up_axis))
+    return cli::fail("info: --facing-up: expected +x, -x, +y, -y, +z or -z, got '" + up_text + "'");
   // The file and 4 bytes a node: the Gaussians are not decoded (a valid
   // file of 1-byte records would need ~350 bytes a node as a DecodedModel).
   std::vector<uint8_t> file;
@@ -94,6 +111,23 @@ int cmd_info(int argc, char** argv) {
   }
   const PartitionRatios ratios = acc.result();
   const double bpp = 8.0 * static_cast<double>(file.size()) / h.point_count;
+  // Leaves whose mean normal faces the point or the axis: decoded one at a time.
+  double facing = -1;
+  if ((facing_point || facing_up) && h.has_normals()) {
+    DecodedModel model;
+    if (!decode_spg(files[0], file.data(), file.size(), model, error)) return cli::fail(error);
+    const Vec3 p(target[0], target[1], target[2]), up = axis_vector(up_axis);
+    uint64_t leaves = 0, toward = 0;
+    for (const DecodedNode& node : model.nodes) {
+      if (!node.leaf()) continue;
+      const Vec3 n = node.normal_frame.col(2);
+      ++leaves;
+      toward += facing_point ? n.dot(p - node.position.mean) > 0 : n.dot(up) > 0;
+    }
+    facing = static_cast<double>(toward) / static_cast<double>(leaves);
+  } else if (facing_point || facing_up) {
+    return cli::fail(files[0] + ": --facing-point/--facing-up: the model has no normals");
+  }
   const uint64_t record_total = static_cast<uint64_t>(h.node_count) * static_cast<uint64_t>(h.layout.record_bytes());
   if (json) {
     cli::Json j;
@@ -115,7 +149,10 @@ int cmd_info(int argc, char** argv) {
         .integer("classes_c", h.class_count[2])
         .num("apr", ratios.apr)
         .num("capr", ratios.capr)
-        .integer("capr_excluded", static_cast<long long>(ratios.capr_excluded));
+        .integer("capr_excluded", static_cast<long long>(ratios.capr_excluded))
+        .str("view_up", axis_name(h.view_hint.up))
+        .str("view_sensor_side", axis_name(h.view_hint.sensor_side));
+    if (facing >= 0) j.num("facing_share", facing);
     std::printf("%s\n", j.done().c_str());
     return 0;
   }
@@ -136,6 +173,10 @@ int cmd_info(int argc, char** argv) {
               static_cast<unsigned long long>(ratios.families));
   std::printf("  bbox         (%g, %g, %g) - (%g, %g, %g)\n", f32_value(h.bbox_bits[0]), f32_value(h.bbox_bits[1]),
               f32_value(h.bbox_bits[2]), f32_value(h.bbox_bits[3]), f32_value(h.bbox_bits[4]), f32_value(h.bbox_bits[5]));
+  std::printf("  view         up %s, sensor side %s\n", axis_name(h.view_hint.up), axis_name(h.view_hint.sensor_side));
+  if (facing >= 0)
+    std::printf("  facing       %.1f %% of the leaves' mean normals face %s %s\n", 100.0 * facing,
+                facing_point ? "the point" : "the axis", facing_point ? point_text.c_str() : up_text.c_str());
   return 0;
 }
 

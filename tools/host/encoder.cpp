@@ -53,8 +53,9 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   // hierarchy up to 85 %, classification and writing the rest.
   const bool estimate = normals && !cloud.has_normals();
   const double tree_start = estimate ? 0.3 : 0.02;
+  report.frame = analyse_scan(cloud.positions, o.orient);
   if (estimate)
-    estimate_normals(cloud, o.normal_neighbours, [&](double f, const char* phase) {
+    estimate_normals(cloud, o.normal_neighbours, report.frame, [&](double f, const char* phase) {
       if (progress) progress->update(0.3 * f, phase);
     });
   if (!normals) cloud.normals.clear();
@@ -122,7 +123,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   header.leaf_count = static_cast<uint32_t>(report.leaves);
   header.point_count = static_cast<uint32_t>(cloud.size());
   header.depth = static_cast<uint16_t>(tree.depth);
-  header.view_hint = o.view_hint;
+  header.view_hint = report.frame.hint;
   for (int a = 0; a < 3; ++a) {
     header.bbox_bits[a] = f32_bits(bmin[a]);
     header.bbox_bits[3 + a] = f32_bits(bmax[a]);

@@ -9,6 +9,7 @@
 #include "core/spg_format.h"
 #include "platform/progress.h"
 #include "tools/host/hierarchy.h"
+#include "tools/host/orientation.h"
 
 namespace stipple {
 
@@ -21,7 +22,7 @@ struct EncodeOptions {
   bool normals = true;  // store normals (computed when the scan has none)
   bool colors = true;   // store colours when the scan has them
   int normal_neighbours = 12;
-  SpgViewHint view_hint;  // stored in the file's header: up axis and sensor side (none by default)
+  OrientOptions orient;  // how estimated normals face; also gives the file's view hint (tools/host/orientation.h)
 };
 
 struct EncodeReport {
@@ -35,6 +36,7 @@ struct EncodeReport {
   double class_rms_log_error[3] = {0, 0, 0};
   PartitionRatios ratios;
   TreeReport tree;
+  ScanFrame frame;  // what analyse_scan decided: normal orientation, view hint
 };
 
 // Encodes `cloud` (normals may be added to it). Returns false with a message

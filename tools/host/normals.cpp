@@ -9,7 +9,8 @@
 
 namespace stipple {
 
-void estimate_normals(PointCloud& cloud, int k, const std::function<void(double, const char*)>& progress) {
+void estimate_normals(PointCloud& cloud, int k, const ScanFrame& frame,
+                      const std::function<void(double, const char*)>& progress) {
   if (cloud.has_normals()) return;
   const size_t n = cloud.size();
   const std::vector<Vec3>& p = cloud.positions;
@@ -31,7 +32,8 @@ void estimate_normals(PointCloud& cloud, int k, const std::function<void(double,
     std::vector<uint32_t> nb;
     // Neighbour lists are kept only when orientation must be propagated.
     std::vector<uint32_t> graph;
-    if (!from_faces) graph.resize(n * kk);
+    const bool propagate = !from_faces && frame.orient == OrientMode::kOutward;
+    if (propagate) graph.resize(n * kk);
     for (size_t m = 0; m < missing.size(); ++m) {
       const uint32_t i = missing[m];
       tree.knearest(p[i], kk, nb);
@@ -42,25 +44,39 @@ void estimate_normals(PointCloud& cloud, int k, const std::function<void(double,
         Vec3 ref = Vec3::Zero();
         for (uint32_t j : nb) ref += normals[j];
         if (nrm.dot(ref) < 0) nrm = -nrm;
-      } else {
+      } else if (propagate) {
         std::copy(nb.begin(), nb.end(), graph.begin() + static_cast<ptrdiff_t>(i * kk));
       }
       normals[i] = nrm;
       if (progress && (m & 4095) == 0) progress(0.5 * static_cast<double>(m) / static_cast<double>(missing.size()), "normals");
     }
-    if (!from_faces) {
+    if (!from_faces && frame.orient == OrientMode::kSensor) {
+      for (size_t i = 0; i < n; ++i)
+        if (normals[i].dot(frame.viewpoint - p[i]) < 0) normals[i] = -normals[i];
+    } else if (!from_faces && frame.orient == OrientMode::kUp) {
+      for (size_t i = 0; i < n; ++i)
+        if (normals[i].dot(frame.up) < 0) normals[i] = -normals[i];
+    } else if (!from_faces) {
       // Orientation: Prim's algorithm over the k-NN graph, flipping each newly
-      // reached normal to agree with the one that reached it.
+      // reached normal to agree with the one that reached it. Each connected
+      // component starts at its point farthest from the centroid, facing away.
+      Vec3 centroid = Vec3::Zero();
+      for (const Vec3& q : p) centroid += q;
+      centroid /= static_cast<double>(n);
       std::vector<uint8_t> done(n, 0);
-      std::vector<uint32_t> by_height(n);
-      for (uint32_t i = 0; i < n; ++i) by_height[i] = i;
-      std::stable_sort(by_height.begin(), by_height.end(), [&](uint32_t a, uint32_t b) { return p[a].z() > p[b].z(); });
+      std::vector<uint32_t> by_distance(n);
+      std::vector<double> d2(n);
+      for (uint32_t i = 0; i < n; ++i) {
+        by_distance[i] = i;
+        d2[i] = (p[i] - centroid).squaredNorm();
+      }
+      std::stable_sort(by_distance.begin(), by_distance.end(), [&](uint32_t a, uint32_t b) { return d2[a] > d2[b]; });
       using Edge = std::pair<double, std::pair<uint32_t, uint32_t>>;  // cost, (to, from)
       std::priority_queue<Edge, std::vector<Edge>, std::greater<Edge>> heap;
       size_t reached = 0;
-      for (uint32_t seed : by_height) {
+      for (uint32_t seed : by_distance) {
         if (done[seed]) continue;
-        if (normals[seed].z() < 0) normals[seed] = -normals[seed];
+        if (normals[seed].dot(p[seed] - centroid) < 0) normals[seed] = -normals[seed];
         heap.push({0.0, {seed, seed}});
         while (!heap.empty()) {
           const auto [cost, edge] = heap.top();

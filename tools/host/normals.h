@@ -6,19 +6,23 @@
 // nearest neighbours (smallest-variance axis), oriented consistently by
 // propagation along a minimum spanning tree of the k-NN graph with edge cost
 // 1 - |n_i . n_j| (Hoppe et al., "Surface reconstruction from unorganized
-// points", SIGGRAPH 1992); each connected component starts at its highest
-// point with its normal pointing up (+z). Deterministic for a given input.
+// points", SIGGRAPH 1992); each connected component starts at its point
+// farthest from the centroid with its normal facing away from it — unless
+// `frame` (tools/host/orientation.h) says the scan has a sensor (each normal
+// faces the viewpoint) or is terrain (each faces up). Deterministic for a
+// given input.
 #pragma once
 
 #include <functional>
 
+#include "tools/host/orientation.h"
 #include "tools/host/point_cloud.h"
 
 namespace stipple {
 
 // Fills `cloud.normals` if empty. `k` is the neighbourhood size (3..64).
 // `progress(fraction, phase)` is called now and then with fraction in [0, 1].
-void estimate_normals(PointCloud& cloud, int k = 12,
+void estimate_normals(PointCloud& cloud, int k = 12, const ScanFrame& frame = {},
                       const std::function<void(double, const char*)>& progress = {});
 
 }  // namespace stipple
