@@ -13,6 +13,21 @@ int32_t dot_q14(const int32_t row[3], const int64_t v[3]) {
 
 }  // namespace
 
+void orbit_basis(SpgAxis up, int32_t basis[3][3]) {
+  const int code = up == SpgAxis::kNone ? 2 : static_cast<int>(up) - 1;  // +y
+  const int k = code / 2;
+  const int32_t sign = code % 2 ? -1 : 1;
+  int32_t y[3] = {0, 0, 0}, z[3] = {0, 0, 0};
+  y[k] = sign;
+  z[(k + 1) % 3] = 1;
+  const int32_t x[3] = {y[1] * z[2] - y[2] * z[1], y[2] * z[0] - y[0] * z[2], y[0] * z[1] - y[1] * z[0]};
+  for (int i = 0; i < 3; ++i) {
+    basis[i][0] = x[i];
+    basis[i][1] = y[i];
+    basis[i][2] = z[i];
+  }
+}
+
 bool orbit_camera(const OrbitView& view, uint16_t width, uint16_t height, Camera* out) {
   constexpr uint32_t kDegree = 11930465u;  // 2^32 / 360
   if (width == 0 || height == 0) return false;
@@ -26,13 +41,22 @@ bool orbit_camera(const OrbitView& view, uint16_t width, uint16_t height, Camera
   const int32_t b[3] = {mul_q14(y.sin, p.cos), p.sin, mul_q14(y.cos, p.cos)};
   const int32_t r[3] = {y.cos, 0, -y.sin};
   const int32_t u[3] = {-mul_q14(y.sin, p.sin), p.cos, -mul_q14(y.cos, p.sin)};
+  // Into the world: w = B v, a signed permutation (exact).
+  int32_t basis[3][3];
+  orbit_basis(view.up, basis);
+  int32_t bw[3], rw[3], uw[3];
+  for (int i = 0; i < 3; ++i) {
+    bw[i] = basis[i][0] * b[0] + basis[i][1] * b[1] + basis[i][2] * b[2];
+    rw[i] = basis[i][0] * r[0] + basis[i][1] * r[1] + basis[i][2] * r[2];
+    uw[i] = basis[i][0] * u[0] + basis[i][1] * u[1] + basis[i][2] * u[2];
+  }
   Camera c;
   for (int a = 0; a < 3; ++a) {
-    c.rotation[0][a] = r[a];
-    c.rotation[1][a] = -u[a];
-    c.rotation[2][a] = -b[a];
+    c.rotation[0][a] = rw[a];
+    c.rotation[1][a] = -uw[a];
+    c.rotation[2][a] = -bw[a];
     c.eye[a] = view.target_mu[a] +
-               static_cast<int32_t>((static_cast<int64_t>(view.distance_mu) * b[a] + (1 << 13)) >> 14);
+               static_cast<int32_t>((static_cast<int64_t>(view.distance_mu) * bw[a] + (1 << 13)) >> 14);
   }
   // f = (height / 2) / tan(fov / 2), in Q4: 8 h cos / sin. One division per camera.
   const SinCosQ14 half = sincos_q14(view.fov / 2);

@@ -17,6 +17,8 @@
 
 #include <cstdint>
 
+#include "core/spg_format.h"
+
 namespace stipple {
 
 struct Camera {
@@ -29,14 +31,23 @@ struct Camera {
 };
 
 // An orbit around a target: the eye sits at `distance_mu` from the target in
-// the direction given by yaw (about the model's +y axis, 0 = looking along -z)
-// and pitch (up from the x-z plane), looking at the target with +y up.
+// the direction given by yaw (about the up axis) and pitch (up from the plane
+// across it), looking at the target with `up` up. With up = +y (the default,
+// and kNone): yaw 0 looks along -z, yaw 90 along -x. Another up axis turns
+// that frame by the signed axis permutation orbit_basis gives: right-handed,
+// so no picture is mirrored.
 struct OrbitView {
   int32_t target_mu[3] = {};
   int32_t distance_mu = 1 << 25;
   uint32_t yaw = 0, pitch = 0;  // binary angles (2^32 per turn)
   uint32_t fov = 0x10000000u;   // vertical field of view, binary angle (22.5 degrees)
+  SpgAxis up = SpgAxis::kPosY;
 };
+
+// The orbit's frame for an up axis: columns x', y' = up, z' (each a signed
+// unit axis, z' the next axis after up's, x' = y' x z'). For +y it is the
+// identity. basis[i][j] is row i (world axis), column j.
+void orbit_basis(SpgAxis up, int32_t basis[3][3]);
 
 inline constexpr int32_t kCameraMaxCoord = 1 << 26;     // |target|, |world point| per axis
 inline constexpr int32_t kCameraMinDistance = 1 << 12;  // MU

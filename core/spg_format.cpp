@@ -120,8 +120,9 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   if (h.point_count < h.leaf_count) return fail(SpgError::kBadCounts, kPointCount);
   // View hint: two axis codes below kSpgAxisCount, the other bits zero.
   const uint16_t hint = load_u16le(data + kViewHint);
-  if ((hint & 7u) >= kSpgAxisCount || ((hint >> 3) & 7u) >= kSpgAxisCount || (hint >> 6) != 0)
+  if ((hint & 7u) >= kSpgAxisCount || ((hint >> 3) & 7u) >= kSpgAxisCount || (hint >> 7) != 0)
     return fail(SpgError::kBadLayout, kViewHint);
+  h.view_hint.sensor_at_origin = (hint >> 6) & 1u;
   h.view_hint.up = static_cast<SpgAxis>(hint & 7u);
   h.view_hint.sensor_side = static_cast<SpgAxis>((hint >> 3) & 7u);
   // Every node needs a record and every leaf at least one LEB128 byte: bound

@@ -49,12 +49,17 @@ enum class SpgAxis : uint8_t { kNone = 0, kPosX, kNegX, kPosY, kNegY, kPosZ, kNe
 inline constexpr uint8_t kSpgAxisCount = 7;
 
 // How the scan wants to be seen (docs/format.md §1, offset 42): which way is
-// up, and the side the sensor saw it from (the default view looks from
-// there). Both kNone in files without a hint: the viewer chooses.
+// up, the side the sensor saw it from (the default view looks from there),
+// or that the sensor stood inside the scan at the origin (the default view
+// looks out from there). All none in files without a hint: the viewer chooses.
 struct SpgViewHint {
   SpgAxis up = SpgAxis::kNone;
   SpgAxis sensor_side = SpgAxis::kNone;
-  uint16_t encode() const { return static_cast<uint16_t>(static_cast<uint16_t>(up) | (static_cast<uint16_t>(sensor_side) << 3)); }
+  bool sensor_at_origin = false;
+  uint16_t encode() const {
+    return static_cast<uint16_t>(static_cast<uint16_t>(up) | (static_cast<uint16_t>(sensor_side) << 3) |
+                                 (sensor_at_origin ? 1u << 6 : 0u));
+  }
 };
 
 // The startup message, defined once: the fixed header and the class tables

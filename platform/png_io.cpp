@@ -7,8 +7,9 @@
 
 namespace stipple {
 
-bool write_png_rgb(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb,
-                   std::string& error) {
+bool write_png(const std::string& path, const Image& img, std::string& error) {
+  const int width = img.width, height = img.height;
+  const std::vector<uint8_t>& rgb = img.rgb;
   if (width <= 0 || height <= 0 || rgb.size() != static_cast<size_t>(width) * static_cast<size_t>(height) * 3) {
     error = path + ": image size does not match its pixels";
     return false;
@@ -32,7 +33,10 @@ bool write_png_rgb(const std::string& path, int width, int height, const std::ve
   return true;
 }
 
-bool read_png_rgb(const std::string& path, int& width, int& height, std::vector<uint8_t>& rgb, std::string& error) {
+bool read_png(const std::string& path, Image& img, std::string& error) {
+  int& width = img.width;
+  int& height = img.height;
+  std::vector<uint8_t>& rgb = img.rgb;
   png_image image{};
   image.version = PNG_IMAGE_VERSION;
   if (!png_image_begin_read_from_file(&image, path.c_str())) {

@@ -1,6 +1,6 @@
 // stipple platform — PNG files through libpng.
 //
-// Images are 8-bit RGB, rows top to bottom, 3 bytes per pixel, no padding.
+// Images are platform/image.h's: 8-bit RGB, rows top to bottom, no padding.
 // Functions return false and set `error` to "<path>: <reason>" on failure;
 // a failed write leaves no partial file (temporary file + rename).
 #pragma once
@@ -9,11 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "platform/image.h"
+
 namespace stipple {
 
-bool write_png_rgb(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb,
-                   std::string& error);
+bool write_png(const std::string& path, const Image& image, std::string& error);
 
-bool read_png_rgb(const std::string& path, int& width, int& height, std::vector<uint8_t>& rgb, std::string& error);
+bool read_png(const std::string& path, Image& image, std::string& error);
 
 }  // namespace stipple

@@ -78,6 +78,7 @@ TEST(Orientation, ScanFromInsideFacesTheScanner) {
   EXPECT_EQ(f.kind, ScanKind::kSensorInside) << f.reason;
   EXPECT_GE(f.visible_share, 0.95);
   EXPECT_EQ(f.hint.up, SpgAxis::kPosZ);  // the room is flat: z is its thinnest extent
+  EXPECT_TRUE(f.hint.sensor_at_origin);  // seen from the scanner
   EXPECT_GE(share_facing_point(c, Vec3::Zero()), 0.99);
 }
 
@@ -133,6 +134,20 @@ TEST(Orientation, OptionsOverrideTheData) {
   const PointCloud u = oriented(s.positions, o, &f);
   EXPECT_EQ(f.hint.up, SpgAxis::kNegX);
   EXPECT_EQ(share_facing_dir(u, -Vec3::UnitX()), 1.0);
+}
+
+// Normals the scan brings are evidence: a sphere around the origin whose
+// file normals face outward is an object, not a room seen from inside (so
+// its file gets no view hint: the committed sphere fixtures stay as they are).
+TEST(Orientation, GivenNormalsOverruleTheGeometry) {
+  const PointCloud s = test::sphere_cloud(3000, 2.0, true);
+  EXPECT_EQ(analyse_scan(s.positions, {}).kind, ScanKind::kSensorInside);
+  const ScanFrame f = analyse_scan(s.positions, {}, &s.normals);
+  EXPECT_EQ(f.kind, ScanKind::kObject) << f.reason;
+  EXPECT_EQ(f.hint.encode(), 0);
+  std::vector<Vec3> inward = s.normals;
+  for (Vec3& n : inward) n = -n;
+  EXPECT_EQ(analyse_scan(s.positions, {}, &inward).kind, ScanKind::kSensorInside);
 }
 
 TEST(Orientation, AxisNames) {

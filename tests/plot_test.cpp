@@ -19,37 +19,38 @@ PlotSpec spec() {
 
 TEST(Plot, MarkersLandWhereTheDataSays) {
   const PlotSpec s = spec();
-  const RgbImage img = render_plot(s);
+  const Image img = render_plot(s);
   ASSERT_EQ(img.width, 900);
   ASSERT_EQ(img.height, 560);
-  EXPECT_EQ(img.at(0, 0), 0xFFFFFFu);  // background
+  EXPECT_EQ(pixel_at(img, 0, 0), 0xFFFFFFu);  // background
   int px, py;
   plot_position(s, 11.3, 61, px, py);  // drawn last: its colour is on top
-  EXPECT_EQ(img.at(px, py), 0xd62728u);
+  EXPECT_EQ(pixel_at(img, px, py), 0xd62728u);
   plot_position(s, 11.3, 62, px, py);
-  EXPECT_EQ(img.at(px, py), 0x1f77b4u);
+  EXPECT_EQ(pixel_at(img, px, py), 0x1f77b4u);
   // The title is drawn: dark pixels in the top band.
   int ink = 0;
   for (int y = 10; y < 35; ++y)
-    for (int x = 0; x < img.width; ++x) ink += img.at(x, y) == 0;
+    for (int x = 0; x < img.width; ++x) ink += pixel_at(img, x, y) == 0;
   EXPECT_GT(ink, 200);
-  EXPECT_EQ(render_plot(s).pixels, img.pixels);  // deterministic
+  EXPECT_EQ(render_plot(s).rgb, img.rgb);  // deterministic
 }
 
 TEST(Plot, PngRoundTripIsExact) {
-  const RgbImage img = render_plot(spec());
+  const Image img = render_plot(spec());
   const std::string path = testing::TempDir() + "plot.png";
   std::string error;
-  ASSERT_TRUE(write_png_rgb(path, img.width, img.height, img.pixels, error)) << error;
-  int w, h;
-  std::vector<uint8_t> back;
-  ASSERT_TRUE(read_png_rgb(path, w, h, back, error)) << error;
-  EXPECT_EQ(w, img.width);
-  EXPECT_EQ(h, img.height);
-  EXPECT_EQ(back, img.pixels);
-  EXPECT_FALSE(write_png_rgb(path, 10, 10, back, error));  // size mismatch
+  ASSERT_TRUE(write_png(path, img, error)) << error;
+  Image back;
+  ASSERT_TRUE(read_png(path, back, error)) << error;
+  EXPECT_EQ(back.width, img.width);
+  EXPECT_EQ(back.height, img.height);
+  EXPECT_EQ(back.rgb, img.rgb);
+  back.width = 10;
+  back.height = 10;
+  EXPECT_FALSE(write_png(path, back, error));  // size mismatch
   EXPECT_NE(error.find("does not match"), std::string::npos);
-  EXPECT_FALSE(read_png_rgb(testing::TempDir() + "missing.png", w, h, back, error));
+  EXPECT_FALSE(read_png(testing::TempDir() + "missing.png", back, error));
 }
 
 }  // namespace

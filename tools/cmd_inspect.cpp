@@ -384,8 +384,8 @@ int cmd_levels(int argc, char** argv) {
     spec.x_label = "bits per original point (cut records + startup tables)";
     spec.y_label = "PSNR (dB)";
     spec.series = {one_sided, symmetric};
-    const RgbImage img = render_plot(spec);
-    if (!write_png_rgb(plot_path, img.width, img.height, img.pixels, error)) return cli::fail(error);
+    const Image img = render_plot(spec);
+    if (!write_png(plot_path, img, error)) return cli::fail(error);
     if (!json) std::printf("plot: %s\n", plot_path.c_str());
   }
   return 0;

@@ -24,30 +24,8 @@ const char kRenderHelp[] =
     "same bytes on every platform — in this process: a simple cut of the tree is\n"
     "chosen for the camera, its records are handed to the client, one frame is\n"
     "drawn and written as PNG (RGB565 frames expanded by bit replication).\n"
-    "\n"
-    "view:\n"
-    "  --size WxH             screen (default 240x320)\n"
-    "  --format rgb565|rgb888 pixel format (default rgb565)\n"
-    "  --camera Y,P[,D[,F]]   orbit: yaw and pitch in degrees, distance from the\n"
-    "                         centre in model extents, vertical field of view in\n"
-    "                         degrees (default 30,20,3,35)\n"
-    "cut:\n"
-    "  --max-size PX          split nodes whose projected 3.5-sigma radius exceeds PX\n"
-    "                         pixels (default 2, the paper's threshold)\n"
-    "  --level L              instead: the nodes at tree level L and the leaves above\n"
-    "client:\n"
-    "  --projection affine|reciprocal|exact   per-point projection (default affine)\n"
-    "  --shading point|node|none              Lambert per sampled normal, per node, or\n"
-    "                                         none (default point)\n"
-    "  --no-specular          Lambert only\n"
-    "  --grey                 ignore the model's colours\n"
-    "  --mean-color           one colour per node (no per-point colour sampling)\n"
-    "  --quality Q            points-per-node scale, 0.01..16 (default 1)\n"
-    "  --point-size N         1..3 px (default 2)\n"
-    "  --pseudo               pseudo-random instead of Sobol samples\n"
-    "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
-    "  --max-points N         frame budget (default 1048576)\n"
-    "  --cache-decoded        cache decoded nodes (no per-frame decode; ~7x the memory)\n"
+    "\n";
+const char kRenderHelpOutput[] =
     "output:\n"
     "  --reference            draw with the double-precision reference renderer instead\n"
     "  --psnr                 also render the reference and report PSNR against it\n"
@@ -72,87 +50,7 @@ const char kDiffHelp[] =
     "diff image (the expected image darkened, differing pixels in red, brighter\n"
     "for larger differences). Exit status 0 when identical, 1 when not.\n";
 
-bool parse_size(const std::string& text, uint16_t& w, uint16_t& h) {
-  const size_t x = text.find('x');
-  unsigned long long a = 0, b = 0;
-  if (x == std::string::npos || !cli::parse_uint(text.substr(0, x), 4096, a) || !cli::parse_uint(text.substr(x + 1), 4096, b) ||
-      a == 0 || b == 0)
-    return false;
-  w = static_cast<uint16_t>(a);
-  h = static_cast<uint16_t>(b);
-  return true;
-}
-
 }  // namespace
-
-bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error) {
-  std::string v;
-  ClientConfig& c = o.config;
-  c.raster.width = 240;
-  c.raster.height = 320;
-  c.raster.max_points = 1u << 20;
-  if (args.value("--size", v) && !parse_size(v, c.raster.width, c.raster.height))
-    return error = "--size: expected WIDTHxHEIGHT within 1..4096, got '" + v + "'", false;
-  if (args.value("--format", v)) {
-    if (v == "rgb565") c.raster.format = PixelFormat::kRgb565;
-    else if (v == "rgb888") c.raster.format = PixelFormat::kRgb888;
-    else return error = "--format: expected rgb565 or rgb888, got '" + v + "'", false;
-  }
-  if (args.value("--camera", v) && !parse_view(v, o.view, error)) return false;
-  const bool has_level = args.value("--level", v);
-  if (has_level) {
-    unsigned long long level = 0;
-    if (!cli::parse_uint(v, 65535, level)) return error = "--level: expected a non-negative integer, got '" + v + "'", false;
-    o.rule.kind = CutRule::kLevel;
-    o.rule.level = static_cast<uint16_t>(level);
-  } else {
-    o.rule.kind = CutRule::kProjectedSize;
-  }
-  if (args.value("--max-size", v)) {
-    double px = 0;
-    if (has_level) return error = "--max-size and --level are alternatives; give one", false;
-    if (!cli::parse_double(v, px) || !(px >= 0.0625 && px <= 4096))
-      return error = "--max-size: expected pixels within [0.0625, 4096], got '" + v + "'", false;
-    o.rule.max_size_q4 = static_cast<int32_t>(std::lround(px * 16));
-  }
-  if (args.value("--projection", v)) {
-    if (v == "affine") c.projection = Projection::kAffine;
-    else if (v == "reciprocal") c.projection = Projection::kReciprocal;
-    else if (v == "exact") c.projection = Projection::kExact;
-    else return error = "--projection: expected affine, reciprocal or exact, got '" + v + "'", false;
-  }
-  if (args.value("--shading", v)) {
-    if (v == "point") c.shading = ShadingMode::kPerPoint;
-    else if (v == "node") c.shading = ShadingMode::kPerNode;
-    else if (v == "none") c.shading = ShadingMode::kNone;
-    else return error = "--shading: expected point, node or none, got '" + v + "'", false;
-  }
-  if (args.flag("--no-specular")) c.lighting.specular_q8 = 0;
-  if (args.flag("--grey")) c.grey = true;
-  if (args.flag("--mean-color")) c.sample_color = false;
-  if (args.flag("--pseudo")) c.source = GaussianSource::kPseudo;
-  if (args.flag("--cache-decoded")) c.cache_decoded = true;
-  if (args.value("--quality", v)) {
-    double q = 0;
-    if (!cli::parse_double(v, q) || !(q >= 0.01 && q <= 16))
-      return error = "--quality: expected a scale within [0.01, 16], got '" + v + "'", false;
-    c.quality_q8 = static_cast<uint16_t>(std::lround(q * 256));
-  }
-  unsigned long long u = 0;
-  if (args.value("--point-size", v)) {
-    if (!cli::parse_uint(v, 3, u) || u < 1) return error = "--point-size: expected 1, 2 or 3, got '" + v + "'", false;
-    c.point_size = static_cast<uint8_t>(u);
-  }
-  if (args.value("--samples", v)) {
-    if (!cli::parse_uint(v, 8192, u) || u < 1) return error = "--samples: expected 1..8192, got '" + v + "'", false;
-    c.samples = static_cast<uint16_t>(u);
-  }
-  if (args.value("--max-points", v)) {
-    if (!cli::parse_uint(v, 1u << 26, u) || u < 1) return error = "--max-points: expected 1..67108864, got '" + v + "'", false;
-    c.raster.max_points = static_cast<uint32_t>(u);
-  }
-  return true;
-}
 
 int render_to_png(const std::string& name, const std::vector<uint8_t>& file, const RenderOptions& o,
                   const std::string& output, bool reference, bool psnr, bool json, int frames) {
@@ -175,7 +73,7 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
     ref = render_reference(model, fixed.cut, o.config, o.view);
   }
   const Image& image = reference ? ref : fixed.image;
-  if (!output.empty() && !write_png_rgb(output, image.width, image.height, image.rgb, error)) return cli::fail(error);
+  if (!output.empty() && !write_png(output, image, error)) return cli::fail(error);
   const double db = psnr ? image_psnr(fixed.image, ref) : 0;
   if (json) {
     cli::Json j;
@@ -211,6 +109,8 @@ int cmd_render(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) {
     std::fputs(kRenderHelp, stdout);
+    std::fputs(kRenderOptionsHelp, stdout);
+    std::fputs(kRenderHelpOutput, stdout);
     return 0;
   }
   RenderOptions o;
@@ -245,7 +145,7 @@ int cmd_image_diff(int argc, char** argv) {
   if (!args.unknown_option().empty()) return cli::fail("image-diff: unknown option '" + args.unknown_option() + "'");
   if (files.size() != 2) return cli::fail("image-diff: expected EXPECTED.png and ACTUAL.png");
   Image a, b;
-  if (!read_png_rgb(files[0], a.width, a.height, a.rgb, error) || !read_png_rgb(files[1], b.width, b.height, b.rgb, error))
+  if (!read_png(files[0], a, error) || !read_png(files[1], b, error))
     return cli::fail(error);
   if (a.width != b.width || a.height != b.height)
     return cli::fail("image-diff: " + files[0] + " is " + std::to_string(a.width) + "x" + std::to_string(a.height) + ", " +
@@ -265,7 +165,7 @@ int cmd_image_diff(int argc, char** argv) {
       for (int c = 0; c < 3; ++c) diff[i + c] = static_cast<uint8_t>(a.rgb[i + c] / 4);
     }
   }
-  if (!output.empty() && !write_png_rgb(output, a.width, a.height, diff, error)) return cli::fail(error);
+  if (!output.empty() && !write_png(output, Image{a.width, a.height, diff}, error)) return cli::fail(error);
   if (differing == 0) {
     std::printf("%s and %s are identical (%dx%d)\n", files[0].c_str(), files[1].c_str(), a.width, a.height);
     return 0;
@@ -293,7 +193,7 @@ int cmd_image_crc(int argc, char** argv) {
   for (const std::string& f : files) {
     Image img;
     std::string error;
-    if (!read_png_rgb(f, img.width, img.height, img.rgb, error)) return cli::fail(error);
+    if (!read_png(f, img, error)) return cli::fail(error);
     std::printf("crc32 %08x  %s\n", crc32(img.rgb.data(), img.rgb.size()), f.c_str());
   }
   return 0;

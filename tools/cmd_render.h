@@ -5,18 +5,10 @@
 #include <vector>
 
 #include "tools/cli.h"
+#include "tools/embedded/render_options.h"
 #include "tools/host/render.h"
 
 namespace stipple {
-
-struct RenderOptions {
-  ClientConfig config;
-  CutRule rule;
-  ViewSpec view;
-};
-
-// Reads the view, cut and client options of `stipple render --help`.
-bool parse_render_options(cli::Args& args, RenderOptions& options, std::string& error);
 
 // Renders `file` (a whole .spg named `name`) and writes `output` (PNG) when
 // not empty; prints a summary. Returns the process exit code.

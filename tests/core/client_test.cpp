@@ -13,7 +13,7 @@
 #include "core/cut.h"
 #include "raster/client.h"
 #include "tests/core/test_files.h"
-#include "tools/handheld/embedded.h"
+#include "tools/embedded/embedded.h"
 
 namespace stipple {
 namespace {

@@ -143,7 +143,7 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
       {40, {99, 0}, SpgError::kBadDepth},
       {42, {7, 0}, SpgError::kBadLayout},                 // view hint: up axis code 7
       {42, {0x38, 0}, SpgError::kBadLayout},              // sensor side code 7
-      {42, {0x40, 0}, SpgError::kBadLayout},              // a hint bit beyond both codes
+      {42, {0x80, 0}, SpgError::kBadLayout},              // a hint bit beyond the defined ones
       {44, {0, 0, 0xC0, 0x7F}, SpgError::kBadFloat},      // NaN bbox
       {44, {0, 0, 0x80, 0x7F}, SpgError::kBadFloat},      // +inf
       {44, {0, 0, 0x80, 0x4F}, SpgError::kBadBoundingBox},  // min x = 4.3e9 > max x

@@ -49,6 +49,43 @@ TEST(Camera, OrbitIsOrthonormalAndLooksAtTheTarget) {
     }
 }
 
+// Any up axis: the orbit's frame is a right-handed signed permutation (no
+// picture is mirrored), its up axis is up on screen at every yaw, and yaw
+// turns about it. +y is the identity, so the golden views are unchanged.
+TEST(Camera, OrbitAboutEveryAxis) {
+  for (uint8_t code = 1; code < kSpgAxisCount; ++code) {
+    const SpgAxis axis = static_cast<SpgAxis>(code);
+    int32_t b[3][3];
+    orbit_basis(axis, b);
+    const int64_t det = int64_t{b[0][0]} * (b[1][1] * b[2][2] - b[1][2] * b[2][1]) -
+                        int64_t{b[0][1]} * (b[1][0] * b[2][2] - b[1][2] * b[2][0]) +
+                        int64_t{b[0][2]} * (b[1][0] * b[2][1] - b[1][1] * b[2][0]);
+    EXPECT_EQ(det, 1) << static_cast<int>(code);
+    int32_t up[3] = {0, 0, 0};
+    up[(code - 1) / 2] = (code - 1) % 2 ? -(1 << 14) : 1 << 14;
+    for (int a = 0; a < 3; ++a) EXPECT_EQ(b[a][1] << 14, up[a]) << static_cast<int>(code);
+    for (uint32_t yaw = 0; yaw < 0xF0000000u; yaw += 0x2468ACE1u) {
+      OrbitView o;
+      o.up = axis;
+      o.yaw = yaw;
+      o.pitch = 20 * 11930465u;
+      Camera c;
+      ASSERT_TRUE(orbit_camera(o, 240, 320, &c));
+      int32_t v[3];
+      camera_rotate(c, up, v);
+      EXPECT_LT(v[1], -(1 << 13)) << "up axis " << static_cast<int>(code) << " is not up on screen";
+      // The eye's offset from the target has no up component beyond sin(pitch).
+      int64_t along = 0;
+      for (int a = 0; a < 3; ++a) along += int64_t{c.eye[a] - o.target_mu[a]} * up[a];
+      EXPECT_NEAR(static_cast<double>(along) / (1 << 14) / o.distance_mu, 0.342, 1e-3);
+    }
+  }
+  int32_t id[3][3];
+  orbit_basis(SpgAxis::kPosY, id);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_EQ(id[i][j], i == j ? 1 : 0);
+}
+
 TEST(Camera, FocalLengthAndRefusals) {
   OrbitView o;
   o.fov = 0x40000000u;  // 90 degrees: f = h / 2

@@ -133,12 +133,13 @@ TEST(SpgWriter, ContentTheReaderWouldRefuseIsRefused) {
   }
   // A view hint survives the round trip.
   Parts p = take_apart(file);
-  p.view.header.view_hint = SpgViewHint{SpgAxis::kNegY, SpgAxis::kNegZ};
+  p.view.header.view_hint = SpgViewHint{SpgAxis::kNegY, SpgAxis::kNegZ, true};
   ASSERT_EQ(write(p), SpgWriteStatus::kOk);
   SpgView back;
   ASSERT_TRUE(spg_parse(out.data(), written, &back).ok());
   EXPECT_EQ(back.header.view_hint.up, SpgAxis::kNegY);
   EXPECT_EQ(back.header.view_hint.sensor_side, SpgAxis::kNegZ);
+  EXPECT_TRUE(back.header.view_hint.sensor_at_origin);
 }
 
 }  // namespace

@@ -53,11 +53,14 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   // hierarchy up to 85 %, classification and writing the rest.
   const bool estimate = normals && !cloud.has_normals();
   const double tree_start = estimate ? 0.3 : 0.02;
-  report.frame = analyse_scan(cloud.positions, o.orient);
-  if (estimate)
-    estimate_normals(cloud, o.normal_neighbours, report.frame, [&](double f, const char* phase) {
-      if (progress) progress->update(0.3 * f, phase);
-    });
+  // Normals the scan brings (file, faces) are evidence for the rules; faces
+  // give theirs first.
+  const auto normals_progress = [&](double f, const char* phase) {
+    if (progress) progress->update(0.3 * f, phase);
+  };
+  if (estimate && !cloud.triangles.empty()) estimate_normals(cloud, o.normal_neighbours, ScanFrame{}, normals_progress);
+  report.frame = analyse_scan(cloud.positions, o.orient, cloud.has_normals() ? &cloud.normals : nullptr);
+  if (estimate && !cloud.has_normals()) estimate_normals(cloud, o.normal_neighbours, report.frame, normals_progress);
   if (!normals) cloud.normals.clear();
   if (!colors) cloud.colors.clear();
 

@@ -98,7 +98,7 @@ double visible_share(const std::vector<Vec3>& points, const Vec3& eye) {
   return static_cast<double>(visible) / static_cast<double>(points.size());
 }
 
-ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& o) {
+ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& o, const std::vector<Vec3>* normals) {
   ScanFrame f;
   const Box3 box = bounding_box(points);
   const Vec3 extent = box.max - box.min;
@@ -126,22 +126,34 @@ ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& o) 
   bool inside = true;
   for (int a = 0; a < 3; ++a) inside = inside && extent[a] > 0 && -box.min[a] >= 0.05 * extent[a] && box.max[a] >= 0.05 * extent[a];
 
+  // With normals in the file (or from faces) the data shows which way its
+  // surfaces face: a rule that contradicts them (most facing away from the
+  // sensor or the sky) does not apply.
+  const auto agrees = [&](const Vec3& sensor, const Vec3* sky) {
+    if (normals == nullptr || normals->size() != points.size()) return true;
+    size_t toward = 0;
+    for (size_t i = 0; i < points.size(); ++i)
+      toward += sky ? (*normals)[i].dot(*sky) > 0 : (*normals)[i].dot(sensor - points[i]) > 0;
+    return 2 * toward >= points.size();
+  };
   if (o.has_viewpoint) {
     f.kind = ScanKind::kViewpoint;
     f.viewpoint = o.viewpoint;
     f.hint.sensor_side = dominant_axis(o.viewpoint - (box.min + box.max) / 2);
     std::snprintf(text, sizeof text, "viewpoint (%g, %g, %g) given", o.viewpoint.x(), o.viewpoint.y(), o.viewpoint.z());
-  } else if (camera) {
+  } else if (camera && agrees(Vec3::Zero(), nullptr)) {
     f.kind = ScanKind::kCameraFrame;
     f.hint = SpgViewHint{SpgAxis::kNegY, SpgAxis::kNegZ};
     std::snprintf(text, sizeof text, "camera frame: %.1f %% of the points in front of the origin (+z forward, +y down)",
                   100.0 * static_cast<double>(in_cone) / static_cast<double>(points.size()));
-  } else if (inside && (f.visible_share = visible_share(points, Vec3::Zero())) >= 0.95) {
+  } else if (inside && agrees(Vec3::Zero(), nullptr) && (f.visible_share = visible_share(points, Vec3::Zero())) >= 0.95) {
     f.kind = ScanKind::kSensorInside;
+    // Seen from the scanner: from outside, the room shows the backs of its walls and ceiling.
+    f.hint.sensor_at_origin = true;
     if (flat) f.hint.up = axis_code(thin, false);
     std::snprintf(text, sizeof text, "sensor at the origin, inside the scan: %.1f %% of the points visible from it",
                   100.0 * f.visible_share);
-  } else if (flat) {
+  } else if (flat && agrees(Vec3::Zero(), &up)) {
     f.kind = ScanKind::kTerrain;
     f.hint = SpgViewHint{axis_code(thin, false), axis_code(thin, false)};
     std::snprintf(text, sizeof text, "terrain: the %c extent (%g) is under half the others", "xyz"[thin], extent[thin]);

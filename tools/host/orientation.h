@@ -15,7 +15,7 @@
 //   3. a sensor inside: the origin inside the bounding box (5-95 % of each
 //      axis) and at least 95 % of the points visible from it (no other point
 //      nearer along the same ray) — a terrestrial or 360-degree scan in its
-//      scanner's frame;
+//      scanner's frame, seen from the scanner;
 //   4. terrain: the thinnest extent below half of each other — airborne
 //      LiDAR, ground scans: up is the thinnest axis, normals face +up;
 //   5. otherwise an object: orientation propagates over the k-NN graph from
@@ -60,8 +60,11 @@ struct ScanFrame {
 };
 
 // Decides how to orient normals and the view hint. Options override the
-// data: a mode other than kAuto, a viewpoint, an up axis.
-ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& options);
+// data: a mode other than kAuto, a viewpoint, an up axis. `normals`, when
+// the scan has them (a file's, or from faces), are evidence: rules 2-4 apply
+// only when at least half of them face the sensor or the sky.
+ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& options,
+                       const std::vector<Vec3>* normals = nullptr);
 
 // Share of points that nothing nearer hides from `eye`: directions are
 // binned in a cube map of about 4 points a cell, and a point counts as

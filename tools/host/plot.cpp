@@ -40,10 +40,10 @@ constexpr int kLeft = 90, kRight = 30, kTop = 50, kBottom = 70;
 
 class Canvas {
  public:
-  explicit Canvas(RgbImage& img) : img_(img) {}
+  explicit Canvas(Image& img) : img_(img) {}
   void set(int x, int y, uint32_t c) {
     if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return;
-    uint8_t* p = &img_.pixels[(static_cast<size_t>(y) * static_cast<size_t>(img_.width) + static_cast<size_t>(x)) * 3];
+    uint8_t* p = &img_.rgb[(static_cast<size_t>(y) * static_cast<size_t>(img_.width) + static_cast<size_t>(x)) * 3];
     p[0] = static_cast<uint8_t>(c >> 16);
     p[1] = static_cast<uint8_t>(c >> 8);
     p[2] = static_cast<uint8_t>(c);
@@ -93,7 +93,7 @@ class Canvas {
   }
 
  private:
-  RgbImage& img_;
+  Image& img_;
 };
 
 int text_width(const std::string& s) { return static_cast<int>(s.size()) * kAdvance - kScale; }
@@ -149,20 +149,15 @@ std::string tick_label(double v, double step) {
 
 }  // namespace
 
-uint32_t RgbImage::at(int x, int y) const {
-  const uint8_t* p = &pixels[(static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x)) * 3];
-  return (uint32_t{p[0]} << 16) | (uint32_t{p[1]} << 8) | p[2];
-}
-
 void plot_position(const PlotSpec& spec, double x, double y, int& px, int& py) {
   to_pixel(spec, axes_for(spec), x, y, px, py);
 }
 
-RgbImage render_plot(const PlotSpec& spec) {
-  RgbImage img;
+Image render_plot(const PlotSpec& spec) {
+  Image img;
   img.width = spec.width;
   img.height = spec.height;
-  img.pixels.assign(static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height) * 3, 0xFF);
+  img.rgb.assign(static_cast<size_t>(spec.width) * static_cast<size_t>(spec.height) * 3, 0xFF);
   Canvas c(img);
   const Axes a = axes_for(spec);
   const uint32_t kInk = 0x000000, kGrid = 0xDDDDDD;

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "platform/image.h"
+
 namespace stipple {
 
 struct PlotSeries {
@@ -27,13 +29,7 @@ struct PlotSpec {
   int width = 900, height = 560;
 };
 
-struct RgbImage {
-  int width = 0, height = 0;
-  std::vector<uint8_t> pixels;  // RGB, rows top to bottom
-  uint32_t at(int x, int y) const;
-};
-
-RgbImage render_plot(const PlotSpec& spec);
+Image render_plot(const PlotSpec& spec);
 
 // Pixel position of data point (x, y) in the image `render_plot` makes for
 // `spec` (for tests and annotations).

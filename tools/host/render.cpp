@@ -28,11 +28,16 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
   const double to_mu = kMu / largest;
   int32_t extent_mu[3];
   for (int a = 0; a < 3; ++a) extent_mu[a] = static_cast<int32_t>(std::llround(extent[a] * to_mu));
-  const OrbitView o = orbit_view(extent_mu, spec);
-  // The camera of orbit_camera, in doubles.
+  const OrbitView o = orbit_view(extent_mu, resolve_view(spec, model.header, extent_mu));
+  // The camera of orbit_camera, in doubles, turned by the same axis permutation.
   const double yaw = radians(o.yaw), pitch = radians(o.pitch), fov = radians(o.fov);
-  const Vec3 back(std::sin(yaw) * std::cos(pitch), std::sin(pitch), std::cos(yaw) * std::cos(pitch));
-  const Vec3 right(std::cos(yaw), 0, -std::sin(yaw));
+  int32_t permutation[3][3];
+  orbit_basis(o.up, permutation);
+  Mat3 basis;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) basis(i, j) = permutation[i][j];
+  const Vec3 back = basis * Vec3(std::sin(yaw) * std::cos(pitch), std::sin(pitch), std::cos(yaw) * std::cos(pitch));
+  const Vec3 right = basis * Vec3(std::cos(yaw), 0, -std::sin(yaw));
   const Vec3 up = back.cross(right);
   Mat3 R;
   R.row(0) = right.transpose();

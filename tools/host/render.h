@@ -1,11 +1,11 @@
 // stipple host — the double-precision reference renderer the fixed-point
-// client (tools/handheld/embedded.h) is measured against.
+// client (tools/embedded/embedded.h) is measured against.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
-#include "tools/handheld/embedded.h"
+#include "tools/embedded/embedded.h"
 #include "tools/host/spg_model.h"
 
 namespace stipple {

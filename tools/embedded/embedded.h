@@ -12,30 +12,39 @@
 #include "core/camera.h"
 #include "core/cut.h"
 #include "core/spg_format.h"
+#include "platform/image.h"
 #include "raster/client.h"
 
 namespace stipple {
 
 // An orbit camera in user units: degrees, and the distance from the model's
-// centre in units of the model's largest extent.
+// centre in units of the model's largest extent; the axis it orbits about.
 struct ViewSpec {
   double yaw = 30, pitch = 20, distance = 3, fov = 35;
+  bool orbit_given = false;     // --camera gave yaw and pitch: no default from the file
+  SpgAxis up = SpgAxis::kNone;  // --up; kNone: from the file (resolve_view)
+  bool has_target = false;      // orbit about target_mu instead of the box's centre
+  double target_mu[3] = {0, 0, 0};
 };
 
-// "yaw,pitch[,distance[,fov]]"; error names the bad part.
+// "yaw,pitch[,distance[,fov]]"; error names the bad part. Sets orbit_given.
 bool parse_view(const std::string& text, ViewSpec& out, std::string& error);
 
-// The integer orbit for a model whose box spans extent_mu (the decoder's MU).
-OrbitView orbit_view(const int32_t extent_mu[3], const ViewSpec& spec);
+// The view a user gets for a model (docs/encoder.md, "Orientation"):
+//   up: --up, else the file's hint, else the thinnest axis (+) of a flat box
+//       (under half of each other extent: terrain), else +y;
+//   yaw, pitch and distance, unless --camera gave them: from the sensor's
+//       side when the file names one, 2 extents away (level with it, pitch
+//       0; from above, pitch 50, when the side is up), from above for a flat
+//       box without a hint, from the origin when the sensor stood inside the
+//       scan there (level, a 90-degree field of view: the eye at the
+//       scanner), else the defaults (30, 20, 3: the bunny's and dragon's
+//       golden views).
+ViewSpec resolve_view(const ViewSpec& spec, const SpgHeader& header, const int32_t extent_mu[3]);
 
-// An RGB888 picture (RGB565 frames are expanded by bit replication, which
-// keeps every bit of the frame).
-struct Image {
-  int width = 0, height = 0;
-  std::vector<uint8_t> rgb;
-};
-Image frame_to_image(const std::vector<uint8_t>& frame, const RasterConfig& config);
-double image_psnr(const Image& a, const Image& b);  // over all channels; +inf when equal
+// The integer orbit for a model whose box spans extent_mu (the decoder's MU),
+// for a resolved spec.
+OrbitView orbit_view(const int32_t extent_mu[3], const ViewSpec& spec);
 
 struct FixedRender {
   std::vector<uint8_t> frame;  // config format, tightly packed rows

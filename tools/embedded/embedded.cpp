@@ -1,8 +1,9 @@
 // stipple — the embedded default. See embedded.h.
-#include "tools/handheld/embedded.h"
+#include "tools/embedded/embedded.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <sstream>
 
@@ -48,48 +49,77 @@ bool parse_view(const std::string& text, ViewSpec& out, std::string& error) {
   if (!(s.distance >= 0.001 && s.distance <= 16))
     return error = "--camera: distance must be within [0.001, 16] model extents", false;
   if (!(s.fov >= 1 && s.fov <= 170)) return error = "--camera: field of view must be within [1, 170] degrees", false;
+  s.orbit_given = true;
+  s.up = out.up;
   out = s;
   return true;
 }
 
+ViewSpec resolve_view(const ViewSpec& spec, const SpgHeader& header, const int32_t extent_mu[3]) {
+  ViewSpec v = spec;
+  int thin = 0;
+  for (int a = 1; a < 3; ++a)
+    if (extent_mu[a] < extent_mu[thin]) thin = a;
+  const bool flat = int64_t{extent_mu[thin]} * 2 < extent_mu[(thin + 1) % 3] &&
+                    int64_t{extent_mu[thin]} * 2 < extent_mu[(thin + 2) % 3];
+  const SpgAxis thin_up = static_cast<SpgAxis>(1 + 2 * thin);
+  if (v.up == SpgAxis::kNone) v.up = header.view_hint.up != SpgAxis::kNone ? header.view_hint.up : flat ? thin_up : SpgAxis::kPosY;
+  if (v.orbit_given) return v;
+  if (header.view_hint.sensor_at_origin) {
+    // The eye at the scanner: the orbit's target a short way in front of it.
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      std::memcpy(&lo[a], &header.bbox_bits[a], 4);
+      std::memcpy(&hi[a], &header.bbox_bits[3 + a], 4);
+    }
+    double largest = 0;
+    for (int a = 0; a < 3; ++a) largest = std::max(largest, double(hi[a]) - lo[a]);
+    if (largest > 0) {
+      v.pitch = 0;
+      v.fov = 90;
+      v.distance = 0.05;
+      int32_t basis[3][3];
+      orbit_basis(v.up, basis);
+      const double yaw = v.yaw * 3.14159265358979323846 / 180;
+      const double b[3] = {std::sin(yaw), 0, std::cos(yaw)};  // pitch 0
+      v.has_target = true;
+      for (int a = 0; a < 3; ++a) {
+        const double back = basis[a][0] * b[0] + basis[a][1] * b[1] + basis[a][2] * b[2];
+        v.target_mu[a] = (0.0 - lo[a]) / largest * kMu - v.distance * kMu * back;
+      }
+      return v;
+    }
+  }
+  const SpgAxis side = header.view_hint.sensor_side;
+  if (side != SpgAxis::kNone) v.distance = 2;  // the sensor's view: closer than the object default
+  if (side == v.up || (side == SpgAxis::kNone && header.view_hint.up == SpgAxis::kNone && flat && v.up == thin_up)) {
+    v.pitch = 50;  // from above
+  } else if (side != SpgAxis::kNone) {
+    // Level with the sensor: the yaw whose horizontal eye direction is the side.
+    int32_t basis[3][3];
+    orbit_basis(v.up, basis);
+    const int code = static_cast<int>(side) - 1;
+    const int k = code / 2;
+    const double sign = code % 2 ? -1 : 1;
+    const double along_x = sign * basis[k][0], along_z = sign * basis[k][2];
+    if (along_x != 0 || along_z != 0) {
+      v.yaw = std::atan2(along_x, along_z) * 180 / 3.14159265358979323846;
+      v.pitch = 0;
+    }
+  }
+  return v;
+}
+
 OrbitView orbit_view(const int32_t extent_mu[3], const ViewSpec& spec) {
   OrbitView o;
-  for (int a = 0; a < 3; ++a) o.target_mu[a] = extent_mu[a] / 2;
+  for (int a = 0; a < 3; ++a)
+    o.target_mu[a] = spec.has_target ? static_cast<int32_t>(std::llround(spec.target_mu[a])) : extent_mu[a] / 2;
   o.distance_mu = static_cast<int32_t>(std::llround(spec.distance * kMu));
   o.yaw = binary_angle(spec.yaw);
   o.pitch = binary_angle(spec.pitch);
   o.fov = binary_angle(spec.fov);
+  o.up = spec.up == SpgAxis::kNone ? SpgAxis::kPosY : spec.up;
   return o;
-}
-
-Image frame_to_image(const std::vector<uint8_t>& frame, const RasterConfig& config) {
-  Image img;
-  img.width = config.width;
-  img.height = config.height;
-  const size_t pixels = static_cast<size_t>(config.width) * config.height;
-  img.rgb.resize(pixels * 3);
-  for (size_t i = 0; i < pixels; ++i) {
-    if (config.format == PixelFormat::kRgb888) {
-      for (int c = 0; c < 3; ++c) img.rgb[3 * i + c] = frame[3 * i + c];
-    } else {
-      const uint32_t v = rgb888_from_565(static_cast<uint16_t>(frame[2 * i] | (frame[2 * i + 1] << 8)));
-      img.rgb[3 * i] = static_cast<uint8_t>(v >> 16);
-      img.rgb[3 * i + 1] = static_cast<uint8_t>(v >> 8);
-      img.rgb[3 * i + 2] = static_cast<uint8_t>(v);
-    }
-  }
-  return img;
-}
-
-double image_psnr(const Image& a, const Image& b) {
-  if (a.rgb.size() != b.rgb.size() || a.rgb.empty()) return 0;
-  double sum = 0;
-  for (size_t i = 0; i < a.rgb.size(); ++i) {
-    const double d = static_cast<double>(a.rgb[i]) - b.rgb[i];
-    sum += d * d;
-  }
-  if (sum == 0) return std::numeric_limits<double>::infinity();
-  return 10 * std::log10(255.0 * 255.0 / (sum / static_cast<double>(a.rgb.size())));
 }
 
 bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
@@ -102,7 +132,8 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     return false;
   }
   Camera camera;
-  if (!orbit_camera(orbit_view(decoder.extent_mu(), spec), config.raster.width, config.raster.height, &camera)) {
+  const ViewSpec resolved = resolve_view(spec, view.header, decoder.extent_mu());
+  if (!orbit_camera(orbit_view(decoder.extent_mu(), resolved), config.raster.width, config.raster.height, &camera)) {
     error = "--camera: the view is out of the camera's range";
     return false;
   }
@@ -135,7 +166,7 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     error = std::string("client: ") + client_status_text(s);
     return false;
   }
-  out.image = frame_to_image(out.frame, config.raster);
+  image_from_frame(out.frame.data(), stride, config.raster.width, config.raster.height, config.raster.format, out.image);
   out.cut = std::move(cut);
   out.camera = camera;
   return true;

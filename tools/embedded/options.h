@@ -1,0 +1,34 @@
+// stipple tools — command-line options, shared by every program (stipple,
+// stipple-handheld and those to come). Standard library only: builds for
+// the handheld too.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace stipple::cli {
+
+// Arguments after the subcommand name, consumed as they are recognised.
+class Args {
+ public:
+  Args(int argc, char** argv, int first);
+  bool flag(const char* name);                         // --name
+  bool value(const char* name, std::string& out);      // --name VALUE or --name=VALUE
+  std::vector<std::string> positionals();              // what is left, in order
+  // Anything still unconsumed that looks like an option; empty if none.
+  std::string unknown_option() const;
+  bool bad() const { return !error_.empty(); }
+  const std::string& error() const { return error_; }
+
+ private:
+  std::vector<std::string> args_;
+  std::vector<bool> used_;
+  std::string error_;
+};
+
+bool parse_uint(const std::string& s, unsigned long long max, unsigned long long& out);
+bool parse_double(const std::string& s, double& out);
+// "X,Y,Z": three finite numbers.
+bool parse_vec3(const std::string& s, double out[3]);
+
+}  // namespace stipple::cli

@@ -1,0 +1,137 @@
+// stipple tools — the shared render options. See render_options.h.
+#include "tools/embedded/render_options.h"
+
+#include <cmath>
+
+namespace stipple {
+namespace {
+
+bool parse_size(const std::string& text, uint16_t& w, uint16_t& h) {
+  const size_t x = text.find('x');
+  unsigned long long a = 0, b = 0;
+  if (x == std::string::npos || !cli::parse_uint(text.substr(0, x), 4096, a) || !cli::parse_uint(text.substr(x + 1), 4096, b) ||
+      a == 0 || b == 0)
+    return false;
+  w = static_cast<uint16_t>(a);
+  h = static_cast<uint16_t>(b);
+  return true;
+}
+
+}  // namespace
+
+const char kRenderOptionsHelp[] =
+    "view:\n"
+    "  --size WxH             screen (default 240x320)\n"
+    "  --format rgb565|rgb888 pixel format (default rgb565)\n"
+    "  --camera Y,P[,D[,F]]   orbit: yaw and pitch in degrees, distance from the\n"
+    "                         centre in model extents, vertical field of view in\n"
+    "                         degrees (default 30,20,3,35; from the file's sensor\n"
+    "                         side when it names one)\n"
+    "  --up AXIS              the axis the orbit turns about: +x -x +y -y +z -z\n"
+    "                         (default: the file's hint, else the thinnest axis of a\n"
+    "                         flat model, else +y)\n"
+    "cut:\n"
+    "  --max-size PX          split nodes whose projected 3.5-sigma radius exceeds PX\n"
+    "                         pixels (default 2, the paper's threshold)\n"
+    "  --level L              instead: the nodes at tree level L and the leaves above\n"
+    "client:\n"
+    "  --projection affine|reciprocal|exact   per-point projection (default affine)\n"
+    "  --shading point|node|none              Lambert per sampled normal, per node, or\n"
+    "                                         none (default point)\n"
+    "  --no-specular          Lambert only\n"
+    "  --grey                 ignore the model's colours\n"
+    "  --mean-color           one colour per node (no per-point colour sampling)\n"
+    "  --quality Q            points-per-node scale, 0.01..16 (default 1)\n"
+    "  --point-size N         1..3 px (default 2)\n"
+    "  --pseudo               pseudo-random instead of Sobol samples\n"
+    "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
+    "  --max-points N         frame budget (default 1048576)\n"
+    "  --cache-decoded        cache decoded nodes (no per-frame decode; ~7x the memory)\n"
+    "  --cache N              nodes the client's cache holds (default 30000, raised\n"
+    "                         to the cut's size)\n";
+
+bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error) {
+  std::string v;
+  ClientConfig& c = o.config;
+  c.raster.width = 240;
+  c.raster.height = 320;
+  c.raster.max_points = 1u << 20;
+  if (args.value("--size", v)) {
+    if (!parse_size(v, c.raster.width, c.raster.height))
+      return error = "--size: expected WIDTHxHEIGHT within 1..4096, got '" + v + "'", false;
+    o.sized = true;
+  }
+  if (args.value("--format", v)) {
+    if (v == "rgb565") c.raster.format = PixelFormat::kRgb565;
+    else if (v == "rgb888") c.raster.format = PixelFormat::kRgb888;
+    else return error = "--format: expected rgb565 or rgb888, got '" + v + "'", false;
+  }
+  if (args.value("--camera", v) && !parse_view(v, o.view, error)) return false;
+  if (args.value("--up", v)) {
+    static const char* const names[] = {"+x", "-x", "+y", "-y", "+z", "-z"};
+    const std::string t = v.size() == 1 ? "+" + v : v;
+    o.view.up = SpgAxis::kNone;
+    for (uint8_t i = 0; i < 6; ++i)
+      if (t == names[i]) o.view.up = static_cast<SpgAxis>(i + 1);
+    if (o.view.up == SpgAxis::kNone) return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
+  }
+  const bool has_level = args.value("--level", v);
+  if (has_level) {
+    unsigned long long level = 0;
+    if (!cli::parse_uint(v, 65535, level)) return error = "--level: expected a non-negative integer, got '" + v + "'", false;
+    o.rule.kind = CutRule::kLevel;
+    o.rule.level = static_cast<uint16_t>(level);
+  } else {
+    o.rule.kind = CutRule::kProjectedSize;
+  }
+  if (args.value("--max-size", v)) {
+    double px = 0;
+    if (has_level) return error = "--max-size and --level are alternatives; give one", false;
+    if (!cli::parse_double(v, px) || !(px >= 0.0625 && px <= 4096))
+      return error = "--max-size: expected pixels within [0.0625, 4096], got '" + v + "'", false;
+    o.rule.max_size_q4 = static_cast<int32_t>(std::lround(px * 16));
+  }
+  if (args.value("--projection", v)) {
+    if (v == "affine") c.projection = Projection::kAffine;
+    else if (v == "reciprocal") c.projection = Projection::kReciprocal;
+    else if (v == "exact") c.projection = Projection::kExact;
+    else return error = "--projection: expected affine, reciprocal or exact, got '" + v + "'", false;
+  }
+  if (args.value("--shading", v)) {
+    if (v == "point") c.shading = ShadingMode::kPerPoint;
+    else if (v == "node") c.shading = ShadingMode::kPerNode;
+    else if (v == "none") c.shading = ShadingMode::kNone;
+    else return error = "--shading: expected point, node or none, got '" + v + "'", false;
+  }
+  if (args.flag("--no-specular")) c.lighting.specular_q8 = 0;
+  if (args.flag("--grey")) c.grey = true;
+  if (args.flag("--mean-color")) c.sample_color = false;
+  if (args.flag("--pseudo")) c.source = GaussianSource::kPseudo;
+  if (args.flag("--cache-decoded")) c.cache_decoded = true;
+  if (args.value("--quality", v)) {
+    double q = 0;
+    if (!cli::parse_double(v, q) || !(q >= 0.01 && q <= 16))
+      return error = "--quality: expected a scale within [0.01, 16], got '" + v + "'", false;
+    c.quality_q8 = static_cast<uint16_t>(std::lround(q * 256));
+  }
+  unsigned long long u = 0;
+  if (args.value("--point-size", v)) {
+    if (!cli::parse_uint(v, 3, u) || u < 1) return error = "--point-size: expected 1, 2 or 3, got '" + v + "'", false;
+    c.point_size = static_cast<uint8_t>(u);
+  }
+  if (args.value("--samples", v)) {
+    if (!cli::parse_uint(v, 8192, u) || u < 1) return error = "--samples: expected 1..8192, got '" + v + "'", false;
+    c.samples = static_cast<uint16_t>(u);
+  }
+  if (args.value("--max-points", v)) {
+    if (!cli::parse_uint(v, 1u << 26, u) || u < 1) return error = "--max-points: expected 1..67108864, got '" + v + "'", false;
+    c.raster.max_points = static_cast<uint32_t>(u);
+  }
+  if (args.value("--cache", v)) {
+    if (!cli::parse_uint(v, 1u << 24, u) || u < 1) return error = "--cache: expected 1..16777216 nodes, got '" + v + "'", false;
+    c.node_capacity = static_cast<uint32_t>(u);
+  }
+  return !args.bad() || (error = args.error(), false);
+}
+
+}  // namespace stipple
