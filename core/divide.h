@@ -14,7 +14,7 @@
 // `floor_div` is the one the per-point path calls: the divide instruction
 // (or the compiler's helper) when the build says the target has one —
 // STIPPLE_HW_DIVIDE=1, CMake option STIPPLE_HW_DIVIDE — and
-// floor_div_soft otherwise. Both give identical results (tests/core/
+// floor_div_soft otherwise. Both give identical results (tests/portable/
 // divide_test.cpp), so images do not depend on the option.
 #pragma once
 

@@ -23,6 +23,14 @@
 
 namespace stipple {
 
+// Distinct index types (draco's lesson): a node id cannot be passed where a
+// class id belongs, nor either where a count does. Node ids are breadth-first
+// indices into a .spg tree; class ids index a sigma class table.
+enum class NodeId : uint32_t {};
+enum class ClassId : uint16_t {};
+constexpr uint32_t index_of(NodeId id) { return static_cast<uint32_t>(id); }
+constexpr uint32_t index_of(ClassId id) { return static_cast<uint32_t>(id); }
+
 enum class Field : uint8_t {
   kPosX, kPosY, kPosZ,
   kFpTheta, kFpPhi, kFpPsi, kSigmaP,

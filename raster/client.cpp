@@ -1,95 +1,68 @@
-// stipple raster — the handheld client. See client.h; formats and measured
-// errors are in docs/fixed_point.md.
+// stipple raster — the handheld client: cache + renderer. See client.h.
 #include "raster/client.h"
-
-#include <initializer_list>
 
 namespace stipple {
 namespace {
 
 constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
-constexpr int32_t kMaxFocalQ4 = 1 << 20;
-constexpr int32_t kMaxDepthMu = 1 << 30;
-constexpr int32_t kMaxSigmaN = 4 << 12;       // theta table covers theta <= 4 rad
 
-struct Layout {
-  size_t raster, decoder, records, ids, hash, g_position, g_normal, g_color, shading, reciprocal, total;
-  size_t decoder_bytes, record_stride;
-  uint32_t hash_entries;
-};
-
-bool valid(const ClientConfig& c) {
-  return point_raster_bytes(c.raster) > 0 && c.node_capacity >= 1 && c.node_capacity <= (1u << 24) &&
-         c.samples >= 1 && c.samples <= 8192 && c.point_size >= 1 && c.point_size <= 3 && c.quality_q8 >= 1 &&
-         c.max_angle_bits >= 1 && c.max_angle_bits <= kMaxAngleBits && c.max_classes[0] >= 1 &&
-         c.lighting.shininess >= 1 && c.lighting.shininess <= 64 &&
-         (c.lighting.light_q14[0] | c.lighting.light_q14[1] | c.lighting.light_q14[2]) != 0;
+ClientStatus status_of(CacheStatus s) {
+  switch (s) {
+    case CacheStatus::kOk: return ClientStatus::kOk;
+    case CacheStatus::kBadLimits: return ClientStatus::kBadConfig;
+    case CacheStatus::kStorageTooSmall: return ClientStatus::kArenaTooSmall;
+    case CacheStatus::kNoStartup: return ClientStatus::kNoStartup;
+    case CacheStatus::kBadStartup: return ClientStatus::kBadStartup;
+    case CacheStatus::kStartupTooLarge: return ClientStatus::kStartupTooLarge;
+    case CacheStatus::kBadRecordSize: return ClientStatus::kBadRecordSize;
+    case CacheStatus::kBadRecord: return ClientStatus::kBadRecord;
+    case CacheStatus::kFull: return ClientStatus::kCacheFull;
+    case CacheStatus::kUnknownNode: return ClientStatus::kUnknownNode;
+  }
+  return ClientStatus::kBadConfig;
 }
 
-// The largest startup the configuration accepts: every angle field at
-// max_angle_bits, every class table full.
-SpgHeader worst_header(const ClientConfig& c) {
-  SpgHeader h;
-  h.flags = static_cast<uint16_t>((c.normals ? kAttrNormals : 0) | (c.color ? kAttrColor : 0));
-  h.layout = paper_layout(c.normals, c.color, 2);
-  for (Field theta : {Field::kFpTheta, Field::kFnTheta, Field::kFcTheta})
-    for (int k = 0; k < 3; ++k)
-      if (h.layout.bits[static_cast<int>(theta) + k] > 0) h.layout.bits[static_cast<int>(theta) + k] = c.max_angle_bits;
-  h.class_count[0] = c.max_classes[0];
-  h.class_count[1] = c.normals ? c.max_classes[1] : 0;
-  h.class_count[2] = c.color ? c.max_classes[2] : 0;
-  return h;
-}
-
-Layout layout_of(const ClientConfig& c) {
-  Layout l{};
-  l.decoder_bytes = node_decoder_bytes(worst_header(c));
-  l.record_stride = c.cache_decoded ? sizeof(FixedNode)
-                                    : static_cast<size_t>(paper_layout(c.normals, c.color, 2).record_bytes());
-  l.hash_entries = 1;
-  while (l.hash_entries < c.node_capacity + c.node_capacity / 2) l.hash_entries <<= 1;
-  size_t at = 0;
-  auto take = [&](size_t bytes) {
-    const size_t here = at;
-    at += align8(bytes);
-    return here;
-  };
-  l.raster = take(point_raster_bytes(c.raster));
-  l.decoder = take(l.decoder_bytes);
-  l.records = take(l.record_stride * c.node_capacity);
-  l.ids = take(4 * size_t{c.node_capacity});
-  l.hash = take(4 * size_t{l.hash_entries});
-  l.g_position = take(sizeof(Gaussian3Q12) * c.samples);
-  l.g_normal = take(c.normals ? sizeof(Gaussian2Q12) * c.samples : 0);
-  l.g_color = take(c.color ? sizeof(Gaussian3Q12) * c.samples : 0);
-  l.shading = take(sizeof(ShadingTables));
-  l.reciprocal = take(sizeof(uint16_t) << kReciprocalBits);
-  l.total = at;
-  return l;
-}
-
-inline uint32_t hash_of(uint32_t id) { return id * 2654435761u; }
-
-inline int32_t dot_q14(const int16_t a[3], const int16_t b[3]) {
-  return static_cast<int32_t>((int64_t{a[0]} * b[0] + int64_t{a[1]} * b[1] + int64_t{a[2]} * b[2]) >> 14);
-}
-
-
-inline uint32_t clamp255(int32_t v) { return v < 0 ? 0u : v > 255 ? 255u : static_cast<uint32_t>(v); }
-
-// Colour after shading: channel * intensity (Q8) + specular, saturated.
-inline uint32_t shade(uint32_t r, uint32_t g, uint32_t b, uint32_t intensity, uint32_t specular) {
-  const uint32_t rr = ((r * intensity) >> 8) + specular, gg = ((g * intensity) >> 8) + specular,
-                 bb = ((b * intensity) >> 8) + specular;
-  return ((rr > 255 ? 255 : rr) << 16) | ((gg > 255 ? 255 : gg) << 8) | (bb > 255 ? 255 : bb);
+ClientStatus status_of(RenderStatus s) {
+  switch (s) {
+    case RenderStatus::kOk: return ClientStatus::kOk;
+    case RenderStatus::kBadConfig: return ClientStatus::kBadConfig;
+    case RenderStatus::kStorageTooSmall: return ClientStatus::kArenaTooSmall;
+    case RenderStatus::kNoStartup: return ClientStatus::kNoStartup;
+    case RenderStatus::kBadCamera: return ClientStatus::kBadCamera;
+  }
+  return ClientStatus::kBadConfig;
 }
 
 }  // namespace
 
-void build_reciprocal_table(uint16_t out[1 << kReciprocalBits]) {
-  // 2^26 / (1024 + i + 1/2) = 2^28 / (4 (1024 + i) + 2), rounded half up.
-  for (uint32_t i = 0; i < (1u << kReciprocalBits); ++i)
-    out[i] = static_cast<uint16_t>(((uint64_t{1} << 29) / (4 * (1024 + i) + 2) + 1) / 2);
+NodeCacheLimits cache_limits(const ClientConfig& c) {
+  NodeCacheLimits l;
+  l.node_capacity = c.node_capacity;
+  l.decoded = c.cache_decoded;
+  l.normals = c.normals;
+  l.color = c.color;
+  for (int k = 0; k < 3; ++k) l.max_classes[k] = c.max_classes[k];
+  l.max_angle_bits = c.max_angle_bits;
+  return l;
+}
+
+RendererConfig renderer_config(const ClientConfig& c) {
+  RendererConfig r;
+  r.raster = c.raster;
+  r.normals = c.normals;
+  r.color = c.color;
+  r.samples = c.samples;
+  r.source = c.source;
+  r.point_size = c.point_size;
+  r.quality_q8 = c.quality_q8;
+  r.projection = c.projection;
+  r.shading = c.shading;
+  r.sample_color = c.sample_color;
+  r.grey = c.grey;
+  r.lighting = c.lighting;
+  r.grey_rgb = c.grey_rgb;
+  r.clear_rgb = c.clear_rgb;
+  return r;
 }
 
 const char* client_status_text(ClientStatus s) {
@@ -109,331 +82,31 @@ const char* client_status_text(ClientStatus s) {
   return "unknown status";
 }
 
-size_t client_arena_bytes(const ClientConfig& config) { return valid(config) ? layout_of(config).total : 0; }
+size_t client_arena_bytes(const ClientConfig& config) {
+  const size_t cache = node_cache_bytes(cache_limits(config)), renderer = point_renderer_bytes(renderer_config(config));
+  return cache == 0 || renderer == 0 ? 0 : align8(cache) + renderer;
+}
 
 ClientStatus Client::init(const ClientConfig& config, void* arena, size_t bytes) {
-  if (!valid(config)) return ClientStatus::kBadConfig;
-  const Layout l = layout_of(config);
-  if (bytes < l.total) return ClientStatus::kArenaTooSmall;
+  const size_t cache = node_cache_bytes(cache_limits(config)), renderer = point_renderer_bytes(renderer_config(config));
+  if (cache == 0 || renderer == 0) return ClientStatus::kBadConfig;
+  if (bytes < align8(cache) + renderer) return ClientStatus::kArenaTooSmall;
   uint8_t* base = static_cast<uint8_t*>(arena);
-  if (raster_.init(config.raster, base + l.raster, l.decoder - l.raster) != RasterStatus::kOk)
-    return ClientStatus::kBadConfig;
-  config_ = config;
-  decoder_storage_ = base + l.decoder;
-  decoder_bytes_ = l.decoder_bytes;
-  record_stride_ = l.record_stride;
-  records_ = base + l.records;
-  ids_ = reinterpret_cast<uint32_t*>(base + l.ids);
-  hash_ = reinterpret_cast<uint32_t*>(base + l.hash);
-  hash_mask_ = l.hash_entries - 1;
-  g_position_ = reinterpret_cast<Gaussian3Q12*>(base + l.g_position);
-  g_normal_ = config.normals ? reinterpret_cast<Gaussian2Q12*>(base + l.g_normal) : nullptr;
-  g_color_ = config.color ? reinterpret_cast<Gaussian3Q12*>(base + l.g_color) : nullptr;
-  shading_ = reinterpret_cast<ShadingTables*>(base + l.shading);
-  reciprocal_ = reinterpret_cast<uint16_t*>(base + l.reciprocal);
-
-  build_gaussian3_table(config.source, g_position_, config.samples);
-  if (g_normal_) build_gaussian2_table(config.source, g_normal_, config.samples);
-  if (g_color_) build_gaussian3_table(config.source, g_color_, config.samples, kColorSobolDim);
-  if (!build_shading_tables(config.lighting, shading_)) return ClientStatus::kBadConfig;
-  build_reciprocal_table(reciprocal_);
-  ppn_ = &ppn_table(config.source, config.point_size);
-  forget_nodes();
-  return ClientStatus::kOk;
+  const ClientStatus s = status_of(cache_.init(cache_limits(config), base, cache));
+  if (s != ClientStatus::kOk) return s;
+  return status_of(renderer_.init(renderer_config(config), base + align8(cache), renderer));
 }
 
-void Client::forget_nodes() {
-  ready_ = false;
-  count_ = 0;
-  for (uint32_t i = 0; i <= hash_mask_; ++i) hash_[i] = 0;
+ClientStatus Client::load_startup(const uint8_t* data, size_t size) { return status_of(cache_.load_startup(data, size)); }
+
+ClientStatus Client::put_node(NodeId id, const uint8_t* record, size_t size) {
+  return status_of(cache_.put(id, record, size));
 }
 
-ClientStatus Client::load_startup(const uint8_t* data, size_t size) {
-  if (records_ == nullptr) return ClientStatus::kBadConfig;
-  forget_nodes();
-  SpgView view;
-  size_t used = 0;
-  startup_error_ = spg_parse_startup(data, size, &view, &used);
-  if (!startup_error_.ok()) return ClientStatus::kBadStartup;
-  const SpgHeader& h = view.header;
-  if ((h.has_normals() && !config_.normals) || (h.has_color() && !config_.color)) return ClientStatus::kStartupTooLarge;
-  for (int c = 0; c < 3; ++c)
-    if (h.class_count[c] > config_.max_classes[c]) return ClientStatus::kStartupTooLarge;
-  if ((!config_.cache_decoded && static_cast<size_t>(h.layout.record_bytes()) > record_stride_) ||
-      node_decoder_bytes(h) > decoder_bytes_)
-    return ClientStatus::kStartupTooLarge;
-  for (Field theta : {Field::kFpTheta, Field::kFnTheta, Field::kFcTheta})
-    for (int k = 0; k < 3; ++k)
-      if (h.layout.bits[static_cast<int>(theta) + k] > config_.max_angle_bits) return ClientStatus::kStartupTooLarge;
-  if (decoder_.init(view, decoder_storage_, decoder_bytes_) != DecodeStatus::kOk) return ClientStatus::kStartupTooLarge;
-  header_ = h;
-  record_bytes_ = static_cast<size_t>(h.layout.record_bytes());
-  ready_ = true;
-  return ClientStatus::kOk;
-}
+ClientStatus Client::drop_node(NodeId id) { return status_of(cache_.drop(id)); }
 
-uint32_t Client::home_slot(uint32_t id) const {
-  const int shift = 32 - __builtin_popcount(hash_mask_);  // the table has hash_mask_ + 1 = 2^k entries
-  return shift >= 32 ? 0 : hash_of(id) >> shift;
-}
-
-uint32_t* Client::find(uint32_t id) const {
-  for (uint32_t i = home_slot(id);; i = (i + 1) & hash_mask_) {
-    if (hash_[i] == 0 || ids_[hash_[i] - 1] == id) return &hash_[i];
-  }
-}
-
-bool Client::has_node(uint32_t id) const { return ready_ && *find(id) != 0; }
-
-void Client::erase_hash(uint32_t* entry) {
-  // Backward-shift deletion keeps every probe sequence unbroken.
-  uint32_t hole = static_cast<uint32_t>(entry - hash_);
-  for (uint32_t j = (hole + 1) & hash_mask_; hash_[j] != 0; j = (j + 1) & hash_mask_) {
-    const uint32_t home = home_slot(ids_[hash_[j] - 1]);
-    // Move j into the hole unless its home lies cyclically in (hole, j].
-    const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
-    if (!stays) {
-      hash_[hole] = hash_[j];
-      hole = j;
-    }
-  }
-  hash_[hole] = 0;
-}
-
-ClientStatus Client::put_node(uint32_t id, const uint8_t* record, size_t size) {
-  if (!ready_) return ClientStatus::kNoStartup;
-  if (size != record_bytes_) return ClientStatus::kBadRecordSize;
-  const int pad_bits = static_cast<int>(record_bytes_ * 8) - header_.layout.total_bits();
-  if (pad_bits > 0 && (record[record_bytes_ - 1] >> (8 - pad_bits)) != 0) return ClientStatus::kBadRecord;
-  FixedNode decoded;
-  if (decoder_.decode(record, &decoded) != DecodeStatus::kOk) return ClientStatus::kBadRecord;
-  uint32_t* entry = find(id);
-  uint32_t slot;
-  if (*entry != 0) {
-    slot = *entry - 1;
-  } else {
-    if (count_ >= config_.node_capacity) return ClientStatus::kCacheFull;
-    slot = count_++;
-    ids_[slot] = id;
-    *entry = slot + 1;
-  }
-  uint8_t* dst = records_ + slot * record_stride_;
-  if (config_.cache_decoded) *reinterpret_cast<FixedNode*>(dst) = decoded;
-  else
-    for (size_t i = 0; i < record_bytes_; ++i) dst[i] = record[i];
-  return ClientStatus::kOk;
-}
-
-ClientStatus Client::drop_node(uint32_t id) {
-  if (!ready_) return ClientStatus::kNoStartup;
-  uint32_t* entry = find(id);
-  if (*entry == 0) return ClientStatus::kUnknownNode;
-  const uint32_t slot = *entry - 1, last = count_ - 1;
-  erase_hash(entry);
-  if (slot != last) {  // keep the cache dense: the last node moves into the hole
-    const uint8_t* src = records_ + last * record_stride_;
-    uint8_t* dst = records_ + slot * record_stride_;
-    for (size_t i = 0; i < record_stride_; ++i) dst[i] = src[i];
-    ids_[slot] = ids_[last];
-    *find(ids_[slot]) = slot + 1;
-  }
-  --count_;
-  return ClientStatus::kOk;
-}
-
-struct Client::PointSetup {
-  NodeProjection proj;
-  uint32_t count;
-  int32_t near;
-  int shift, size;
-  uint32_t base_r, base_g, base_b, node_rgb, node_intensity, node_specular;
-  int32_t sn0, sn1, l0, l1, l2, h0, h1, h2;
-  int64_t ca[3][3];  // colour axes, 8-bit levels per sigma in Q8
-};
-
-struct Client::FrameSetup {
-  Camera camera;
-  int32_t width_q4, height_q4;
-  int depth_shift;
-  int16_t light[3], half[3];  // model space, Q14
-  bool model_color;
-};
-
-template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
-void Client::draw_node(const FrameSetup& f, const FixedNode& node, FrameStats& stats) {
-  PointSetup setup;  // filled in place: draw_points reads it by reference
-  NodeProjection& proj = setup.proj;
-  if (!proj.setup(f.camera, node)) {
-    ++stats.nodes_culled;
-    return;
-  }
-  // The gamma-extent (3.5 sigma) on screen, an L1 bound: cull nodes wholly
-  // off screen. Screen covariance M M^T for the points-per-node index.
-  int64_t ex = 0, ey = 0, a = 0, b = 0, cc = 0;
-  for (int k = 0; k < 3; ++k) {
-    const int64_t vx = proj.mx[k] >> 4, vy = proj.my[k] >> 4;  // 1/16 px per sigma
-    ex += abs64(vx);
-    ey += abs64(vy);
-    a += vx * vx;
-    b += vx * vy;
-    cc += vy * vy;
-  }
-  ex = (ex * 7) >> 1;
-  ey = (ey * 7) >> 1;
-  if (proj.x0_q4 + ex < 0 || proj.x0_q4 - ex >= f.width_q4 || proj.y0_q4 + ey < 0 || proj.y0_q4 - ey >= f.height_q4) {
-    ++stats.nodes_culled;
-    return;
-  }
-  // a, c: (1/16 px)^2 = 1/256 px^2, below 3 * 2^48.
-  setup.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
-  setup.near = f.camera.near_mu;
-  setup.shift = f.depth_shift;
-  setup.size = config_.point_size;
-
-  // Base colour and per-node shading terms.
-  const uint32_t base = f.model_color ? (uint32_t{node.color[0]} << 16) | (uint32_t{node.color[1]} << 8) | node.color[2]
-                                      : config_.grey_rgb & 0xFFFFFFu;
-  setup.base_r = base >> 16;
-  setup.base_g = (base >> 8) & 0xFF;
-  setup.base_b = base & 0xFF;
-  const int32_t sn0 = node.sigma_n[0] < kMaxSigmaN ? node.sigma_n[0] : kMaxSigmaN;
-  const int32_t sn1 = node.sigma_n[1] < kMaxSigmaN ? node.sigma_n[1] : kMaxSigmaN;
-  setup.sn0 = sn0;
-  setup.sn1 = sn1;
-  setup.l0 = dot_q14(node.normal_frame[2], f.light);
-  setup.l1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.light)} * sn0) >> 12);
-  setup.l2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.light)} * sn1) >> 12);
-  setup.h0 = dot_q14(node.normal_frame[2], f.half);
-  setup.h1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.half)} * sn0) >> 12);
-  setup.h2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.half)} * sn1) >> 12);
-  setup.node_rgb = base;
-  setup.node_intensity = 256;
-  setup.node_specular = 0;
-  if (config_.shading != ShadingMode::kNone && header_.has_normals()) {
-    setup.node_intensity = shading_->diffuse[intensity_index(setup.l0)];
-    if (kSpecular) setup.node_specular = shading_->specular[intensity_index(setup.h0)];
-    setup.node_rgb = shade(setup.base_r, setup.base_g, setup.base_b, setup.node_intensity, setup.node_specular);
-  }
-  // Colour axes in 8-bit levels per sigma, Q8 (saturated: sigma_c comes from the file).
-  if (kColorPoints)
-    for (int k = 0; k < 3; ++k)
-      for (int ch = 0; ch < 3; ++ch) {
-        const int64_t v = (int64_t{node.color_axis[k][ch]} * 255) >> 4;
-        setup.ca[k][ch] = v > (1 << 24) ? (1 << 24) : v < -(1 << 24) ? -(1 << 24) : v;
-      }
-  stats.points += draw_points<P, kShadePoints, kColorPoints, kSpecular>(setup, stats);
-  ++stats.nodes_drawn;
-}
-
-// The per-point path: its own function, never inlined, so that the ARMv5
-// build can be checked symbol by symbol for run-time helper calls
-// (tests/handheld/per_point_helpers.cmake).
-template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
-uint32_t Client::draw_points(const PointSetup& s, FrameStats& stats) {
-  const NodeProjection& proj = s.proj;
-  const uint32_t count = s.count;
-  const uint32_t base_r = s.base_r, base_g = s.base_g, base_b = s.base_b;
-  const uint32_t node_rgb = s.node_rgb, node_intensity = s.node_intensity, node_specular = s.node_specular;
-  const int32_t sn0 = s.sn0, sn1 = s.sn1, l0 = s.l0, l1 = s.l1, l2 = s.l2, h0 = s.h0, h1 = s.h1, h2 = s.h2;
-  const int64_t(&ca)[3][3] = s.ca;
-  const int32_t near = s.near;
-  const int shift = s.shift;
-  const int size = s.size;
-  uint32_t drawn = 0;
-  for (uint32_t j = 0; j < count; ++j) {
-    ScreenSample p;
-    if (!proj.template point<P>(g_position_[j], near, reciprocal_, &p)) continue;
-    const int32_t x = p.x_q4, y = p.y_q4;
-    const int64_t z = p.z;
-    const uint64_t dz = static_cast<uint64_t>(z - near) << shift;
-    const uint32_t depth = dz > 0xFFFFFFFEu ? 0xFFFFFFFEu : static_cast<uint32_t>(dz);
-    uint32_t rgb = node_rgb;
-    if constexpr (kColorPoints || kShadePoints) {
-      uint32_t r = base_r, gg = base_g, bb = base_b;
-      if constexpr (kColorPoints) {
-        const Gaussian3Q12 q = g_color_[j];
-        r = clamp255(static_cast<int32_t>(base_r) + static_cast<int32_t>((ca[0][0] * q.v[0] + ca[1][0] * q.v[1] + ca[2][0] * q.v[2]) >> 20));
-        gg = clamp255(static_cast<int32_t>(base_g) + static_cast<int32_t>((ca[0][1] * q.v[0] + ca[1][1] * q.v[1] + ca[2][1] * q.v[2]) >> 20));
-        bb = clamp255(static_cast<int32_t>(base_b) + static_cast<int32_t>((ca[0][2] * q.v[0] + ca[1][2] * q.v[1] + ca[2][2] * q.v[2]) >> 20));
-      }
-      uint32_t intensity = node_intensity, specular = node_specular;
-      if constexpr (kShadePoints) {
-        const Gaussian2Q12 n = g_normal_[j];
-        const int64_t al = (int64_t{sn0} * n.v[0]) >> 12, be = (int64_t{sn1} * n.v[1]) >> 12;  // Q12 radians
-        const uint64_t t2 = static_cast<uint64_t>(al * al + be * be) >> kCosSincShift;          // theta^2 cell
-        const CosSincQ14 cs = shading_->cos_sinc[t2 < kCosSincEntries ? t2 : kCosSincEntries - 1];
-        const int32_t l = static_cast<int32_t>((cs.cos * int64_t{l0} + cs.sinc * ((n.v[0] * int64_t{l1} + n.v[1] * int64_t{l2}) >> 12)) >> 14);
-        intensity = shading_->diffuse[intensity_index(l)];
-        if constexpr (kSpecular) {
-          const int32_t h = static_cast<int32_t>((cs.cos * int64_t{h0} + cs.sinc * ((n.v[0] * int64_t{h1} + n.v[1] * int64_t{h2}) >> 12)) >> 14);
-          specular = shading_->specular[intensity_index(h)];
-        }
-      }
-      rgb = (kShadePoints || config_.shading != ShadingMode::kNone) ? shade(r, gg, bb, intensity, specular)
-                                                                    : (r << 16) | (gg << 8) | bb;
-    }
-    if (raster_.add(ScreenPoint{x, y, depth, rgb}, size)) ++drawn;
-    else ++stats.points_dropped;
-  }
-  return drawn;
-}
-
-ClientStatus Client::render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats_out) {
-  if (!ready_) return ClientStatus::kNoStartup;
-  if (camera.focal_q4 < 1 || camera.focal_q4 > kMaxFocalQ4 || camera.near_mu < kCameraMinDistance ||
-      camera.far_mu <= camera.near_mu || camera.far_mu > kMaxDepthMu)
-    return ClientStatus::kBadCamera;
-  for (int k = 0; k < 3; ++k)
-    if (camera.eye[k] < -(1 << 29) || camera.eye[k] > (1 << 29)) return ClientStatus::kBadCamera;
-  FrameSetup f;
-  f.camera = camera;
-  f.width_q4 = 16 * config_.raster.width;
-  f.height_q4 = 16 * config_.raster.height;
-  // Depth word: (z - near) << shift spans [near, far] in 32 bits.
-  const uint32_t range = static_cast<uint32_t>(camera.far_mu - camera.near_mu);
-  f.depth_shift = __builtin_clz(range);
-  // Light and half vector into model space: R^T v.
-  for (int a = 0; a < 3; ++a) {
-    int64_t l = 0, h = 0;
-    for (int k = 0; k < 3; ++k) {
-      l += int64_t{camera.rotation[k][a]} * shading_->light_q14[k];
-      h += int64_t{camera.rotation[k][a]} * shading_->half_q14[k];
-    }
-    f.light[a] = static_cast<int16_t>(l >> 14);
-    f.half[a] = static_cast<int16_t>(h >> 14);
-  }
-  f.model_color = header_.has_color() && !config_.grey;
-
-  const bool normals = header_.has_normals() && config_.shading != ShadingMode::kNone;
-  const bool shade_points = normals && config_.shading == ShadingMode::kPerPoint;
-  const bool color_points = f.model_color && config_.sample_color;
-  const bool specular = normals && config_.lighting.specular_q8 > 0;
-  using DrawFn = void (Client::*)(const FrameSetup&, const FixedNode&, FrameStats&);
-#define STIPPLE_PICK(P)                                                                                        \
-  (shade_points ? (color_points ? (specular ? &Client::draw_node<P, true, true, true> : &Client::draw_node<P, true, true, false>)      \
-                                : (specular ? &Client::draw_node<P, true, false, true> : &Client::draw_node<P, true, false, false>))  \
-                : (color_points ? (specular ? &Client::draw_node<P, false, true, true> : &Client::draw_node<P, false, true, false>)  \
-                                : (specular ? &Client::draw_node<P, false, false, true> : &Client::draw_node<P, false, false, false>)))
-  DrawFn draw = config_.projection == Projection::kAffine       ? STIPPLE_PICK(Projection::kAffine)
-                : config_.projection == Projection::kReciprocal ? STIPPLE_PICK(Projection::kReciprocal)
-                                                                : STIPPLE_PICK(Projection::kExact);
-#undef STIPPLE_PICK
-
-  FrameStats stats;
-  stats.nodes = count_;
-  raster_.begin_frame();
-  if (config_.cache_decoded) {
-    for (uint32_t s = 0; s < count_; ++s) (this->*draw)(f, *reinterpret_cast<const FixedNode*>(records_ + s * record_stride_), stats);
-  } else {
-    FixedNode node;
-    for (uint32_t s = 0; s < count_; ++s) {
-      if (decoder_.decode(records_ + s * record_stride_, &node) != DecodeStatus::kOk) continue;  // checked at put_node
-      (this->*draw)(f, node, stats);
-    }
-  }
-  raster_.draw(config_.clear_rgb, frame, stride);
-  if (stats_out) *stats_out = stats;
-  return ClientStatus::kOk;
+ClientStatus Client::render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats) {
+  return status_of(renderer_.render(cache_, camera, frame, stride, stats));
 }
 
 }  // namespace stipple

@@ -1,46 +1,29 @@
-// stipple raster — the handheld client: node cache, decoder, quasi-random
-// point generation, projection, shading and the tile rasterizer over one
+// stipple raster — the handheld client: a node cache (core/node_cache.h) and
+// the software point renderer (raster/point_renderer.h) over one
 // caller-provided arena.
 //
 //   size_t n = client_arena_bytes(config);     // 0: invalid configuration
 //   client.init(config, arena, n);             // carves every table and buffer
 //   client.load_startup(msg, size);            // header + class tables (.spg §1-§2)
-//   client.put_node(id, record, size);         // decode-checked, cached packed
-//   client.drop_node(id);
+//   client.put_node(NodeId{id}, record, size); // decode-checked, cached
+//   client.drop_node(NodeId{id});
 //   client.render(camera, frame, stride);      // one frame, integer only
 //
 // After init nothing is allocated, nothing is thrown, and the per-frame path
-// (render) uses integer arithmetic only. A record is validated when it is put
-// (class indices against the startup tables, padding bits zero) and cached
-// in its packed form — 9 to 17 bytes a node — then decoded each frame; or,
-// with cache_decoded, decoded once and cached as a FixedNode (116 bytes),
-// which trades memory for the per-frame decode.
-//
-// Per node and frame: the mean and the sigma-scaled axes go to camera space;
-// the projection is linearized at the mean (M, 2 x 3, 1/16 px per sigma),
-// which gives the screen covariance M M^T, hence the points-per-node index;
-// then sample j = 0 .. n-1 of the Gaussian tables becomes one point:
-//   kAffine      x = x0 + M g                 (no division per point)
-//   kReciprocal  X/Z per point, 1/Z from a 1024-entry table
-//   kExact       X/Z per point by integer division
-// docs/fixed_point.md gives every format and the measured error of each mode.
+// (render) uses integer arithmetic only. The cache's and the renderer's
+// contracts are in their headers; this class only composes them, so a
+// client without the software renderer (the GL client) uses NodeCache alone.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 
 #include "core/camera.h"
-#include "core/gaussian_table.h"
-#include "core/node_decoder.h"
+#include "core/node_cache.h"
 #include "core/spg_format.h"
-#include "raster/point_raster.h"
-#include "raster/points_per_node.h"
-#include "raster/projection.h"
-#include "raster/shading.h"
+#include "raster/point_renderer.h"
 
 namespace stipple {
-
-enum class ShadingMode : uint8_t { kPerPoint, kPerNode, kNone };
 
 struct ClientConfig {
   RasterConfig raster;                     // screen, pixel format, tiles, points per frame
@@ -63,6 +46,10 @@ struct ClientConfig {
   uint32_t clear_rgb = 0x000000;
 };
 
+// The two halves of a client configuration.
+NodeCacheLimits cache_limits(const ClientConfig& config);
+RendererConfig renderer_config(const ClientConfig& config);
+
 enum class ClientStatus : uint8_t {
   kOk = 0,
   kBadConfig,         // init: a value out of range
@@ -79,14 +66,6 @@ enum class ClientStatus : uint8_t {
 
 const char* client_status_text(ClientStatus s);
 
-struct FrameStats {
-  uint32_t nodes = 0;         // nodes held
-  uint32_t nodes_drawn = 0;   // nodes that produced points
-  uint32_t nodes_culled = 0;  // behind the near plane or off screen
-  uint32_t points = 0;        // points generated and binned
-  uint32_t points_dropped = 0;  // refused by a full frame budget
-};
-
 // Arena bytes for a configuration, or 0 when it is invalid.
 size_t client_arena_bytes(const ClientConfig& config);
 
@@ -95,55 +74,28 @@ class Client {
   [[nodiscard]] ClientStatus init(const ClientConfig& config, void* arena, size_t bytes);
 
   // Validates and adopts a startup message (the first bytes of a .spg file,
-  // spg_parse_startup); forgets every cached node. The message is copied
-  // into the arena as needed: the caller's buffer may go away.
+  // spg_startup_bytes long); forgets every cached node. The message is
+  // copied into the arena as needed: the caller's buffer may go away.
   [[nodiscard]] ClientStatus load_startup(const uint8_t* data, size_t size);
-  SpgResult startup_error() const { return startup_error_; }
+  SpgResult startup_error() const { return cache_.startup_error(); }
 
   // Adds or replaces node `id`.
-  [[nodiscard]] ClientStatus put_node(uint32_t id, const uint8_t* record, size_t size);
-  [[nodiscard]] ClientStatus drop_node(uint32_t id);
-  bool has_node(uint32_t id) const;
-  uint32_t node_count() const { return count_; }
-  size_t record_bytes() const { return record_bytes_; }
+  [[nodiscard]] ClientStatus put_node(NodeId id, const uint8_t* record, size_t size);
+  [[nodiscard]] ClientStatus drop_node(NodeId id);
+  bool has_node(NodeId id) const { return cache_.has(id); }
+  uint32_t node_count() const { return cache_.count(); }
+  size_t record_bytes() const { return cache_.record_bytes(); }
 
   // Draws every cached node into `frame` (height rows of `stride` bytes in the
   // configured pixel format).
   [[nodiscard]] ClientStatus render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats = nullptr);
 
-  const NodeDecoder& decoder() const { return decoder_; }
+  const NodeDecoder& decoder() const { return cache_.decoder(); }
+  const NodeCache& cache() const { return cache_; }
 
  private:
-  struct FrameSetup;
-  struct PointSetup;
-  template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
-  void draw_node(const FrameSetup& f, const FixedNode& node, FrameStats& stats);
-  template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
-  [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
-  uint32_t* find(uint32_t id) const;
-  uint32_t home_slot(uint32_t id) const;  // where id's probe sequence starts
-  void erase_hash(uint32_t* entry);
-  void forget_nodes();
-
-  ClientConfig config_{};
-  PointRaster raster_;
-  NodeDecoder decoder_;
-  bool ready_ = false;
-  SpgResult startup_error_{};
-  SpgHeader header_{};
-  size_t record_bytes_ = 0, record_stride_ = 0, decoder_bytes_ = 0;
-  void* decoder_storage_ = nullptr;
-  uint8_t* records_ = nullptr;  // node_capacity x record_stride_
-  uint32_t* ids_ = nullptr;     // per slot
-  uint32_t* hash_ = nullptr;    // slot + 1, 0 = empty; linear probing
-  uint32_t hash_mask_ = 0;
-  uint32_t count_ = 0;
-  Gaussian3Q12* g_position_ = nullptr;
-  Gaussian2Q12* g_normal_ = nullptr;
-  Gaussian3Q12* g_color_ = nullptr;
-  ShadingTables* shading_ = nullptr;
-  uint16_t* reciprocal_ = nullptr;  // 1024 entries
-  const PpnTable* ppn_ = nullptr;
+  NodeCache cache_;
+  PointRenderer renderer_;
 };
 
 }  // namespace stipple

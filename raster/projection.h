@@ -16,7 +16,7 @@
 // near plane >= 2^12 MU, so u < 2^35, |X/Z| < 2^19 in Q16, and every product
 // below stays under 2^63; setup refuses nodes whose |M| reaches 2^28 (a node
 // millions of pixels wide, which the cut must refine). Measured errors of
-// each mode are in docs/fixed_point.md (tests/core/projection_test.cpp).
+// each mode are in docs/fixed_point.md (tests/portable/projection_test.cpp).
 #pragma once
 
 #include <cstdint>

@@ -145,9 +145,9 @@ int main(int argc, char** argv) {
       // Drop what left the cut (every node, for simplicity, every 10th frame), add what entered.
       if (frame % 10 == 0)
         for (uint32_t i = 0; i < view.header.node_count; ++i)
-          if (client.has_node(i)) client_ok &= client.drop_node(i) == stipple::ClientStatus::kOk;
+          if (client.has_node(stipple::NodeId{i})) client_ok &= client.drop_node(stipple::NodeId{i}) == stipple::ClientStatus::kOk;
       for (uint32_t i = 0; i < n && i < client_config.node_capacity; ++i)
-        client_ok &= client.put_node(cut[i], view.records + static_cast<size_t>(cut[i]) * view.record_bytes,
+        client_ok &= client.put_node(stipple::NodeId{cut[i]}, view.records + static_cast<size_t>(cut[i]) * view.record_bytes,
                                      view.record_bytes) == stipple::ClientStatus::kOk;
       client_ok &= client.render(camera, frame_pixels.data(), 240 * 2, &stats) == stipple::ClientStatus::kOk;
       checksum += frame_pixels[1000 + frame] + stats.points;

@@ -1,5 +1,5 @@
 // The encoder's .spg files: every variant round-trips through the reference
-// decoder, the fixtures of tests/core/format_test.cpp are what the encoder
+// decoder, the fixtures of tests/portable/format_test.cpp are what the encoder
 // writes, and the reference decoder names the byte of a hostile header.
 #include <gtest/gtest.h>
 

@@ -1,7 +1,12 @@
 // The dependency direction tools -> platform -> raster -> core, and core's
 // rules: no OS, SDL, GL, libpng or Eigen header, no exceptions, no iostream.
+// The rooms of DESIGN.md: no tools/ library includes a program's folder; the
+// portable suite includes only core, raster and its own fixtures; the GPU
+// renderer (platform/gl/) never includes raster/; what the handheld builds
+// (tools/embedded/) uses no host library.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -42,6 +47,7 @@ bool has_word(const std::string& text, const std::string& word) {
 
 std::vector<fs::path> sources(const std::string& folder) {
   std::vector<fs::path> out;
+  if (!fs::exists(test::source_path(folder))) return out;  // a room not built yet
   for (const auto& e : fs::recursive_directory_iterator(test::source_path(folder)))
     if (e.path().extension() == ".h" || e.path().extension() == ".cpp") out.push_back(e.path());
   return out;
@@ -78,6 +84,55 @@ TEST(Layering, CoreAndRasterUseStandardHeadersOnly) {
       EXPECT_FALSE(has_word(text, "double")) << file << " uses floating point";
     }
   }
+}
+
+// tools/: libraries by concern, and program folders (a main each). A
+// library may not reach into a program.
+const std::vector<std::string> kProgramFolders = {"tools/cli/", "tools/handheld/", "tools/emulator/", "tools/gl/",
+                                                  "tools/bench/"};
+
+TEST(Layering, NoToolsLibraryIncludesAProgram) {
+  size_t checked = 0;
+  for (const auto& e : fs::directory_iterator(test::source_path("tools"))) {
+    if (!e.is_directory()) continue;
+    const std::string folder = "tools/" + e.path().filename().string() + "/";
+    if (std::find(kProgramFolders.begin(), kProgramFolders.end(), folder) != kProgramFolders.end()) continue;
+    for (const fs::path& file : sources(folder.substr(0, folder.size() - 1))) {
+      ++checked;
+      for (const std::string& inc : includes_of(file))
+        for (const std::string& program : kProgramFolders)
+          EXPECT_NE(inc.rfind(program, 0), 0u) << file << " includes " << inc << ": a library may not use a program's folder";
+    }
+  }
+  EXPECT_GT(checked, 10u);
+}
+
+TEST(Layering, PortableSuiteSeesOnlyCoreRasterAndFixtures) {
+  const std::vector<std::string> ok = {"core/", "raster/", "tests/portable/", "gtest/"};
+  const std::vector<fs::path> files = sources("tests/portable");
+  ASSERT_FALSE(files.empty());
+  for (const fs::path& file : files)
+    for (const std::string& inc : includes_of(file)) {
+      if (inc.find('/') == std::string::npos) continue;  // <vector>, <cstdint>: the standard library
+      const bool allowed = std::any_of(ok.begin(), ok.end(), [&](const std::string& p) { return inc.rfind(p, 0) == 0; });
+      EXPECT_TRUE(allowed) << file << " includes " << inc << ": the portable suite runs on every target";
+    }
+}
+
+TEST(Layering, GpuClientNeverIncludesRaster) {
+  for (const fs::path& file : sources("platform/gl"))
+    for (const std::string& inc : includes_of(file))
+      EXPECT_NE(inc.rfind("raster/", 0), 0u) << file << " includes " << inc << ": the GL client uses core's node cache";
+}
+
+TEST(Layering, EmbeddedDefaultUsesNoHostLibrary) {
+  const char* host[] = {"Eigen", "png.h", "platform/png_io.h", "tools/host/", "tools/encoder/", "tools/scan/",
+                        "tools/reference/", "SDL", "GL/", "EGL"};
+  const std::vector<fs::path> files = sources("tools/embedded");
+  ASSERT_FALSE(files.empty());
+  for (const fs::path& file : files)
+    for (const std::string& inc : includes_of(file))
+      for (const char* bad : host) EXPECT_NE(inc.rfind(bad, 0), 0u) << file << " includes " << inc << ": it builds for the handheld";
 }
 
 }  // namespace

@@ -12,7 +12,7 @@
 #include "tools/host/point_cloud.h"
 #include "tools/host/ply_io.h"
 #include "tools/host/spg_model.h"
-#include "tests/core/test_files.h"
+#include "tests/portable/test_files.h"
 
 namespace stipple::test {
 

@@ -44,7 +44,7 @@ void check_client(const uint8_t* data, size_t size) {
   if (f.client.load_startup(data, used) != stipple::ClientStatus::kOk) return;  // beyond the configuration
   const size_t rb = f.client.record_bytes();
   for (size_t at = used, id = 0; at + rb <= size && id < 256; at += rb, ++id)
-    (void)f.client.put_node(static_cast<uint32_t>(id * 2654435761u), data + at, rb);
+    (void)f.client.put_node(stipple::NodeId{static_cast<uint32_t>(id * 2654435761u)}, data + at, rb);
   stipple::OrbitView orbit;
   for (int a = 0; a < 3; ++a) orbit.target_mu[a] = f.client.decoder().extent_mu()[a] / 2;
   stipple::Camera camera;

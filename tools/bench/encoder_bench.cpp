@@ -268,7 +268,7 @@ void BM_ClientFrame(benchmark::State& state) {
       client.load_startup(spg.data(), spg_startup_bytes(view.header.class_count)) != ClientStatus::kOk)
     std::abort();
   for (uint32_t i = 0; i < n; ++i)
-    if (client.put_node(cut[i], view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes) !=
+    if (client.put_node(NodeId{cut[i]}, view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes) !=
         ClientStatus::kOk)
       std::abort();
   std::vector<uint8_t> frame(640 * 480 * 3);

@@ -12,7 +12,7 @@
 #include "core/node_decoder.h"
 #include "core/node_format.h"
 #include "core/spg_format.h"
-#include "tests/core/test_files.h"
+#include "tests/portable/test_files.h"
 
 namespace stipple {
 namespace {

@@ -12,7 +12,7 @@
 #include "core/camera.h"
 #include "core/node_decoder.h"
 #include "raster/projection.h"
-#include "tests/core/test_files.h"
+#include "tests/portable/test_files.h"
 
 namespace stipple {
 namespace {

@@ -11,7 +11,7 @@
 #include "core/cut.h"
 #include "raster/points_per_node.h"
 #include "raster/shading.h"
-#include "tests/core/test_files.h"
+#include "tests/portable/test_files.h"
 
 namespace stipple {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "core/spg_format.h"
 #include "core/spg_writer.h"
-#include "tests/core/test_files.h"
+#include "tests/portable/test_files.h"
 
 namespace stipple {
 namespace {

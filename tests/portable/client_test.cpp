@@ -7,13 +7,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <vector>
 
 #include "core/cut.h"
 #include "raster/client.h"
-#include "tests/core/test_files.h"
-#include "tools/embedded/embedded.h"
+#include "tests/portable/test_files.h"
 
 namespace stipple {
 namespace {
@@ -53,11 +53,8 @@ struct Harness {
 const uint8_t* record(uint32_t id) { return bunny().view.records + static_cast<size_t>(id) * bunny().view.record_bytes; }
 
 Camera camera_for(const Client& client, double yaw, double pitch, uint16_t w = 240, uint16_t h = 320) {
-  ViewSpec spec;
-  spec.yaw = yaw;
-  spec.pitch = pitch;
   Camera cam;
-  EXPECT_TRUE(orbit_camera(orbit_view(client.decoder().extent_mu(), spec), w, h, &cam));
+  EXPECT_TRUE(orbit_camera(test::orbit(client.decoder().extent_mu(), yaw, pitch), w, h, &cam));
   return cam;
 }
 
@@ -106,8 +103,8 @@ TEST(Client, RefusesWorkBeforeStartupAndBadStartups) {
   Harness h(small_config());
   Camera cam{};
   std::vector<uint8_t> frame(240 * 320 * 2);
-  EXPECT_EQ(h.client.put_node(0, record(0), bunny().view.record_bytes), ClientStatus::kNoStartup);
-  EXPECT_EQ(h.client.drop_node(0), ClientStatus::kNoStartup);
+  EXPECT_EQ(h.client.put_node(NodeId{0}, record(0), bunny().view.record_bytes), ClientStatus::kNoStartup);
+  EXPECT_EQ(h.client.drop_node(NodeId{0}), ClientStatus::kNoStartup);
   EXPECT_EQ(h.client.render(cam, frame.data(), 480), ClientStatus::kNoStartup);
 
   std::vector<uint8_t> startup(bunny().file.begin(), bunny().file.begin() + static_cast<long>(bunny().startup_bytes));
@@ -137,14 +134,14 @@ TEST(Client, RefusesWorkBeforeStartupAndBadStartups) {
     EXPECT_EQ(h.client.load_startup(copy.data(), copy.size()), ClientStatus::kOk);
   }
   EXPECT_EQ(h.client.record_bytes(), bunny().view.record_bytes);
-  EXPECT_EQ(h.client.put_node(0, record(0), bunny().view.record_bytes), ClientStatus::kOk);
+  EXPECT_EQ(h.client.put_node(NodeId{0}, record(0), bunny().view.record_bytes), ClientStatus::kOk);
 }
 
 TEST(Client, ValidatesRecordsAndCacheBounds) {
   Harness h(small_config(4));
   ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
   const size_t rb = bunny().view.record_bytes;
-  EXPECT_EQ(h.client.put_node(1, record(1), rb - 1), ClientStatus::kBadRecordSize);
+  EXPECT_EQ(h.client.put_node(NodeId{1}, record(1), rb - 1), ClientStatus::kBadRecordSize);
   // A sigma_p class index beyond the table: all ones in the record's class field.
   std::vector<uint8_t> bad(record(1), record(1) + rb);
   const RecordLayout& l = bunny().view.header.layout;
@@ -152,16 +149,16 @@ TEST(Client, ValidatesRecordsAndCacheBounds) {
   f.v[static_cast<int>(Field::kSigmaP)] = static_cast<uint16_t>((1u << l.width(Field::kSigmaP)) - 1);
   ASSERT_GE(f[Field::kSigmaP], bunny().view.header.class_count[0]);
   pack_record(l, f, bad.data());
-  EXPECT_EQ(h.client.put_node(1, bad.data(), rb), ClientStatus::kBadRecord);
-  EXPECT_FALSE(h.client.has_node(1));
-  for (uint32_t id = 0; id < 4; ++id) EXPECT_EQ(h.client.put_node(id * 1000, record(id), rb), ClientStatus::kOk);
-  EXPECT_EQ(h.client.put_node(7, record(7), rb), ClientStatus::kCacheFull);
-  EXPECT_EQ(h.client.put_node(2000, record(9), rb), ClientStatus::kOk);  // replacing is not adding
+  EXPECT_EQ(h.client.put_node(NodeId{1}, bad.data(), rb), ClientStatus::kBadRecord);
+  EXPECT_FALSE(h.client.has_node(NodeId{1}));
+  for (uint32_t id = 0; id < 4; ++id) EXPECT_EQ(h.client.put_node(NodeId{id * 1000}, record(id), rb), ClientStatus::kOk);
+  EXPECT_EQ(h.client.put_node(NodeId{7}, record(7), rb), ClientStatus::kCacheFull);
+  EXPECT_EQ(h.client.put_node(NodeId{2000}, record(9), rb), ClientStatus::kOk);  // replacing is not adding
   EXPECT_EQ(h.client.node_count(), 4u);
-  EXPECT_EQ(h.client.drop_node(5), ClientStatus::kUnknownNode);
-  EXPECT_EQ(h.client.drop_node(0), ClientStatus::kOk);
-  EXPECT_EQ(h.client.drop_node(0), ClientStatus::kUnknownNode);
-  EXPECT_EQ(h.client.put_node(7, record(7), rb), ClientStatus::kOk);
+  EXPECT_EQ(h.client.drop_node(NodeId{5}), ClientStatus::kUnknownNode);
+  EXPECT_EQ(h.client.drop_node(NodeId{0}), ClientStatus::kOk);
+  EXPECT_EQ(h.client.drop_node(NodeId{0}), ClientStatus::kUnknownNode);
+  EXPECT_EQ(h.client.put_node(NodeId{7}, record(7), rb), ClientStatus::kOk);
   Camera cam{};
   std::vector<uint8_t> frame(240 * 320 * 2);
   EXPECT_EQ(h.client.render(cam, frame.data(), 480), ClientStatus::kBadCamera);
@@ -182,19 +179,19 @@ TEST(Client, FrameDependsOnlyOnTheCachedSet) {
   for (int step = 0; step < 60000; ++step) {
     const uint32_t id = static_cast<uint32_t>(rng() % n);
     if (held[id] && rng() % 2) {
-      ASSERT_EQ(churn.client.drop_node(id), ClientStatus::kOk);
+      ASSERT_EQ(churn.client.drop_node(NodeId{id}), ClientStatus::kOk);
       held[id] = false;
     } else {
-      ASSERT_EQ(churn.client.put_node(id, record(id), rb), ClientStatus::kOk);
+      ASSERT_EQ(churn.client.put_node(NodeId{id}, record(id), rb), ClientStatus::kOk);
       held[id] = true;
     }
   }
   uint32_t count = 0;
   for (uint32_t id = 0; id < n; ++id) {
-    EXPECT_EQ(churn.client.has_node(id), static_cast<bool>(held[id])) << id;
+    EXPECT_EQ(churn.client.has_node(NodeId{id}), static_cast<bool>(held[id])) << id;
     if (held[id]) {
       ++count;
-      ASSERT_EQ(fresh.client.put_node(id, record(id), rb), ClientStatus::kOk);
+      ASSERT_EQ(fresh.client.put_node(NodeId{id}, record(id), rb), ClientStatus::kOk);
     }
   }
   EXPECT_EQ(churn.client.node_count(), count);
@@ -210,7 +207,7 @@ TEST(Client, DrawsNothingBehindTheCameraAndCountsCulls) {
   const uint32_t n = bunny().view.header.node_count;
   Harness h(small_config(n));
   ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
-  for (uint32_t id = 0; id < n; ++id) ASSERT_EQ(h.client.put_node(id, record(id), bunny().view.record_bytes), ClientStatus::kOk);
+  for (uint32_t id = 0; id < n; ++id) ASSERT_EQ(h.client.put_node(NodeId{id}, record(id), bunny().view.record_bytes), ClientStatus::kOk);
   Camera cam = camera_for(h.client, 0, 0);
   // Turn the camera around: the model is behind it.
   for (int k = 0; k < 3; ++k)
@@ -228,12 +225,57 @@ TEST(Client, FrameBudgetDropsPointsAndSaysSo) {
   Harness h(c);
   ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
   for (uint32_t id = 0; id < bunny().view.header.node_count; ++id)
-    ASSERT_EQ(h.client.put_node(id, record(id), bunny().view.record_bytes), ClientStatus::kOk);
+    ASSERT_EQ(h.client.put_node(NodeId{id}, record(id), bunny().view.record_bytes), ClientStatus::kOk);
   FrameStats stats;
   draw(h.client, camera_for(h.client, 0, 0), &stats);
   EXPECT_LE(stats.points, 1000u);
   EXPECT_GT(stats.points, 900u);
   EXPECT_GT(stats.points_dropped, 0u);
+}
+
+// The cache alone, as a client without the software renderer (the GL
+// client) uses it: every held node decodes to what the decoder makes of its
+// record, packed or decoded; ids come back through dense iteration; the
+// client's arena is the cache's plus the renderer's.
+TEST(NodeCache, ServesNodesWithoutARenderer) {
+  const SpgView& v = bunny().view;
+  for (bool decoded : {false, true}) {
+    NodeCacheLimits limits;
+    limits.node_capacity = 500;
+    limits.decoded = decoded;
+    std::vector<uint64_t> storage(node_cache_bytes(limits) / 8 + 1);
+    NodeCache cache;
+    ASSERT_EQ(cache.init(limits, storage.data(), storage.size() * 8), CacheStatus::kOk);
+    ASSERT_EQ(cache.load_startup(bunny().file.data(), bunny().startup_bytes), CacheStatus::kOk);
+    for (uint32_t id = 0; id < 1000; id += 2) ASSERT_EQ(cache.put(NodeId{id}, record(id), v.record_bytes), CacheStatus::kOk);
+    EXPECT_EQ(cache.put(NodeId{1}, record(1), v.record_bytes), CacheStatus::kFull);
+    ASSERT_EQ(cache.drop(NodeId{10}), CacheStatus::kOk);
+    EXPECT_EQ(cache.count(), 499u);
+    std::vector<bool> seen(1000, false);
+    for (uint32_t s = 0; s < cache.count(); ++s) {
+      const uint32_t id = index_of(cache.id_at(s));
+      ASSERT_TRUE(id % 2 == 0 && id != 10 && !seen[id]) << id;
+      seen[id] = true;
+      FixedNode got, want;
+      ASSERT_TRUE(cache.node_at(s, &got));
+      ASSERT_EQ(cache.decoder().decode(record(id), &want), DecodeStatus::kOk);
+      // Field by field (padding bytes carry no value).
+      EXPECT_TRUE(std::memcmp(got.mean, want.mean, sizeof got.mean) == 0 &&
+                  std::memcmp(got.axis, want.axis, sizeof got.axis) == 0 &&
+                  std::memcmp(got.normal_frame, want.normal_frame, sizeof got.normal_frame) == 0 &&
+                  std::memcmp(got.sigma_n, want.sigma_n, sizeof got.sigma_n) == 0 &&
+                  std::memcmp(got.color, want.color, sizeof got.color) == 0 &&
+                  std::memcmp(got.color_axis, want.color_axis, sizeof got.color_axis) == 0)
+          << id;
+    }
+    cache.clear();
+    EXPECT_EQ(cache.count(), 0u);
+    EXPECT_FALSE(cache.has(NodeId{0}));
+    EXPECT_TRUE(cache.ready());  // the startup stays
+  }
+  const ClientConfig c = small_config();
+  EXPECT_EQ(client_arena_bytes(c), ((node_cache_bytes(cache_limits(c)) + 7) & ~size_t{7}) +
+                                       point_renderer_bytes(renderer_config(c)));
 }
 
 }  // namespace

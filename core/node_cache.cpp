@@ -1,0 +1,205 @@
+// stipple core — the node cache. See node_cache.h.
+#include "core/node_cache.h"
+
+#include <initializer_list>
+
+namespace stipple {
+namespace {
+
+constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
+
+struct Layout {
+  size_t decoder, records, ids, hash, total;
+  size_t decoder_bytes, record_stride;
+  uint32_t hash_entries;
+};
+
+bool valid(const NodeCacheLimits& l) {
+  return l.node_capacity >= 1 && l.node_capacity <= (1u << 24) && l.max_angle_bits >= 1 &&
+         l.max_angle_bits <= kMaxAngleBits && l.max_classes[0] >= 1;
+}
+
+// The largest startup the limits accept: every angle field at
+// max_angle_bits, every class table full.
+SpgHeader worst_header(const NodeCacheLimits& c) {
+  SpgHeader h;
+  h.flags = static_cast<uint16_t>((c.normals ? kAttrNormals : 0) | (c.color ? kAttrColor : 0));
+  h.layout = paper_layout(c.normals, c.color, 2);
+  for (Field theta : {Field::kFpTheta, Field::kFnTheta, Field::kFcTheta})
+    for (int k = 0; k < 3; ++k)
+      if (h.layout.bits[static_cast<int>(theta) + k] > 0) h.layout.bits[static_cast<int>(theta) + k] = c.max_angle_bits;
+  h.class_count[0] = c.max_classes[0];
+  h.class_count[1] = c.normals ? c.max_classes[1] : 0;
+  h.class_count[2] = c.color ? c.max_classes[2] : 0;
+  return h;
+}
+
+Layout layout_of(const NodeCacheLimits& c) {
+  Layout l{};
+  l.decoder_bytes = node_decoder_bytes(worst_header(c));
+  l.record_stride = c.decoded ? sizeof(FixedNode) : static_cast<size_t>(paper_layout(c.normals, c.color, 2).record_bytes());
+  l.hash_entries = 1;
+  while (l.hash_entries < c.node_capacity + c.node_capacity / 2) l.hash_entries <<= 1;
+  size_t at = 0;
+  auto take = [&](size_t bytes) {
+    const size_t here = at;
+    at += align8(bytes);
+    return here;
+  };
+  l.decoder = take(l.decoder_bytes);
+  l.records = take(l.record_stride * c.node_capacity);
+  l.ids = take(4 * size_t{c.node_capacity});
+  l.hash = take(4 * size_t{l.hash_entries});
+  l.total = at;
+  return l;
+}
+
+inline uint32_t hash_of(uint32_t id) { return id * 2654435761u; }
+
+}  // namespace
+
+const char* cache_status_text(CacheStatus s) {
+  switch (s) {
+    case CacheStatus::kOk: return "ok";
+    case CacheStatus::kBadLimits: return "invalid node cache limits";
+    case CacheStatus::kStorageTooSmall: return "storage smaller than node_cache_bytes";
+    case CacheStatus::kNoStartup: return "no startup message loaded";
+    case CacheStatus::kBadStartup: return "startup message is invalid";
+    case CacheStatus::kStartupTooLarge: return "startup message needs more than the cache was configured for";
+    case CacheStatus::kBadRecordSize: return "node record size differs from the startup message's";
+    case CacheStatus::kBadRecord: return "node record has a class index beyond its table or nonzero padding";
+    case CacheStatus::kFull: return "node cache is full";
+    case CacheStatus::kUnknownNode: return "node is not in the cache";
+  }
+  return "unknown status";
+}
+
+size_t node_cache_bytes(const NodeCacheLimits& limits) { return valid(limits) ? layout_of(limits).total : 0; }
+
+CacheStatus NodeCache::init(const NodeCacheLimits& limits, void* storage, size_t bytes) {
+  if (!valid(limits)) return CacheStatus::kBadLimits;
+  const Layout l = layout_of(limits);
+  if (bytes < l.total) return CacheStatus::kStorageTooSmall;
+  uint8_t* base = static_cast<uint8_t*>(storage);
+  limits_ = limits;
+  decoder_storage_ = base + l.decoder;
+  decoder_bytes_ = l.decoder_bytes;
+  record_stride_ = l.record_stride;
+  records_ = base + l.records;
+  ids_ = reinterpret_cast<uint32_t*>(base + l.ids);
+  hash_ = reinterpret_cast<uint32_t*>(base + l.hash);
+  hash_mask_ = l.hash_entries - 1;
+  ready_ = false;
+  clear();
+  return CacheStatus::kOk;
+}
+
+void NodeCache::clear() {
+  count_ = 0;
+  for (uint32_t i = 0; i <= hash_mask_; ++i) hash_[i] = 0;
+}
+
+CacheStatus NodeCache::load_startup(const uint8_t* data, size_t size) {
+  if (records_ == nullptr) return CacheStatus::kBadLimits;
+  ready_ = false;
+  clear();
+  SpgView view;
+  size_t used = 0;
+  startup_error_ = spg_parse_startup(data, size, &view, &used);
+  if (!startup_error_.ok()) return CacheStatus::kBadStartup;
+  const SpgHeader& h = view.header;
+  if ((h.has_normals() && !limits_.normals) || (h.has_color() && !limits_.color)) return CacheStatus::kStartupTooLarge;
+  for (int c = 0; c < 3; ++c)
+    if (h.class_count[c] > limits_.max_classes[c]) return CacheStatus::kStartupTooLarge;
+  if ((!limits_.decoded && static_cast<size_t>(h.layout.record_bytes()) > record_stride_) ||
+      node_decoder_bytes(h) > decoder_bytes_)
+    return CacheStatus::kStartupTooLarge;
+  for (Field theta : {Field::kFpTheta, Field::kFnTheta, Field::kFcTheta})
+    for (int k = 0; k < 3; ++k)
+      if (h.layout.bits[static_cast<int>(theta) + k] > limits_.max_angle_bits) return CacheStatus::kStartupTooLarge;
+  if (decoder_.init(view, decoder_storage_, decoder_bytes_) != DecodeStatus::kOk) return CacheStatus::kStartupTooLarge;
+  header_ = h;
+  record_bytes_ = static_cast<size_t>(h.layout.record_bytes());
+  ready_ = true;
+  return CacheStatus::kOk;
+}
+
+uint32_t NodeCache::home_slot(uint32_t id) const {
+  const int shift = 32 - __builtin_popcount(hash_mask_);  // the table has hash_mask_ + 1 = 2^k entries
+  return shift >= 32 ? 0 : hash_of(id) >> shift;
+}
+
+uint32_t* NodeCache::find(uint32_t id) const {
+  for (uint32_t i = home_slot(id);; i = (i + 1) & hash_mask_) {
+    if (hash_[i] == 0 || ids_[hash_[i] - 1] == id) return &hash_[i];
+  }
+}
+
+bool NodeCache::has(NodeId id) const { return ready_ && *find(index_of(id)) != 0; }
+
+void NodeCache::erase_hash(uint32_t* entry) {
+  // Backward-shift deletion keeps every probe sequence unbroken.
+  uint32_t hole = static_cast<uint32_t>(entry - hash_);
+  for (uint32_t j = (hole + 1) & hash_mask_; hash_[j] != 0; j = (j + 1) & hash_mask_) {
+    const uint32_t home = home_slot(ids_[hash_[j] - 1]);
+    // Move j into the hole unless its home lies cyclically in (hole, j].
+    const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
+    if (!stays) {
+      hash_[hole] = hash_[j];
+      hole = j;
+    }
+  }
+  hash_[hole] = 0;
+}
+
+CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size) {
+  if (!ready_) return CacheStatus::kNoStartup;
+  if (size != record_bytes_) return CacheStatus::kBadRecordSize;
+  const int pad_bits = static_cast<int>(record_bytes_ * 8) - header_.layout.total_bits();
+  if (pad_bits > 0 && (record[record_bytes_ - 1] >> (8 - pad_bits)) != 0) return CacheStatus::kBadRecord;
+  FixedNode decoded;
+  if (decoder_.decode(record, &decoded) != DecodeStatus::kOk) return CacheStatus::kBadRecord;
+  const uint32_t id = index_of(node);
+  uint32_t* entry = find(id);
+  uint32_t slot;
+  if (*entry != 0) {
+    slot = *entry - 1;
+  } else {
+    if (count_ >= limits_.node_capacity) return CacheStatus::kFull;
+    slot = count_++;
+    ids_[slot] = id;
+    *entry = slot + 1;
+  }
+  uint8_t* dst = records_ + slot * record_stride_;
+  if (limits_.decoded) *reinterpret_cast<FixedNode*>(dst) = decoded;
+  else
+    for (size_t i = 0; i < record_bytes_; ++i) dst[i] = record[i];
+  return CacheStatus::kOk;
+}
+
+CacheStatus NodeCache::drop(NodeId node) {
+  if (!ready_) return CacheStatus::kNoStartup;
+  uint32_t* entry = find(index_of(node));
+  if (*entry == 0) return CacheStatus::kUnknownNode;
+  const uint32_t slot = *entry - 1, last = count_ - 1;
+  erase_hash(entry);
+  if (slot != last) {  // keep the cache dense: the last node moves into the hole
+    const uint8_t* src = records_ + last * record_stride_;
+    uint8_t* dst = records_ + slot * record_stride_;
+    for (size_t i = 0; i < record_stride_; ++i) dst[i] = src[i];
+    ids_[slot] = ids_[last];
+    *find(ids_[slot]) = slot + 1;
+  }
+  --count_;
+  return CacheStatus::kOk;
+}
+
+bool NodeCache::node_at(uint32_t slot, FixedNode* out) const {
+  if (limits_.decoded) {
+    *out = decoded_at(slot);
+    return true;
+  }
+  return decoder_.decode(record_at(slot), out) == DecodeStatus::kOk;
+}
+
+}  // namespace stipple

@@ -1,0 +1,110 @@
+// stipple core — the node cache: the receiving side of a node stream.
+//
+// It adopts a startup message (the .spg's header and class tables,
+// docs/format.md §1-§2) and then holds node records by id: put (add or
+// replace), drop, lookup, and dense iteration for whoever draws them — the
+// software point renderer (raster/point_renderer.h) or the GPU client. The
+// protocol's node-enter and node-leave messages are put and drop.
+//
+//   size_t n = node_cache_bytes(limits);   // 0: invalid limits
+//   cache.init(limits, storage, n);        // carves the tables from storage
+//   cache.load_startup(msg, size);         // forgets every node
+//   cache.put(NodeId{7}, record, size);    // validated, then cached
+//   cache.drop(NodeId{7});
+//
+// After init nothing is allocated, nothing is thrown and no floating point
+// is used. A record is validated when it is put (class indices against the
+// startup's tables, padding bits zero), so every held record decodes. Records
+// are kept packed (9-17 bytes a node, decoded by whoever reads them) or, with
+// `decoded`, decoded once into a FixedNode (116 bytes), which trades memory
+// for the per-frame decode. Ids hash into an open-addressed table (linear
+// probing, backward-shift deletion); slots stay dense, so iteration visits
+// exactly count() records. Not thread-safe: one owner.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "core/node_decoder.h"
+#include "core/node_format.h"
+#include "core/spg_format.h"
+
+namespace stipple {
+
+struct NodeCacheLimits {
+  uint32_t node_capacity = 30000;          // nodes held at once (1 .. 2^24)
+  bool decoded = false;                    // keep FixedNodes instead of packed records
+  bool normals = true, color = true;       // attributes a startup may carry
+  uint16_t max_classes[3] = {4096, 4096, 64};  // sigma_p, sigma_n, sigma_c tables
+  uint8_t max_angle_bits = 10;             // widest angle field accepted
+};
+
+enum class CacheStatus : uint8_t {
+  kOk = 0,
+  kBadLimits,         // init: a limit out of range
+  kStorageTooSmall,   // init: fewer bytes than node_cache_bytes
+  kNoStartup,         // put/drop before a startup message
+  kBadStartup,        // load_startup: the message fails validation (see startup_error)
+  kStartupTooLarge,   // load_startup: attributes, class tables or angle widths beyond the limits
+  kBadRecordSize,     // put: size differs from the startup's record size
+  kBadRecord,         // put: class index beyond its table or nonzero padding
+  kFull,              // put: node_capacity nodes already held
+  kUnknownNode,       // drop: id not held
+};
+
+const char* cache_status_text(CacheStatus s);
+
+// Storage bytes for the limits (8-byte aligned pieces), or 0 when invalid.
+size_t node_cache_bytes(const NodeCacheLimits& limits);
+
+class NodeCache {
+ public:
+  [[nodiscard]] CacheStatus init(const NodeCacheLimits& limits, void* storage, size_t bytes);
+
+  // Validates and adopts a startup message (spg_parse_startup); forgets
+  // every node. What it needs is copied: the caller's buffer may go away.
+  [[nodiscard]] CacheStatus load_startup(const uint8_t* data, size_t size);
+  SpgResult startup_error() const { return startup_error_; }
+  bool ready() const { return ready_; }
+  const SpgHeader& header() const { return header_; }
+  const NodeDecoder& decoder() const { return decoder_; }
+  size_t record_bytes() const { return record_bytes_; }
+
+  [[nodiscard]] CacheStatus put(NodeId id, const uint8_t* record, size_t size);
+  [[nodiscard]] CacheStatus drop(NodeId id);
+  bool has(NodeId id) const;
+  uint32_t count() const { return count_; }
+  // Forgets every node, keeps the startup.
+  void clear();
+
+  // Dense iteration, slot 0 .. count() - 1 (order changes on drop).
+  NodeId id_at(uint32_t slot) const { return NodeId{ids_[slot]}; }
+  // The node in slot `slot`, decoded into *out (copied when cached
+  // decoded); false only if its record fails to decode, which put() rules out.
+  [[nodiscard]] bool node_at(uint32_t slot, FixedNode* out) const;
+  // The cached record: packed, record_bytes() long (when !decoded()).
+  const uint8_t* record_at(uint32_t slot) const { return records_ + slot * record_stride_; }
+  // The cached FixedNode, without a copy (when decoded()).
+  const FixedNode& decoded_at(uint32_t slot) const { return *reinterpret_cast<const FixedNode*>(record_at(slot)); }
+  bool decoded() const { return limits_.decoded; }
+
+ private:
+  uint32_t* find(uint32_t id) const;
+  uint32_t home_slot(uint32_t id) const;  // where id's probe sequence starts
+  void erase_hash(uint32_t* entry);
+
+  NodeCacheLimits limits_{};
+  NodeDecoder decoder_;
+  bool ready_ = false;
+  SpgResult startup_error_{};
+  SpgHeader header_{};
+  size_t record_bytes_ = 0, record_stride_ = 0, decoder_bytes_ = 0;
+  void* decoder_storage_ = nullptr;
+  uint8_t* records_ = nullptr;  // node_capacity x record_stride_
+  uint32_t* ids_ = nullptr;     // per slot
+  uint32_t* hash_ = nullptr;    // slot + 1, 0 = empty; linear probing
+  uint32_t hash_mask_ = 0;
+  uint32_t count_ = 0;
+};
+
+}  // namespace stipple

@@ -1,0 +1,299 @@
+// stipple raster — the software point renderer. See point_renderer.h;
+// formats and measured errors are in docs/fixed_point.md.
+#include "raster/point_renderer.h"
+
+namespace stipple {
+namespace {
+
+constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
+constexpr int32_t kMaxFocalQ4 = 1 << 20;
+constexpr int32_t kMaxDepthMu = 1 << 30;
+constexpr int32_t kMaxSigmaN = 4 << 12;       // theta table covers theta <= 4 rad
+
+struct Layout {
+  size_t raster, g_position, g_normal, g_color, shading, reciprocal, total;
+};
+
+Layout layout_of(const RendererConfig& c) {
+  Layout l{};
+  size_t at = 0;
+  auto take = [&](size_t bytes) {
+    const size_t here = at;
+    at += align8(bytes);
+    return here;
+  };
+  l.raster = take(point_raster_bytes(c.raster));
+  l.g_position = take(sizeof(Gaussian3Q12) * c.samples);
+  l.g_normal = take(c.normals ? sizeof(Gaussian2Q12) * c.samples : 0);
+  l.g_color = take(c.color ? sizeof(Gaussian3Q12) * c.samples : 0);
+  l.shading = take(sizeof(ShadingTables));
+  l.reciprocal = take(sizeof(uint16_t) << kReciprocalBits);
+  l.total = at;
+  return l;
+}
+
+inline int32_t dot_q14(const int16_t a[3], const int16_t b[3]) {
+  return static_cast<int32_t>((int64_t{a[0]} * b[0] + int64_t{a[1]} * b[1] + int64_t{a[2]} * b[2]) >> 14);
+}
+
+
+inline uint32_t clamp255(int32_t v) { return v < 0 ? 0u : v > 255 ? 255u : static_cast<uint32_t>(v); }
+
+// Colour after shading: channel * intensity (Q8) + specular, saturated.
+inline uint32_t shade(uint32_t r, uint32_t g, uint32_t b, uint32_t intensity, uint32_t specular) {
+  const uint32_t rr = ((r * intensity) >> 8) + specular, gg = ((g * intensity) >> 8) + specular,
+                 bb = ((b * intensity) >> 8) + specular;
+  return ((rr > 255 ? 255 : rr) << 16) | ((gg > 255 ? 255 : gg) << 8) | (bb > 255 ? 255 : bb);
+}
+
+}  // namespace
+
+void build_reciprocal_table(uint16_t out[1 << kReciprocalBits]) {
+  // 2^26 / (1024 + i + 1/2) = 2^28 / (4 (1024 + i) + 2), rounded half up.
+  for (uint32_t i = 0; i < (1u << kReciprocalBits); ++i)
+    out[i] = static_cast<uint16_t>(((uint64_t{1} << 29) / (4 * (1024 + i) + 2) + 1) / 2);
+}
+
+const char* render_status_text(RenderStatus s) {
+  switch (s) {
+    case RenderStatus::kOk: return "ok";
+    case RenderStatus::kBadConfig: return "invalid renderer configuration";
+    case RenderStatus::kStorageTooSmall: return "storage smaller than point_renderer_bytes";
+    case RenderStatus::kNoStartup: return "no startup message loaded";
+    case RenderStatus::kBadCamera: return "camera out of range";
+  }
+  return "unknown status";
+}
+
+bool renderer_config_valid(const RendererConfig& c) {
+  return point_raster_bytes(c.raster) > 0 && c.samples >= 1 && c.samples <= 8192 && c.point_size >= 1 &&
+         c.point_size <= 3 && c.quality_q8 >= 1 && c.lighting.shininess >= 1 && c.lighting.shininess <= 64 &&
+         (c.lighting.light_q14[0] | c.lighting.light_q14[1] | c.lighting.light_q14[2]) != 0;
+}
+
+size_t point_renderer_bytes(const RendererConfig& config) {
+  return renderer_config_valid(config) ? layout_of(config).total : 0;
+}
+
+RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, size_t bytes) {
+  if (!renderer_config_valid(config)) return RenderStatus::kBadConfig;
+  const Layout l = layout_of(config);
+  if (bytes < l.total) return RenderStatus::kStorageTooSmall;
+  uint8_t* base = static_cast<uint8_t*>(storage);
+  if (raster_.init(config.raster, base + l.raster, l.g_position - l.raster) != RasterStatus::kOk)
+    return RenderStatus::kBadConfig;
+  config_ = config;
+  g_position_ = reinterpret_cast<Gaussian3Q12*>(base + l.g_position);
+  g_normal_ = config.normals ? reinterpret_cast<Gaussian2Q12*>(base + l.g_normal) : nullptr;
+  g_color_ = config.color ? reinterpret_cast<Gaussian3Q12*>(base + l.g_color) : nullptr;
+  shading_ = reinterpret_cast<ShadingTables*>(base + l.shading);
+  reciprocal_ = reinterpret_cast<uint16_t*>(base + l.reciprocal);
+  build_gaussian3_table(config.source, g_position_, config.samples);
+  if (g_normal_) build_gaussian2_table(config.source, g_normal_, config.samples);
+  if (g_color_) build_gaussian3_table(config.source, g_color_, config.samples, kColorSobolDim);
+  if (!build_shading_tables(config.lighting, shading_)) return RenderStatus::kBadConfig;
+  build_reciprocal_table(reciprocal_);
+  ppn_ = &ppn_table(config.source, config.point_size);
+  return RenderStatus::kOk;
+}
+
+struct PointRenderer::PointSetup {
+  NodeProjection proj;
+  uint32_t count;
+  int32_t near;
+  int shift, size;
+  uint32_t base_r, base_g, base_b, node_rgb, node_intensity, node_specular;
+  int32_t sn0, sn1, l0, l1, l2, h0, h1, h2;
+  int64_t ca[3][3];  // colour axes, 8-bit levels per sigma in Q8
+};
+
+struct PointRenderer::FrameSetup {
+  Camera camera;
+  int32_t width_q4, height_q4;
+  int depth_shift;
+  int16_t light[3], half[3];  // model space, Q14
+  bool model_color;
+};
+
+template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, FrameStats& stats) {
+  PointSetup setup;  // filled in place: draw_points reads it by reference
+  NodeProjection& proj = setup.proj;
+  if (!proj.setup(f.camera, node)) {
+    ++stats.nodes_culled;
+    return;
+  }
+  // The gamma-extent (3.5 sigma) on screen, an L1 bound: cull nodes wholly
+  // off screen. Screen covariance M M^T for the points-per-node index.
+  int64_t ex = 0, ey = 0, a = 0, b = 0, cc = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int64_t vx = proj.mx[k] >> 4, vy = proj.my[k] >> 4;  // 1/16 px per sigma
+    ex += abs64(vx);
+    ey += abs64(vy);
+    a += vx * vx;
+    b += vx * vy;
+    cc += vy * vy;
+  }
+  ex = (ex * 7) >> 1;
+  ey = (ey * 7) >> 1;
+  if (proj.x0_q4 + ex < 0 || proj.x0_q4 - ex >= f.width_q4 || proj.y0_q4 + ey < 0 || proj.y0_q4 - ey >= f.height_q4) {
+    ++stats.nodes_culled;
+    return;
+  }
+  // a, c: (1/16 px)^2 = 1/256 px^2, below 3 * 2^48.
+  setup.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
+  setup.near = f.camera.near_mu;
+  setup.shift = f.depth_shift;
+  setup.size = config_.point_size;
+
+  // Base colour and per-node shading terms.
+  const uint32_t base = f.model_color ? (uint32_t{node.color[0]} << 16) | (uint32_t{node.color[1]} << 8) | node.color[2]
+                                      : config_.grey_rgb & 0xFFFFFFu;
+  setup.base_r = base >> 16;
+  setup.base_g = (base >> 8) & 0xFF;
+  setup.base_b = base & 0xFF;
+  const int32_t sn0 = node.sigma_n[0] < kMaxSigmaN ? node.sigma_n[0] : kMaxSigmaN;
+  const int32_t sn1 = node.sigma_n[1] < kMaxSigmaN ? node.sigma_n[1] : kMaxSigmaN;
+  setup.sn0 = sn0;
+  setup.sn1 = sn1;
+  setup.l0 = dot_q14(node.normal_frame[2], f.light);
+  setup.l1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.light)} * sn0) >> 12);
+  setup.l2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.light)} * sn1) >> 12);
+  setup.h0 = dot_q14(node.normal_frame[2], f.half);
+  setup.h1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.half)} * sn0) >> 12);
+  setup.h2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.half)} * sn1) >> 12);
+  setup.node_rgb = base;
+  setup.node_intensity = 256;
+  setup.node_specular = 0;
+  if (config_.shading != ShadingMode::kNone && header.has_normals()) {
+    setup.node_intensity = shading_->diffuse[intensity_index(setup.l0)];
+    if (kSpecular) setup.node_specular = shading_->specular[intensity_index(setup.h0)];
+    setup.node_rgb = shade(setup.base_r, setup.base_g, setup.base_b, setup.node_intensity, setup.node_specular);
+  }
+  // Colour axes in 8-bit levels per sigma, Q8 (saturated: sigma_c comes from the file).
+  if (kColorPoints)
+    for (int k = 0; k < 3; ++k)
+      for (int ch = 0; ch < 3; ++ch) {
+        const int64_t v = (int64_t{node.color_axis[k][ch]} * 255) >> 4;
+        setup.ca[k][ch] = v > (1 << 24) ? (1 << 24) : v < -(1 << 24) ? -(1 << 24) : v;
+      }
+  stats.points += draw_points<P, kShadePoints, kColorPoints, kSpecular>(setup, stats);
+  ++stats.nodes_drawn;
+}
+
+// The per-point path: its own function, never inlined, so that the ARMv5
+// build can be checked symbol by symbol for run-time helper calls
+// (tests/handheld/per_point_helpers.cmake).
+template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
+  const NodeProjection& proj = s.proj;
+  const uint32_t count = s.count;
+  const uint32_t base_r = s.base_r, base_g = s.base_g, base_b = s.base_b;
+  const uint32_t node_rgb = s.node_rgb, node_intensity = s.node_intensity, node_specular = s.node_specular;
+  const int32_t sn0 = s.sn0, sn1 = s.sn1, l0 = s.l0, l1 = s.l1, l2 = s.l2, h0 = s.h0, h1 = s.h1, h2 = s.h2;
+  const int64_t(&ca)[3][3] = s.ca;
+  const int32_t near = s.near;
+  const int shift = s.shift;
+  const int size = s.size;
+  uint32_t drawn = 0;
+  for (uint32_t j = 0; j < count; ++j) {
+    ScreenSample p;
+    if (!proj.template point<P>(g_position_[j], near, reciprocal_, &p)) continue;
+    const int32_t x = p.x_q4, y = p.y_q4;
+    const int64_t z = p.z;
+    const uint64_t dz = static_cast<uint64_t>(z - near) << shift;
+    const uint32_t depth = dz > 0xFFFFFFFEu ? 0xFFFFFFFEu : static_cast<uint32_t>(dz);
+    uint32_t rgb = node_rgb;
+    if constexpr (kColorPoints || kShadePoints) {
+      uint32_t r = base_r, gg = base_g, bb = base_b;
+      if constexpr (kColorPoints) {
+        const Gaussian3Q12 q = g_color_[j];
+        r = clamp255(static_cast<int32_t>(base_r) + static_cast<int32_t>((ca[0][0] * q.v[0] + ca[1][0] * q.v[1] + ca[2][0] * q.v[2]) >> 20));
+        gg = clamp255(static_cast<int32_t>(base_g) + static_cast<int32_t>((ca[0][1] * q.v[0] + ca[1][1] * q.v[1] + ca[2][1] * q.v[2]) >> 20));
+        bb = clamp255(static_cast<int32_t>(base_b) + static_cast<int32_t>((ca[0][2] * q.v[0] + ca[1][2] * q.v[1] + ca[2][2] * q.v[2]) >> 20));
+      }
+      uint32_t intensity = node_intensity, specular = node_specular;
+      if constexpr (kShadePoints) {
+        const Gaussian2Q12 n = g_normal_[j];
+        const int64_t al = (int64_t{sn0} * n.v[0]) >> 12, be = (int64_t{sn1} * n.v[1]) >> 12;  // Q12 radians
+        const uint64_t t2 = static_cast<uint64_t>(al * al + be * be) >> kCosSincShift;          // theta^2 cell
+        const CosSincQ14 cs = shading_->cos_sinc[t2 < kCosSincEntries ? t2 : kCosSincEntries - 1];
+        const int32_t l = static_cast<int32_t>((cs.cos * int64_t{l0} + cs.sinc * ((n.v[0] * int64_t{l1} + n.v[1] * int64_t{l2}) >> 12)) >> 14);
+        intensity = shading_->diffuse[intensity_index(l)];
+        if constexpr (kSpecular) {
+          const int32_t h = static_cast<int32_t>((cs.cos * int64_t{h0} + cs.sinc * ((n.v[0] * int64_t{h1} + n.v[1] * int64_t{h2}) >> 12)) >> 14);
+          specular = shading_->specular[intensity_index(h)];
+        }
+      }
+      rgb = (kShadePoints || config_.shading != ShadingMode::kNone) ? shade(r, gg, bb, intensity, specular)
+                                                                    : (r << 16) | (gg << 8) | bb;
+    }
+    if (raster_.add(ScreenPoint{x, y, depth, rgb}, size)) ++drawn;
+    else ++stats.points_dropped;
+  }
+  return drawn;
+}
+
+RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera, uint8_t* frame, size_t stride,
+                                   FrameStats* stats_out) {
+  if (ppn_ == nullptr) return RenderStatus::kBadConfig;  // not initialized
+  if (!cache.ready()) return RenderStatus::kNoStartup;
+  const SpgHeader& header = cache.header();
+  if (camera.focal_q4 < 1 || camera.focal_q4 > kMaxFocalQ4 || camera.near_mu < kCameraMinDistance ||
+      camera.far_mu <= camera.near_mu || camera.far_mu > kMaxDepthMu)
+    return RenderStatus::kBadCamera;
+  for (int k = 0; k < 3; ++k)
+    if (camera.eye[k] < -(1 << 29) || camera.eye[k] > (1 << 29)) return RenderStatus::kBadCamera;
+  FrameSetup f;
+  f.camera = camera;
+  f.width_q4 = 16 * config_.raster.width;
+  f.height_q4 = 16 * config_.raster.height;
+  // Depth word: (z - near) << shift spans [near, far] in 32 bits.
+  const uint32_t range = static_cast<uint32_t>(camera.far_mu - camera.near_mu);
+  f.depth_shift = __builtin_clz(range);
+  // Light and half vector into model space: R^T v.
+  for (int a = 0; a < 3; ++a) {
+    int64_t l = 0, h = 0;
+    for (int k = 0; k < 3; ++k) {
+      l += int64_t{camera.rotation[k][a]} * shading_->light_q14[k];
+      h += int64_t{camera.rotation[k][a]} * shading_->half_q14[k];
+    }
+    f.light[a] = static_cast<int16_t>(l >> 14);
+    f.half[a] = static_cast<int16_t>(h >> 14);
+  }
+  f.model_color = header.has_color() && !config_.grey;
+
+  const bool normals = header.has_normals() && config_.shading != ShadingMode::kNone;
+  const bool shade_points = normals && config_.shading == ShadingMode::kPerPoint;
+  const bool color_points = f.model_color && config_.sample_color;
+  const bool specular = normals && config_.lighting.specular_q8 > 0;
+  using DrawFn = void (PointRenderer::*)(const FrameSetup&, const SpgHeader&, const FixedNode&, FrameStats&);
+#define STIPPLE_PICK(P)                                                                                        \
+  (shade_points ? (color_points ? (specular ? &PointRenderer::draw_node<P, true, true, true> : &PointRenderer::draw_node<P, true, true, false>)      \
+                                : (specular ? &PointRenderer::draw_node<P, true, false, true> : &PointRenderer::draw_node<P, true, false, false>))  \
+                : (color_points ? (specular ? &PointRenderer::draw_node<P, false, true, true> : &PointRenderer::draw_node<P, false, true, false>)  \
+                                : (specular ? &PointRenderer::draw_node<P, false, false, true> : &PointRenderer::draw_node<P, false, false, false>)))
+  DrawFn draw = config_.projection == Projection::kAffine       ? STIPPLE_PICK(Projection::kAffine)
+                : config_.projection == Projection::kReciprocal ? STIPPLE_PICK(Projection::kReciprocal)
+                                                                : STIPPLE_PICK(Projection::kExact);
+#undef STIPPLE_PICK
+
+  FrameStats stats;
+  const uint32_t count = cache.count();
+  stats.nodes = count;
+  raster_.begin_frame();
+  if (cache.decoded()) {
+    for (uint32_t s = 0; s < count; ++s) (this->*draw)(f, header, cache.decoded_at(s), stats);
+  } else {
+    FixedNode node;
+    for (uint32_t s = 0; s < count; ++s) {
+      if (!cache.node_at(s, &node)) continue;  // checked at put
+      (this->*draw)(f, header, node, stats);
+    }
+  }
+  raster_.draw(config_.clear_rgb, frame, stride);
+  if (stats_out) *stats_out = stats;
+  return RenderStatus::kOk;
+}
+
+}  // namespace stipple

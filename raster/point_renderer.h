@@ -1,0 +1,104 @@
+// stipple raster — the software point renderer: draws every node a
+// NodeCache holds (core/node_cache.h) into a frame, in fixed point.
+//
+//   size_t n = point_renderer_bytes(config);   // 0: invalid configuration
+//   renderer.init(config, storage, n);         // tables, tile bins
+//   renderer.render(cache, camera, frame, stride);
+//
+// After init nothing is allocated, nothing is thrown, and render uses
+// integer arithmetic only. Per node and frame: the mean and the sigma-scaled
+// axes go to camera space; the projection is linearized at the mean (M,
+// 2 x 3, 1/16 px per sigma), which gives the screen covariance M M^T, hence
+// the points-per-node index; then sample j = 0 .. n-1 of the Gaussian tables
+// becomes one point:
+//   kAffine      x = x0 + M g                 (no division per point)
+//   kReciprocal  X/Z per point, 1/Z from a 1024-entry table
+//   kExact       X/Z per point by integer division
+// Shading is Lambert + Blinn specular of per-point sampled normals through
+// tables. docs/fixed_point.md gives every format and the measured error of
+// each mode. The renderer keeps no node state: the cache is the only input
+// besides the camera, so a GPU client can use the same cache without it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "core/camera.h"
+#include "core/gaussian_table.h"
+#include "core/node_cache.h"
+#include "raster/point_raster.h"
+#include "raster/points_per_node.h"
+#include "raster/projection.h"
+#include "raster/shading.h"
+
+namespace stipple {
+
+enum class ShadingMode : uint8_t { kPerPoint, kPerNode, kNone };
+
+struct RendererConfig {
+  RasterConfig raster;                     // screen, pixel format, tiles, points per frame
+  bool normals = true, color = true;       // Gaussian tables to build (attributes a model may have)
+  uint16_t samples = 1024;                 // Gaussian table entries = most points per node
+  GaussianSource source = GaussianSource::kSobol;
+  uint8_t point_size = 2;                  // 1..3 px (the paper drew 1.8 px points)
+  uint16_t quality_q8 = 256;               // points-per-node scale (256 = as measured)
+  Projection projection = Projection::kAffine;
+  ShadingMode shading = ShadingMode::kPerPoint;
+  bool sample_color = true;                // per-point colour from sigma_c (else the node's mean colour)
+  bool grey = false;                       // ignore the model's colour
+  Lighting lighting;
+  uint32_t grey_rgb = 0xD8D8D8;            // base colour without colour attributes
+  uint32_t clear_rgb = 0x000000;
+};
+
+enum class RenderStatus : uint8_t {
+  kOk = 0,
+  kBadConfig,        // init: a value out of range (render: not initialized)
+  kStorageTooSmall,  // init: fewer bytes than point_renderer_bytes
+  kNoStartup,        // render: the cache holds no startup message
+  kBadCamera,        // render: focal length, near plane or depth range out of range
+};
+
+const char* render_status_text(RenderStatus s);
+
+struct FrameStats {
+  uint32_t nodes = 0;         // nodes held
+  uint32_t nodes_drawn = 0;   // nodes that produced points
+  uint32_t nodes_culled = 0;  // behind the near plane or off screen
+  uint32_t points = 0;        // points generated and binned
+  uint32_t points_dropped = 0;  // refused by a full frame budget
+};
+
+bool renderer_config_valid(const RendererConfig& config);
+
+// Storage bytes for a configuration (8-byte aligned pieces), or 0 when invalid.
+size_t point_renderer_bytes(const RendererConfig& config);
+
+class PointRenderer {
+ public:
+  [[nodiscard]] RenderStatus init(const RendererConfig& config, void* storage, size_t bytes);
+
+  // Draws every node `cache` holds into `frame` (height rows of `stride`
+  // bytes in the configured pixel format).
+  [[nodiscard]] RenderStatus render(const NodeCache& cache, const Camera& camera, uint8_t* frame, size_t stride,
+                                    FrameStats* stats = nullptr);
+
+ private:
+  struct FrameSetup;
+  struct PointSetup;
+  template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+  void draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, FrameStats& stats);
+  template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+  [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
+
+  RendererConfig config_{};
+  PointRaster raster_;
+  Gaussian3Q12* g_position_ = nullptr;
+  Gaussian2Q12* g_normal_ = nullptr;
+  Gaussian3Q12* g_color_ = nullptr;
+  ShadingTables* shading_ = nullptr;
+  uint16_t* reciprocal_ = nullptr;  // 1024 entries
+  const PpnTable* ppn_ = nullptr;
+};
+
+}  // namespace stipple
