@@ -1,7 +1,7 @@
 // stipple core — tables of Gaussian sample vectors in fixed point (TOG05 §6).
 //
 // Entry j holds the unit-variance 3-D (or 2-D) sample that the reference
-// sampler (tools/host/sampler.cpp, docs/sampling.md) draws for sample j of a
+// sampler (tools/reference/sampler.cpp, docs/sampling.md) draws for sample j of a
 // node: Sobol point j + 1 (dimensions 0-2; 3-4 for the 2-D normal table)
 // through the paper's Box–Muller variant,
 //   tau = sqrt(-2 ln r0) * sqrt(3/2) (3-D; unscaled for 2-D), clipped at 3.5;

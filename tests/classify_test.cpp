@@ -3,7 +3,7 @@
 
 #include <random>
 
-#include "tools/host/classify.h"
+#include "tools/encoder/classify.h"
 
 namespace stipple {
 namespace {

@@ -7,11 +7,11 @@
 
 #include "platform/file_io.h"
 #include "test_util.h"
-#include "tools/host/encoder.h"
-#include "tools/host/metrics.h"
-#include "tools/host/ply_io.h"
-#include "tools/host/sampler.h"
-#include "tools/host/spg_model.h"
+#include "tools/encoder/encoder.h"
+#include "tools/reference/metrics.h"
+#include "tools/scan/ply_io.h"
+#include "tools/reference/sampler.h"
+#include "tools/reference/spg_model.h"
 
 namespace stipple {
 namespace {

@@ -8,8 +8,8 @@
 #include "core/spg_format.h"
 #include "platform/file_io.h"
 #include "test_util.h"
-#include "tools/host/encoder.h"
-#include "tools/host/spg_model.h"
+#include "tools/encoder/encoder.h"
+#include "tools/reference/spg_model.h"
 
 namespace stipple {
 namespace {

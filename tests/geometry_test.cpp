@@ -8,10 +8,10 @@
 
 #include "core/sobol.h"
 #include "test_util.h"
-#include "tools/host/kdtree.h"
-#include "tools/host/node_stats.h"
-#include "tools/host/normals.h"
-#include "tools/host/quantize.h"
+#include "tools/scan/kdtree.h"
+#include "tools/encoder/node_stats.h"
+#include "tools/encoder/normals.h"
+#include "tools/encoder/quantize.h"
 
 namespace stipple {
 namespace {

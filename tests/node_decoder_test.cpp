@@ -9,7 +9,7 @@
 
 #include "core/node_decoder.h"
 #include "test_util.h"
-#include "tools/host/quantize.h"
+#include "tools/encoder/quantize.h"
 
 namespace stipple {
 namespace {

@@ -11,8 +11,8 @@
 #include <random>
 
 #include "test_util.h"
-#include "tools/host/normals.h"
-#include "tools/host/orientation.h"
+#include "tools/encoder/normals.h"
+#include "tools/encoder/orientation.h"
 
 namespace stipple {
 namespace {

@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "platform/png_io.h"
-#include "tools/host/plot.h"
+#include "tools/reference/plot.h"
 
 namespace stipple {
 namespace {

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <limits>
 
-#include "tools/host/ply_io.h"
+#include "tools/scan/ply_io.h"
 
 namespace stipple {
 namespace {

@@ -12,9 +12,9 @@
 #include "raster/client.h"
 #include "raster/points_per_node.h"
 #include "test_util.h"
-#include "tools/host/ppn_measure.h"
-#include "tools/host/render.h"
-#include "tools/host/spg_model.h"
+#include "tools/reference/ppn_measure.h"
+#include "tools/reference/render.h"
+#include "tools/reference/spg_model.h"
 
 namespace stipple {
 namespace {

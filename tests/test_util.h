@@ -8,10 +8,10 @@
 
 #include <gtest/gtest.h>
 
-#include "tools/host/encoder.h"
-#include "tools/host/point_cloud.h"
-#include "tools/host/ply_io.h"
-#include "tools/host/spg_model.h"
+#include "tools/encoder/encoder.h"
+#include "tools/scan/point_cloud.h"
+#include "tools/scan/ply_io.h"
+#include "tools/reference/spg_model.h"
 #include "tests/portable/test_files.h"
 
 namespace stipple::test {

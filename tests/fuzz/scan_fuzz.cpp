@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-#include "tools/host/ply_io.h"
+#include "tools/scan/ply_io.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   stipple::PointCloud cloud;

@@ -13,7 +13,7 @@
 #include "core/camera.h"
 #include "core/spg_format.h"
 #include "raster/client.h"
-#include "tools/host/spg_model.h"
+#include "tools/reference/spg_model.h"
 
 namespace {
 

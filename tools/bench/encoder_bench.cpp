@@ -20,12 +20,12 @@
 #include "core/cut.h"
 #include "raster/client.h"
 #include "raster/point_raster.h"
-#include "tools/host/classify.h"
-#include "tools/host/encoder.h"
-#include "tools/host/kdtree.h"
-#include "tools/host/normals.h"
-#include "tools/host/ply_io.h"
-#include "tools/host/render.h"
+#include "tools/encoder/classify.h"
+#include "tools/encoder/encoder.h"
+#include "tools/scan/kdtree.h"
+#include "tools/encoder/normals.h"
+#include "tools/scan/ply_io.h"
+#include "tools/reference/render.h"
 
 namespace stipple {
 namespace {

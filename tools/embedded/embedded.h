@@ -1,7 +1,7 @@
 // stipple — the embedded default, without host libraries: an orbit view in
 // user units, the fixed-point client fed a simple cut of a .spg in process,
 // and the frame as an RGB888 image. Builds for the handheld too (no Eigen,
-// no libpng); the host's renderer (tools/host/render.h) adds the double
+// no libpng); the host's renderer (tools/reference/render.h) adds the double
 // reference on top.
 #pragma once
 

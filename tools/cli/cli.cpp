@@ -1,0 +1,76 @@
+#include "tools/cli/cli.h"
+
+#include <charconv>
+#include <cmath>
+
+namespace stipple::cli {
+
+void Json::key(const char* k) {
+  if (!body_.empty()) body_ += ", ";
+  body_ += "\"";
+  body_ += k;
+  body_ += "\": ";
+}
+Json& Json::num(const char* k, double v) {
+  key(k);
+  if (!std::isfinite(v)) {
+    body_ += "null";
+    return *this;
+  }
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  body_ += buf;
+  return *this;
+}
+Json& Json::integer(const char* k, long long v) {
+  key(k);
+  body_ += std::to_string(v);
+  return *this;
+}
+Json& Json::str(const char* k, const std::string& v) {
+  key(k);
+  body_ += "\"";
+  for (char c : v) {
+    if (c == '"' || c == '\\') body_ += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      body_ += buf;
+      continue;
+    }
+    body_ += c;
+  }
+  body_ += "\"";
+  return *this;
+}
+Json& Json::boolean(const char* k, bool v) {
+  key(k);
+  body_ += v ? "true" : "false";
+  return *this;
+}
+Json& Json::raw(const char* k, const std::string& json) {
+  key(k);
+  body_ += json;
+  return *this;
+}
+
+std::string with_commas(unsigned long long v) {
+  const std::string digits = std::to_string(v);
+  std::string out;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "stipple: %s\n", message.c_str());
+  return 1;
+}
+
+void warn(const std::vector<std::string>& messages) {
+  for (const std::string& m : messages) std::fprintf(stderr, "stipple: warning: %s\n", m.c_str());
+}
+
+}  // namespace stipple::cli

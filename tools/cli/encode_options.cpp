@@ -1,0 +1,136 @@
+// stipple encode and demo — their shared options and summary.
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "platform/file_io.h"
+#include "platform/progress.h"
+#include "tools/cli/cli.h"
+#include "tools/cli/encode_options.h"
+#include "tools/cli/render_output.h"
+#include "tools/encoder/encoder.h"
+#include "tools/encoder/normals.h"
+#include "tools/reference/metrics.h"
+#include "tools/reference/sampler.h"
+#include "tools/reference/spg_model.h"
+#include "tools/scan/ply_io.h"
+
+namespace stipple {
+
+bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& json, std::string& error) {
+  std::string v;
+  unsigned long long u;
+  if (args.value("--leaf-size", v)) {
+    if (!cli::parse_uint(v, 1u << 20, u) || u < 2) return error = "--leaf-size: expected an integer >= 2, got '" + v + "'", false;
+    o.tree.leaf_size = static_cast<uint32_t>(u);
+  }
+  if (args.value("--classes", v)) {
+    unsigned long long c[3];
+    size_t start = 0;
+    for (int k = 0; k < 3; ++k) {
+      const size_t comma = v.find(',', start);
+      const std::string part = v.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+      if (!cli::parse_uint(part, 65535, c[k]) || (k < 2 && comma == std::string::npos))
+        return error = "--classes: expected P,N,C (three integers), got '" + v + "'", false;
+      start = comma + 1;
+    }
+    o.classes_p = static_cast<int>(c[0]);
+    o.classes_n = static_cast<int>(c[1]);
+    o.classes_c = static_cast<int>(c[2]);
+  }
+  if (args.value("--balance", v)) {
+    if (!cli::parse_double(v, o.tree.balance) || o.tree.balance < 0 || o.tree.balance > 0.5)
+      return error = "--balance: expected a number in [0, 0.5], got '" + v + "'", false;
+  }
+  if (args.value("--shrink", v)) {
+    const size_t comma = v.find(',');
+    if (comma == std::string::npos || !cli::parse_double(v.substr(0, comma), o.tree.stats.shrink_eta0) ||
+        !cli::parse_double(v.substr(comma + 1), o.tree.stats.shrink_eta1) || o.tree.stats.shrink_eta0 < 0 ||
+        o.tree.stats.shrink_eta0 > 1 || o.tree.stats.shrink_eta1 < 0)
+      return error = "--shrink: expected ETA0,ETA1 with ETA0 in [0, 1] and ETA1 >= 0, got '" + v + "'", false;
+  }
+  if (args.value("--neighbours", v)) {
+    if (!cli::parse_uint(v, 64, u) || u < 3) return error = "--neighbours: expected 3..64, got '" + v + "'", false;
+    o.normal_neighbours = static_cast<int>(u);
+  }
+  if (args.value("--threads", v)) {
+    if (!cli::parse_uint(v, 256, u) || u < 1) return error = "--threads: expected 1..256, got '" + v + "'", false;
+    o.tree.threads = static_cast<int>(u);
+  }
+  if (args.value("--orient", v)) {
+    const OrientMode modes[] = {OrientMode::kAuto, OrientMode::kSensor, OrientMode::kUp, OrientMode::kOutward};
+    bool found = false;
+    for (OrientMode m : modes)
+      if (v == orient_mode_name(m)) o.orient.mode = m, found = true;
+    if (!found) return error = "--orient: expected auto, sensor, up or outward, got '" + v + "'", false;
+  }
+  if (args.value("--viewpoint", v)) {
+    double xyz[3];
+    if (!cli::parse_vec3(v, xyz)) return error = "--viewpoint: expected X,Y,Z (three finite numbers), got '" + v + "'", false;
+    o.orient.has_viewpoint = true;
+    o.orient.viewpoint = Vec3(xyz[0], xyz[1], xyz[2]);
+  }
+  if (args.value("--up", v) && !parse_axis(v, o.orient.up))
+    return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
+  if (args.flag("--no-shrink")) o.tree.stats.shrink_eta0 = 1.0;
+  o.tree.octree = args.flag("--octree");
+  o.normals = !args.flag("--no-normals");
+  o.colors = !args.flag("--no-color");
+  quiet = args.flag("--quiet") || args.flag("-q");
+  json = args.flag("--json");
+  if (args.bad()) return error = args.error(), false;
+  return true;
+}
+
+std::string summary_json(const std::string& scan, const EncodeReport& r, double seconds, double peak_mb) {
+  cli::Json j;
+  j.str("scan", scan)
+      .integer("points", static_cast<long long>(r.points))
+      .integer("nodes", static_cast<long long>(r.nodes))
+      .integer("leaves", static_cast<long long>(r.leaves))
+      .integer("depth", r.depth)
+      .integer("bytes", static_cast<long long>(r.bytes))
+      .integer("record_bytes", static_cast<long long>(r.record_bytes))
+      .num("bits_per_point", r.bits_per_point)
+      .num("seconds", seconds)
+      .num("peak_mb", peak_mb)
+      .str("normals", r.normals_source)
+      .str("scan_kind", scan_kind_name(r.frame.kind))
+      .str("orient", orient_mode_name(r.frame.orient))
+      .str("view_up", axis_name(r.frame.hint.up))
+      .str("view_sensor_side", axis_name(r.frame.hint.sensor_side))
+      .boolean("colors", r.colors)
+      .integer("classes_p", r.classes[0])
+      .integer("classes_n", r.classes[1])
+      .integer("classes_c", r.classes[2])
+      .num("apr", r.ratios.apr)
+      .num("capr", r.ratios.capr)
+      .integer("capr_excluded", static_cast<long long>(r.ratios.capr_excluded))
+      .integer("euclidean_fallbacks", static_cast<long long>(r.tree.euclidean_fallbacks))
+      .integer("unbalanced_splits", static_cast<long long>(r.tree.unbalanced));
+  return j.done();
+}
+
+void print_summary(const std::string& scan, const EncodeReport& r, double seconds, double peak_mb) {
+  std::printf("%s: %s points, %s nodes, %s leaves, depth %d, %s bytes (%llu-byte records), %.2f bits/point, "
+              "%.2f s, peak %.0f MB\n",
+              scan.c_str(), cli::with_commas(r.points).c_str(), cli::with_commas(r.nodes).c_str(),
+              cli::with_commas(r.leaves).c_str(), r.depth, cli::with_commas(r.bytes).c_str(),
+              static_cast<unsigned long long>(r.record_bytes), r.bits_per_point, seconds, peak_mb);
+  std::printf("  %s; normals %s%s; view: up %s, sensor side %s\n", r.frame.reason.c_str(), r.normals_source.c_str(),
+              r.normals_source == "k-NN" ? (std::string(", facing ") + orient_mode_name(r.frame.orient)).c_str() : "",
+              axis_name(r.frame.hint.up), axis_name(r.frame.hint.sensor_side));
+}
+
+void keep_every(PointCloud& cloud, unsigned long long k, const EncodeOptions& o) {
+  if (o.normals) estimate_normals(cloud, o.normal_neighbours, analyse_scan(cloud.positions, o.orient));
+  PointCloud out;
+  for (size_t i = 0; i < cloud.size(); i += k) {
+    out.positions.push_back(cloud.positions[i]);
+    if (cloud.has_normals()) out.normals.push_back(cloud.normals[i]);
+    if (cloud.has_colors()) out.colors.push_back(cloud.colors[i]);
+  }
+  cloud = std::move(out);
+}
+
+}  // namespace stipple

@@ -1,0 +1,74 @@
+// stipple — host command-line tool: encode scans, inspect and sample `.spg`
+// files, measure geometric error, render. One table below drives both the
+// dispatch and `stipple --help`.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <new>
+#include <string>
+
+#include "tools/cli/cli.h"
+
+namespace {
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(int argc, char** argv);
+};
+
+const Command kCommands[] = {
+    {"demo", "encode the bundled scan, render it with the fixed-point client (the main job)", stipple::cmd_demo},
+    {"encode", "scan (.ply or x y z text) -> .spg", stipple::cmd_encode},
+    {"info", "describe a .spg file", stipple::cmd_info},
+    {"sample", "generate points from a .spg cut (reference decoder) -> .ply", stipple::cmd_sample},
+    {"metrics", "nearest-neighbour error and PSNR between two point sets", stipple::cmd_metrics},
+    {"levels", "bits per point and PSNR of each tree level's cut (the trade)", stipple::cmd_levels},
+    {"render", "draw a .spg with the fixed-point handheld client -> .png", stipple::cmd_render},
+    {"ppn-table", "measure the points-per-node table with the client's rasterizer", stipple::cmd_ppn_table},
+    {"image-diff", "compare two PNG images byte for byte, write a diff image", stipple::cmd_image_diff},
+    {"image-crc", "CRC-32 of PNG images' pixels (what stipple-handheld --crc prints)", stipple::cmd_image_crc},
+};
+
+void usage(std::FILE* out) {
+  std::fputs("usage: stipple <command> [options]\n\n"
+             "Statistical point geometry: scans -> hierarchy of Gaussians -> 13/17-byte nodes.\n\ncommands:\n",
+             out);
+  for (const Command& c : kCommands) std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
+  std::fputs("\n`stipple <command> --help` describes each command.\n", out);
+}
+
+// What the command was working on, for a message that must name it: the
+// first argument that is not an option.
+std::string subject(int argc, char** argv) {
+  for (int i = 2; i < argc; ++i)
+    if (argv[i][0] != '-') return argv[i];
+  return "";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
+    usage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  for (const Command& c : kCommands) {
+    if (std::strcmp(argv[1], c.name) != 0) continue;
+    // Errors are values everywhere below; what still escapes (the host ran
+    // out of memory, a library threw) ends with a message, never an abort.
+    const std::string what = std::string(c.name) + (subject(argc, argv).empty() ? "" : " " + subject(argc, argv));
+    try {
+      return c.run(argc, argv);
+    } catch (const std::bad_alloc&) {
+      std::fprintf(stderr, "stipple: %s: out of memory (lower --max-points, or use a host with more memory)\n",
+                   what.c_str());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "stipple: %s: %s\n", what.c_str(), e.what());
+    }
+    return 1;
+  }
+  std::fprintf(stderr, "stipple: unknown command '%s'\n\n", argv[1]);
+  usage(stderr);
+  return 2;
+}

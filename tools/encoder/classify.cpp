@@ -1,0 +1,111 @@
+// stipple host — log-space k-means of sigma tuples. See classify.h.
+#include "tools/encoder/classify.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <thread>
+
+#include "tools/scan/kdtree.h"
+
+namespace stipple {
+namespace {
+
+// A uniform double in [0, 1) from a 64-bit generator, identical everywhere.
+double uniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+void assign_all(const std::vector<Vec3>& points, const std::vector<Vec3>& centers, std::vector<uint16_t>& index,
+                int threads) {
+  const KdTree tree(centers);
+  const size_t n = points.size();
+  auto work = [&](size_t lo, size_t hi) {
+    for (size_t i = lo; i < hi; ++i) index[i] = static_cast<uint16_t>(tree.nearest(points[i]));
+  };
+  std::vector<std::thread> pool;
+  const size_t parts = static_cast<size_t>(std::max(1, threads));
+  for (size_t t = 1; t < parts; ++t) pool.emplace_back(work, n * t / parts, n * (t + 1) / parts);
+  work(0, n / parts);
+  for (std::thread& t : pool) t.join();
+}
+
+}  // namespace
+
+Classification classify_sigmas(const std::vector<Vec3>& tuples, int dims, int max_classes, int max_iterations,
+                               int threads) {
+  Classification out;
+  const size_t n = tuples.size();
+  out.index.assign(n, 0);
+  if (n == 0) return out;
+  std::vector<Vec3> logs(n, Vec3::Zero());
+  for (size_t i = 0; i < n; ++i)
+    for (int d = 0; d < dims; ++d) logs[i][d] = std::log(tuples[i][d]);
+
+  // Few distinct tuples: classes are exact.
+  std::vector<Vec3> distinct = logs;
+  auto less = [](const Vec3& a, const Vec3& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::sort(distinct.begin(), distinct.end(), less);
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+  const size_t k = std::min(distinct.size(), static_cast<size_t>(std::max(1, max_classes)));
+  std::vector<Vec3> centers;
+  if (distinct.size() <= k) {
+    centers = distinct;
+  } else {
+    // k-means++ seeding on a deterministic sample.
+    std::mt19937_64 rng(0x5354504701ull);
+    const size_t sample_size = std::min(distinct.size(), 4 * k);
+    std::vector<Vec3> sample;
+    sample.reserve(sample_size);
+    for (size_t i = 0; i < sample_size; ++i) sample.push_back(distinct[i * distinct.size() / sample_size]);
+    std::vector<double> d2(sample_size, std::numeric_limits<double>::infinity());
+    centers.push_back(sample[static_cast<size_t>(uniform(rng) * static_cast<double>(sample_size))]);
+    while (centers.size() < k) {
+      double total = 0;
+      for (size_t i = 0; i < sample_size; ++i) {
+        d2[i] = std::min(d2[i], (sample[i] - centers.back()).squaredNorm());
+        total += d2[i];
+      }
+      if (total <= 0) break;
+      double target = uniform(rng) * total;
+      size_t pick = sample_size - 1;
+      for (size_t i = 0; i < sample_size; ++i) {
+        target -= d2[i];
+        if (target < 0) {
+          pick = i;
+          break;
+        }
+      }
+      centers.push_back(sample[pick]);
+    }
+    // Lloyd iterations over every tuple.
+    std::vector<Vec3> sums;
+    std::vector<uint32_t> counts;
+    for (int it = 0; it < max_iterations; ++it) {
+      const std::vector<uint16_t> before = out.index;
+      assign_all(logs, centers, out.index, threads);
+      if (it > 0 && out.index == before) break;
+      sums.assign(centers.size(), Vec3::Zero());
+      counts.assign(centers.size(), 0);
+      for (size_t i = 0; i < n; ++i) {
+        sums[out.index[i]] += logs[i];
+        ++counts[out.index[i]];
+      }
+      for (size_t c = 0; c < centers.size(); ++c)
+        if (counts[c]) centers[c] = sums[c] / static_cast<double>(counts[c]);  // an empty class keeps its centre
+    }
+  }
+  assign_all(logs, centers, out.index, threads);
+  double err = 0;
+  for (size_t i = 0; i < n; ++i) err += (logs[i] - centers[out.index[i]]).squaredNorm();
+  out.rms_log_error = std::sqrt(err / static_cast<double>(n));
+  out.centers.resize(centers.size());
+  for (size_t c = 0; c < centers.size(); ++c) {
+    out.centers[c] = Vec3::Zero();
+    for (int d = 0; d < dims; ++d) out.centers[c][d] = std::exp(centers[c][d]);
+  }
+  return out;
+}
+
+}  // namespace stipple

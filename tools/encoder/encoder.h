@@ -1,0 +1,50 @@
+// stipple host — the encoder pipeline: scan -> normals -> hierarchy ->
+// classification -> quantization -> `.spg` bytes (docs/format.md).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/spg_format.h"
+#include "platform/progress.h"
+#include "tools/encoder/hierarchy.h"
+#include "tools/encoder/orientation.h"
+
+namespace stipple {
+
+struct EncodeOptions {
+  TreeOptions tree;
+  // Class counts; 0 means automatic: clamp(nodes / 16, 64, 4096) for sigma_p
+  // and sigma_n (a small scan does not need 4096 classes of 12 bytes each),
+  // 64 for sigma_c.
+  int classes_p = 0, classes_n = 0, classes_c = 0;
+  bool normals = true;  // store normals (computed when the scan has none)
+  bool colors = true;   // store colours when the scan has them
+  int normal_neighbours = 12;
+  OrientOptions orient;  // how estimated normals face; also gives the file's view hint (tools/encoder/orientation.h)
+};
+
+struct EncodeReport {
+  uint64_t points = 0, nodes = 0, leaves = 0;
+  int depth = 0;
+  uint64_t bytes = 0, record_bytes = 0;
+  double bits_per_point = 0;
+  std::string normals_source;  // "file", "faces", "k-NN", "none"
+  bool colors = false;
+  int classes[3] = {0, 0, 0};
+  double class_rms_log_error[3] = {0, 0, 0};
+  PartitionRatios ratios;
+  TreeReport tree;
+  ScanFrame frame;  // what analyse_scan decided: normal orientation, view hint
+};
+
+// Encodes `cloud` (normals may be added to it). Returns false with a message
+// naming the option at fault for invalid options.
+bool encode_cloud(PointCloud& cloud, const EncodeOptions& options, std::vector<uint8_t>& spg, EncodeReport& report,
+                  std::string& error, ProgressBar* progress = nullptr);
+
+// The bounding box as stored: float32, rounded outwards so it contains every point.
+void stored_bounding_box(const std::vector<Vec3>& points, float min[3], float max[3]);
+
+}  // namespace stipple

@@ -1,0 +1,111 @@
+// stipple host — node statistics (TOG05 §3). See node_stats.h.
+#include "tools/encoder/node_stats.h"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+
+namespace stipple {
+
+Vec3 any_perpendicular(const Vec3& v) {
+  // Cross with the coordinate axis least aligned with v.
+  Eigen::Index axis;
+  v.cwiseAbs().minCoeff(&axis);
+  return v.cross(Vec3::Unit(axis)).normalized();
+}
+
+Gaussian3 pca3(const Vec3* values, const uint32_t* ids, size_t n) {
+  Gaussian3 g;
+  if (n == 0) return g;
+  // Pass 1: the mean, accumulated relative to the first value.
+  const Vec3 origin = values[ids[0]];
+  Vec3 sum = Vec3::Zero();
+  for (size_t i = 0; i < n; ++i) sum += values[ids[i]] - origin;
+  g.mean = origin + sum / static_cast<double>(n);
+  // Pass 2: covariance of the centred values.
+  Mat3 cov = Mat3::Zero();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 d = values[ids[i]] - g.mean;
+    cov.noalias() += d * d.transpose();
+  }
+  cov /= static_cast<double>(n);
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
+  const Vec3 lambda = eig.eigenvalues();  // ascending
+  for (int k = 0; k < 3; ++k) g.sigma[k] = std::sqrt(std::max(0.0, lambda[2 - k]));
+  g.frame.col(0) = eig.eigenvectors().col(2);
+  g.frame.col(1) = eig.eigenvectors().col(1);
+  g.frame.col(2) = g.frame.col(0).cross(g.frame.col(1)).normalized();
+  return g;
+}
+
+void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3& fallback_z, Mat3& frame,
+                  Vec2& sigma_n) {
+  Vec3 sum = Vec3::Zero();
+  for (size_t i = 0; i < n; ++i) sum += normals[ids[i]];
+  const double len = sum.norm();
+  const Vec3 m = (len > 1e-9 * static_cast<double>(n) && std::isfinite(len)) ? Vec3(sum / len) : fallback_z;
+  const Vec3 t1 = any_perpendicular(m);
+  const Vec3 t2 = m.cross(t1);
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  size_t used = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& nv = normals[ids[i]];
+    if (nv.squaredNorm() == 0) continue;
+    const double x = nv.dot(t1), y = nv.dot(t2), z = nv.dot(m);
+    const double r = std::hypot(x, y);
+    const double theta = std::atan2(r, z);  // accurate near 0 and pi, unlike acos
+    const Vec2 uv = r > 0 ? Vec2(theta * x / r, theta * y / r) : Vec2::Zero();
+    cov.noalias() += uv * uv.transpose();
+    ++used;
+  }
+  if (used > 0) cov /= static_cast<double>(used);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  sigma_n = Vec2(std::sqrt(std::max(0.0, eig.eigenvalues()[1])), std::sqrt(std::max(0.0, eig.eigenvalues()[0])));
+  const Eigen::Vector2d major = eig.eigenvectors().col(1);
+  const Vec3 x = (major[0] * t1 + major[1] * t2).normalized();
+  frame.col(0) = x;
+  frame.col(1) = m.cross(x);
+  frame.col(2) = m;
+}
+
+NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& o) {
+  NodeStats s;
+  s.count = static_cast<uint32_t>(n);
+  Gaussian3& g = s.position;
+  g = pca3(cloud.positions.data(), ids, n);
+  const bool normals = o.normals && cloud.has_normals();
+  if (normals) normal_stats(cloud.normals.data(), ids, n, g.frame.col(2), s.normal_frame, s.sigma_n);
+  const Vec3 normal = normals ? Vec3(s.normal_frame.col(2)) : Vec3::UnitZ();
+
+  const double tiny = std::max(o.sigma_floor, o.vanish_ratio * g.sigma[0]);
+  const int vanishing = g.sigma[0] <= o.sigma_floor ? 3 : g.sigma[1] <= tiny ? 2 : g.sigma[2] <= tiny ? 1 : 0;
+  Vec3 f1 = g.frame.col(0), f3 = g.frame.col(2);
+  if (vanishing == 2) {
+    // A line: keep its direction, turn f3 towards the normal.
+    const Vec3 projected = normal - normal.dot(f1) * f1;
+    f3 = (normals && projected.norm() > 1e-6) ? Vec3(projected.normalized()) : any_perpendicular(f1);
+  } else if (vanishing == 3) {
+    // A point: f3 along the normal, any tangent pair.
+    f3 = normal;
+    f1 = any_perpendicular(f3);
+  }
+  if (normals && f3.dot(normal) < 0) f3 = -f3;
+  g.frame.col(0) = f1;
+  g.frame.col(2) = f3;
+  g.frame.col(1) = f3.cross(f1);
+  if (normals && o.shrink_eta0 < 1.0) {
+    const double beta = o.shrink_eta0 + (1.0 - o.shrink_eta0) * std::max(0.0, 1.0 - o.shrink_eta1 * std::sqrt(s.sigma_n[0]));
+    g.sigma[2] *= beta;
+  }
+  for (int k = 0; k < 3; ++k) g.sigma[k] = std::max(g.sigma[k], o.sigma_floor);
+  if (normals) s.sigma_n = s.sigma_n.cwiseMax(o.sigma_floor);
+
+  if (o.colors && cloud.has_colors()) {
+    s.color = pca3(cloud.colors.data(), ids, n);
+    for (int k = 0; k < 3; ++k) s.color.sigma[k] = std::max(s.color.sigma[k], o.sigma_floor);
+  }
+  return s;
+}
+
+}  // namespace stipple

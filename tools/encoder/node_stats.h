@@ -1,0 +1,79 @@
+// stipple host — per-node statistics (TOG05 §3, "Statistical representation").
+//
+// Positions: mean, PCA frame (columns f1, f2, f3, right-handed) and standard
+// deviations sigma1 >= sigma2 >= sigma3, from centred sums (two passes: the
+// mean first, then the covariance of p - mean), so a node far from the origin
+// loses no precision. The 3x3 eigenproblem uses Eigen's iterative
+// SelfAdjointEigenSolver (accurate for repeated and vanishing eigenvalues,
+// unlike closed forms).
+//
+// Degenerate nodes (a sigma at or below `vanish_ratio * sigma1`, or sigma1 at or
+// below the floor), the paper's rules:
+//   one vanishing  — the PCA frame (f3 is the plane's normal);
+//   two vanishing  — keep f1, turn the frame about f1 so f3 points along the
+//                    average normal (any perpendicular without normals);
+//   three          — f3 along the average normal (z without normals), f1, f2
+//                    any tangent pair.
+// With normals, f3 is always flipped to agree with the mean normal. Every sigma
+// is then floored at `sigma_floor`.
+//
+// Normals: z = the mean normal m; each normal is mapped to the tangent plane at
+// m by the log map (u, v) = theta (cos phi, sin phi) — theta its angle from m,
+// phi its azimuth — and a 2-D PCA about the origin gives sigma_n1 >= sigma_n2
+// and the frame fn = (x, y, m) with x the major axis.
+//
+// Colours: 3-D PCA like positions, no orientation rule.
+//
+// Curvature-aware shrink (docs/encoder.md): sigma3 *= beta with
+// beta = eta0 + (1 - eta0) * max(0, 1 - eta1 * sqrt(sigma_n1)).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+
+#include "tools/scan/point_cloud.h"
+
+namespace stipple {
+
+using Mat3 = Eigen::Matrix3d;
+using Vec2 = Eigen::Vector2d;
+
+struct Gaussian3 {
+  Vec3 mean = Vec3::Zero();
+  Mat3 frame = Mat3::Identity();  // columns: axes 1, 2, 3
+  Vec3 sigma = Vec3::Zero();      // descending
+};
+
+struct NodeStats {
+  uint32_t count = 0;
+  Gaussian3 position;
+  Mat3 normal_frame = Mat3::Identity();  // column 2 is the mean normal
+  Vec2 sigma_n = Vec2::Zero();
+  Gaussian3 color;
+};
+
+struct StatsOptions {
+  double sigma_floor = 1e-15;
+  double vanish_ratio = 1e-6;
+  bool normals = true;
+  bool colors = true;
+  double shrink_eta0 = 0.25;  // 1 disables the shrink (docs/encoder.md has the measurements)
+  double shrink_eta1 = 2.0;
+};
+
+// Plain PCA of `values[ids[0..n)]`: mean, descending sigmas, right-handed frame.
+Gaussian3 pca3(const Vec3* values, const uint32_t* ids, size_t n);
+
+// Mean-normal frame and sigma_n of `normals[ids[0..n)]`. `fallback_z` is used
+// when the normals cancel out (or are all zero).
+void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3& fallback_z, Mat3& frame,
+                  Vec2& sigma_n);
+
+// All statistics of one node, with the degenerate-node rules and the shrink.
+NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& options);
+
+// A unit vector perpendicular to unit `v`, chosen deterministically.
+Vec3 any_perpendicular(const Vec3& v);
+
+}  // namespace stipple

@@ -1,0 +1,155 @@
+// stipple host — in-process rendering. See render.h.
+#include "tools/reference/render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include "tools/reference/sampler.h"
+
+namespace stipple {
+namespace {
+
+constexpr double kTurn = 4294967296.0;  // 2^32
+constexpr double kMu = 16777216.0;      // 2^24 MU per largest extent
+
+double radians(uint32_t angle) { return angle / kTurn * 2 * std::numbers::pi; }
+
+}  // namespace
+
+Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& cut, const ClientConfig& config,
+                       const ViewSpec& spec) {
+  const int w = config.raster.width, h = config.raster.height;
+  // Model units as the fixed decoder defines them.
+  const Vec3 extent = model.bbox_max - model.bbox_min;
+  const double largest = std::max({extent.x(), extent.y(), extent.z(), 0.0}) > 0 ? extent.maxCoeff() : 1.0;
+  const double to_mu = kMu / largest;
+  int32_t extent_mu[3];
+  for (int a = 0; a < 3; ++a) extent_mu[a] = static_cast<int32_t>(std::llround(extent[a] * to_mu));
+  const OrbitView o = orbit_view(extent_mu, resolve_view(spec, model.header, extent_mu));
+  // The camera of orbit_camera, in doubles, turned by the same axis permutation.
+  const double yaw = radians(o.yaw), pitch = radians(o.pitch), fov = radians(o.fov);
+  int32_t permutation[3][3];
+  orbit_basis(o.up, permutation);
+  Mat3 basis;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) basis(i, j) = permutation[i][j];
+  const Vec3 back = basis * Vec3(std::sin(yaw) * std::cos(pitch), std::sin(pitch), std::cos(yaw) * std::cos(pitch));
+  const Vec3 right = basis * Vec3(std::cos(yaw), 0, -std::sin(yaw));
+  const Vec3 up = back.cross(right);
+  Mat3 R;
+  R.row(0) = right.transpose();
+  R.row(1) = -up.transpose();
+  R.row(2) = -back.transpose();
+  const Vec3 target(o.target_mu[0], o.target_mu[1], o.target_mu[2]);
+  const Vec3 eye = target + o.distance_mu * back;
+  const double focal = (h / 2.0) / std::tan(fov / 2), cx = w / 2.0, cy = h / 2.0;
+  const double near = std::max(o.distance_mu / 64, kCameraMinDistance);
+
+  // Lighting in camera space, then in the model.
+  const Lighting& L = config.lighting;
+  const Vec3 light_cam = Vec3(L.light_q14[0], L.light_q14[1], L.light_q14[2]).normalized();
+  Vec3 half_cam = (light_cam + Vec3(0, 0, -1));
+  half_cam = half_cam.norm() > 0 ? half_cam.normalized() : Vec3(0, 0, -1);
+  const Vec3 light = R.transpose() * light_cam, half = R.transpose() * half_cam;
+  const double ambient = std::min<int>(L.ambient_q8, 256) / 256.0, strength = L.specular_q8 / 256.0;
+
+  const bool normals = model.header.has_normals() && config.shading != ShadingMode::kNone;
+  const bool per_point_normals = normals && config.shading == ShadingMode::kPerPoint;
+  const bool specular = normals && L.specular_q8 > 0;
+  const bool color = model.header.has_color() && !config.grey;
+  const bool color_points = color && config.sample_color;
+  const PpnTable& table = ppn_table(config.source, config.point_size);
+  std::vector<Gaussian3Q12> pseudo3(config.samples), pseudo_c(config.samples);
+  std::vector<Gaussian2Q12> pseudo2(config.samples);
+  if (config.source == GaussianSource::kPseudo) {
+    build_gaussian3_table(config.source, pseudo3.data(), pseudo3.size());
+    build_gaussian3_table(config.source, pseudo_c.data(), pseudo_c.size(), kColorSobolDim);
+    build_gaussian2_table(config.source, pseudo2.data(), pseudo2.size());
+  }
+  auto g3 = [&](uint32_t j, int dim) -> Vec3 {
+    if (config.source == GaussianSource::kSobol) return reference_gaussian3(j + 1, dim);
+    const Gaussian3Q12& q = dim == 0 ? pseudo3[j] : pseudo_c[j];
+    return Vec3(q.v[0], q.v[1], q.v[2]) / 4096.0;
+  };
+  auto g2 = [&](uint32_t j) -> Vec2 {
+    if (config.source == GaussianSource::kSobol) return reference_gaussian2(j + 1);
+    return Vec2(pseudo2[j].v[0], pseudo2[j].v[1]) / 4096.0;
+  };
+
+  std::vector<double> depth(static_cast<size_t>(w) * h, std::numeric_limits<double>::infinity());
+  std::vector<uint32_t> color_buf(static_cast<size_t>(w) * h, config.clear_rgb);
+  const Vec3 grey(((config.grey_rgb >> 16) & 255), ((config.grey_rgb >> 8) & 255), (config.grey_rgb & 255));
+  const int s = config.point_size;
+  for (uint32_t id : cut) {
+    const DecodedNode& node = model.nodes[id];
+    const Vec3 mean = (node.position.mean - model.bbox_min) * to_mu;
+    const Mat3 axes = node.position.frame * node.position.sigma.asDiagonal() * to_mu;  // columns: sigma-scaled axes, MU
+    const Vec3 c = R * (mean - eye);
+    if (c.z() <= near || std::abs(c.x()) > 8 * c.z() || std::abs(c.y()) > 8 * c.z()) continue;
+    const Mat3 A = R * axes;  // camera-space axes (columns)
+    // Jacobian of the projection at the mean, px per MU; M = J A, px per sigma.
+    Eigen::Matrix<double, 2, 3> J;
+    J << focal / c.z(), 0, -focal * c.x() / (c.z() * c.z()), 0, focal / c.z(), -focal * c.y() / (c.z() * c.z());
+    const Eigen::Matrix<double, 2, 3> M = J * A;
+    const double sx0 = cx + focal * c.x() / c.z(), sy0 = cy + focal * c.y() / c.z();
+    const double ex = 3.5 * M.row(0).cwiseAbs().sum(), ey = 3.5 * M.row(1).cwiseAbs().sum();
+    if (sx0 + ex < 0 || sx0 - ex >= w || sy0 + ey < 0 || sy0 - ey >= h) continue;
+    const Eigen::Matrix2d S = M * M.transpose() * 256.0;  // 1/256 px^2
+    // Saturated to +-2^40, NaN to +2^40 (the index saturates far below):
+    // llround of a value beyond 2^63 has no defined result.
+    const auto q = [](double v) { return std::llround(v < -0x1p40 ? -0x1p40 : v < 0x1p40 ? v : 0x1p40); };
+    const uint32_t count = points_per_node(table, ppn_index(q(S(0, 0)), q(S(0, 1)), q(S(1, 1))), config.quality_q8, config.samples);
+    const Vec3 base = color ? Vec3(node.color.mean * 255.0) : grey;
+    const Vec3 n0 = node.normal_frame.col(2);
+    for (uint32_t j = 0; j < count; ++j) {
+      const Vec3 p = c + A * g3(j, 0);
+      if (p.z() < near) continue;
+      if (std::abs(p.x()) > 8 * p.z() || std::abs(p.y()) > 8 * p.z()) continue;
+      const double x = cx + focal * p.x() / p.z(), y = cy + focal * p.y() / p.z();
+      Vec3 col = base;
+      if (color_points)
+        col = (node.color.mean + node.color.frame * node.color.sigma.cwiseProduct(g3(j, kColorSobolDim))).cwiseMax(0.0).cwiseMin(1.0) * 255.0;
+      double intensity = 1, highlight = 0;
+      if (normals) {
+        Vec3 n = n0;
+        if (per_point_normals) {
+          const Vec2 t = g2(j);
+          const double a = node.sigma_n[0] * t.x(), b = node.sigma_n[1] * t.y();
+          const double theta = std::hypot(a, b), phi = std::atan2(b, a);
+          n = node.normal_frame * Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+        }
+        intensity = ambient + (1 - ambient) * std::max(0.0, light.dot(n));
+        if (specular) highlight = 255 * strength * std::pow(std::max(0.0, half.dot(n)), L.shininess);
+      }
+      col = (col * intensity).array() + highlight;
+      uint32_t rgb = 0;
+      for (int k = 0; k < 3; ++k) rgb = (rgb << 8) | static_cast<uint32_t>(std::clamp(std::lround(col[k]), 0L, 255L));
+      const int x0 = static_cast<int>(std::floor(x - (s - 1) / 2.0)), y0 = static_cast<int>(std::floor(y - (s - 1) / 2.0));
+      for (int py = std::max(y0, 0); py < std::min(y0 + s, h); ++py)
+        for (int px = std::max(x0, 0); px < std::min(x0 + s, w); ++px) {
+          const size_t i = static_cast<size_t>(py) * w + px;
+          if (p.z() < depth[i]) {
+            depth[i] = p.z();
+            color_buf[i] = rgb;
+          }
+        }
+    }
+  }
+  Image img;
+  img.width = w;
+  img.height = h;
+  img.rgb.resize(static_cast<size_t>(w) * h * 3);
+  for (size_t i = 0; i < color_buf.size(); ++i) {
+    uint32_t v = color_buf[i];
+    if (config.raster.format == PixelFormat::kRgb565) v = rgb888_from_565(rgb565(v));
+    img.rgb[3 * i] = static_cast<uint8_t>(v >> 16);
+    img.rgb[3 * i + 1] = static_cast<uint8_t>(v >> 8);
+    img.rgb[3 * i + 2] = static_cast<uint8_t>(v);
+  }
+  return img;
+}
+
+}  // namespace stipple

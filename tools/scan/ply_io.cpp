@@ -1,0 +1,535 @@
+// stipple host — PLY and plain-text scan reader, PLY writer. See ply_io.h.
+#include "tools/scan/ply_io.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <sstream>
+
+#include "platform/file_io.h"
+
+namespace stipple {
+
+Box3 bounding_box(const std::vector<Vec3>& points) {
+  Box3 box;
+  if (points.empty()) return box;
+  box.min = box.max = points[0];
+  for (const Vec3& p : points) {
+    box.min = box.min.cwiseMin(p);
+    box.max = box.max.cwiseMax(p);
+  }
+  return box;
+}
+
+namespace {
+
+enum class Type : uint8_t { kInt8, kUint8, kInt16, kUint16, kInt32, kUint32, kFloat32, kFloat64 };
+
+bool parse_type(const std::string& s, Type& t) {
+  static const std::pair<const char*, Type> kNames[] = {
+      {"char", Type::kInt8},     {"int8", Type::kInt8},       {"uchar", Type::kUint8},
+      {"uint8", Type::kUint8},   {"short", Type::kInt16},     {"int16", Type::kInt16},
+      {"ushort", Type::kUint16}, {"uint16", Type::kUint16},   {"int", Type::kInt32},
+      {"int32", Type::kInt32},   {"uint", Type::kUint32},     {"uint32", Type::kUint32},
+      {"float", Type::kFloat32}, {"float32", Type::kFloat32}, {"double", Type::kFloat64},
+      {"float64", Type::kFloat64}};
+  for (const auto& [name, type] : kNames)
+    if (s == name) {
+      t = type;
+      return true;
+    }
+  return false;
+}
+
+size_t type_size(Type t) {
+  switch (t) {
+    case Type::kInt8: case Type::kUint8: return 1;
+    case Type::kInt16: case Type::kUint16: return 2;
+    case Type::kInt32: case Type::kUint32: case Type::kFloat32: return 4;
+    case Type::kFloat64: return 8;
+  }
+  return 1;
+}
+
+// Scale that maps an integer colour channel to [0, 1].
+double color_scale(Type t) {
+  switch (t) {
+    case Type::kInt8: return 1.0 / 127.0;
+    case Type::kUint8: return 1.0 / 255.0;
+    case Type::kInt16: return 1.0 / 32767.0;
+    case Type::kUint16: return 1.0 / 65535.0;
+    case Type::kInt32: return 1.0 / 2147483647.0;
+    case Type::kUint32: return 1.0 / 4294967295.0;
+    case Type::kFloat32: case Type::kFloat64: return 1.0;
+  }
+  return 1.0;
+}
+
+struct Property {
+  std::string name;
+  Type type = Type::kFloat32;
+  bool is_list = false;
+  Type count_type = Type::kUint8;
+};
+
+struct Element {
+  std::string name;
+  uint64_t count = 0;
+  std::vector<Property> properties;
+};
+
+enum class Format { kAscii, kBinaryLE, kBinaryBE };
+
+// Bounds-checked input: every read reports failure instead of overrunning.
+class Input {
+ public:
+  Input(const uint8_t* data, size_t size, size_t pos, Format format)
+      : data_(data), size_(size), pos_(pos), format_(format) {}
+
+  size_t pos() const { return pos_; }
+  size_t remaining() const { return size_ - pos_; }
+
+  // Reads one scalar of type `t`. Returns false at end of input or on a
+  // malformed ASCII token.
+  bool read(Type t, double& value) {
+    if (format_ == Format::kAscii) return read_ascii(t, value);
+    const size_t n = type_size(t);
+    if (remaining() < n) return false;
+    uint8_t b[8];
+    std::memcpy(b, data_ + pos_, n);
+    pos_ += n;
+    if (format_ == Format::kBinaryBE) std::reverse(b, b + n);
+    switch (t) {
+      case Type::kInt8: value = static_cast<int8_t>(b[0]); break;
+      case Type::kUint8: value = b[0]; break;
+      case Type::kInt16: { int16_t v; std::memcpy(&v, b, 2); value = v; break; }
+      case Type::kUint16: { uint16_t v; std::memcpy(&v, b, 2); value = v; break; }
+      case Type::kInt32: { int32_t v; std::memcpy(&v, b, 4); value = v; break; }
+      case Type::kUint32: { uint32_t v; std::memcpy(&v, b, 4); value = v; break; }
+      case Type::kFloat32: { float v; std::memcpy(&v, b, 4); value = v; break; }
+      case Type::kFloat64: { double v; std::memcpy(&v, b, 8); value = v; break; }
+    }
+    return true;
+  }
+
+  bool ascii_error() const { return ascii_error_; }
+
+ private:
+  bool read_ascii(Type t, double& value) {
+    while (pos_ < size_ && std::isspace(data_[pos_])) ++pos_;
+    if (pos_ >= size_) return false;
+    const char* begin = reinterpret_cast<const char*>(data_ + pos_);
+    const char* end = reinterpret_cast<const char*>(data_ + size_);
+    const char* stop = begin;
+    while (stop < end && !std::isspace(static_cast<unsigned char>(*stop))) ++stop;
+    std::from_chars_result r;
+    if (t == Type::kFloat32 || t == Type::kFloat64) {
+      r = std::from_chars(begin, stop, value);
+      // from_chars does not accept "nan"/"inf" spelled with a sign prefix '+'; both are rejected later anyway.
+    } else {
+      long long v = 0;
+      r = std::from_chars(begin, stop, v);
+      value = static_cast<double>(v);
+    }
+    if (r.ec != std::errc() || r.ptr != stop) {
+      ascii_error_ = true;
+      return false;
+    }
+    pos_ += static_cast<size_t>(stop - begin);
+    return true;
+  }
+
+  const uint8_t* data_;
+  size_t size_;
+  size_t pos_;
+  Format format_;
+  bool ascii_error_ = false;
+};
+
+std::string at_byte(size_t pos) { return "byte " + std::to_string(pos); }
+
+bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
+               std::string& error) {
+  // Header: text lines up to and including "end_header".
+  std::vector<Element> elements;
+  Format format = Format::kAscii;
+  bool have_format = false;
+  size_t pos = 0;
+  int line_no = 0;
+  bool ended = false;
+  while (pos < size && !ended) {
+    size_t eol = pos;
+    while (eol < size && data[eol] != '\n') ++eol;
+    if (eol >= size) break;  // header must end with a newline after end_header
+    std::string line(reinterpret_cast<const char*>(data + pos), eol - pos);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    pos = eol + 1;
+    ++line_no;
+    const std::string where = name + ": header line " + std::to_string(line_no) + ": ";
+    std::istringstream words(line);
+    std::string key;
+    words >> key;
+    if (line_no == 1) {
+      if (key != "ply") {
+        error = where + "missing 'ply' magic";
+        return false;
+      }
+      continue;
+    }
+    if (key.empty() || key == "comment" || key == "obj_info") continue;
+    if (key == "format") {
+      std::string f, version;
+      words >> f >> version;
+      if (f == "ascii") format = Format::kAscii;
+      else if (f == "binary_little_endian") format = Format::kBinaryLE;
+      else if (f == "binary_big_endian") format = Format::kBinaryBE;
+      else {
+        error = where + "unknown format '" + f + "'";
+        return false;
+      }
+      if (version != "1.0") {
+        error = where + "unsupported PLY version '" + version + "'";
+        return false;
+      }
+      have_format = true;
+    } else if (key == "element") {
+      Element e;
+      std::string count;
+      words >> e.name >> count;
+      const auto r = std::from_chars(count.data(), count.data() + count.size(), e.count);
+      if (e.name.empty() || count.empty() || r.ec != std::errc() || r.ptr != count.data() + count.size()) {
+        error = where + "malformed element line '" + line + "'";
+        return false;
+      }
+      elements.push_back(e);
+    } else if (key == "property") {
+      if (elements.empty()) {
+        error = where + "property before any element";
+        return false;
+      }
+      Property p;
+      std::string type;
+      words >> type;
+      if (type == "list") {
+        std::string count_type, item_type;
+        words >> count_type >> item_type >> p.name;
+        if (!parse_type(count_type, p.count_type) || !parse_type(item_type, p.type) ||
+            p.count_type == Type::kFloat32 || p.count_type == Type::kFloat64) {
+          error = where + "unknown or invalid list property types '" + count_type + " " + item_type + "'";
+          return false;
+        }
+        p.is_list = true;
+      } else {
+        words >> p.name;
+        if (!parse_type(type, p.type)) {
+          error = where + "unknown property type '" + type + "'";
+          return false;
+        }
+      }
+      if (p.name.empty()) {
+        error = where + "property without a name";
+        return false;
+      }
+      elements.back().properties.push_back(p);
+    } else if (key == "end_header") {
+      ended = true;
+    } else {
+      error = where + "unknown header keyword '" + key + "'";
+      return false;
+    }
+  }
+  if (!ended) {
+    error = name + ": header has no end_header line";
+    return false;
+  }
+  if (!have_format) {
+    error = name + ": header has no format line";
+    return false;
+  }
+
+  // Locate the vertex element and the properties we use.
+  const Element* vertex = nullptr;
+  for (const Element& e : elements)
+    if (e.name == "vertex") vertex = &e;
+  if (!vertex) {
+    error = name + ": no 'vertex' element";
+    return false;
+  }
+  auto find = [&](const Element& e, const char* n) -> int {
+    for (size_t i = 0; i < e.properties.size(); ++i)
+      if (e.properties[i].name == n && !e.properties[i].is_list) return static_cast<int>(i);
+    return -1;
+  };
+  const int ix = find(*vertex, "x"), iy = find(*vertex, "y"), iz = find(*vertex, "z");
+  if (ix < 0 || iy < 0 || iz < 0) {
+    error = name + ": vertex element lacks scalar x, y and z properties";
+    return false;
+  }
+  int in_[3] = {find(*vertex, "nx"), find(*vertex, "ny"), find(*vertex, "nz")};
+  const bool has_normals = in_[0] >= 0 && in_[1] >= 0 && in_[2] >= 0;
+  int ic[3] = {find(*vertex, "red"), find(*vertex, "green"), find(*vertex, "blue")};
+  if (ic[0] < 0 || ic[1] < 0 || ic[2] < 0) {
+    ic[0] = find(*vertex, "diffuse_red");
+    ic[1] = find(*vertex, "diffuse_green");
+    ic[2] = find(*vertex, "diffuse_blue");
+  }
+  const bool has_colors = ic[0] >= 0 && ic[1] >= 0 && ic[2] >= 0;
+
+  // Every element costs at least this many bytes; reject counts the file cannot hold.
+  uint64_t bytes_needed = 0;
+  for (const Element& e : elements) {
+    uint64_t min_bytes = 0;
+    for (const Property& p : e.properties)
+      min_bytes += format == Format::kAscii ? 2 : (p.is_list ? type_size(p.count_type) : type_size(p.type));
+    if (e.count > 0 && min_bytes == 0) {
+      error = name + ": element '" + e.name + "' has " + std::to_string(e.count) + " items but no properties";
+      return false;
+    }
+    if (e.count > std::numeric_limits<uint32_t>::max() ||
+        (min_bytes > 0 && e.count > (size - pos + 1) / min_bytes)) {
+      error = name + ": element '" + e.name + "' claims " + std::to_string(e.count) +
+              " items, more than the " + std::to_string(size - pos) + " bytes after the header can hold";
+      return false;
+    }
+    bytes_needed += e.count * min_bytes;
+  }
+  if (format != Format::kAscii && bytes_needed > size - pos) {
+    error = name + ": file is truncated: the header's elements need at least " + std::to_string(bytes_needed) +
+            " bytes after the header, the file has " + std::to_string(size - pos);
+    return false;
+  }
+
+  cloud = PointCloud{};
+  cloud.positions.reserve(vertex->count);
+  if (has_normals) cloud.normals.reserve(vertex->count);
+  if (has_colors) cloud.colors.reserve(vertex->count);
+
+  Input in(data, size, pos, format);
+  std::vector<double> values;
+  for (const Element& e : elements) {
+    const bool is_vertex = &e == vertex;
+    const bool is_face = e.name == "face";
+    int face_list = -1;
+    if (is_face)
+      for (size_t i = 0; i < e.properties.size(); ++i)
+        if (e.properties[i].is_list &&
+            (e.properties[i].name == "vertex_indices" || e.properties[i].name == "vertex_index"))
+          face_list = static_cast<int>(i);
+    values.assign(e.properties.size(), 0.0);
+    std::vector<uint32_t> face;
+    for (uint64_t item = 0; item < e.count; ++item) {
+      for (size_t pi = 0; pi < e.properties.size(); ++pi) {
+        const Property& p = e.properties[pi];
+        const size_t start = in.pos();
+        auto fail = [&](const std::string& what) {
+          error = name + ": " + at_byte(start) + ": " + e.name + " " + std::to_string(item) + ", property '" +
+                  p.name + "': " + what;
+          return false;
+        };
+        auto read_fail = [&]() {
+          return fail(in.ascii_error() ? "malformed number" : "file is truncated");
+        };
+        if (!p.is_list) {
+          if (!in.read(p.type, values[pi])) return read_fail();
+          continue;
+        }
+        double count_value;
+        if (!in.read(p.count_type, count_value)) return read_fail();
+        if (count_value < 0 || count_value > 1e6 ||
+            count_value * (format == Format::kAscii ? 2.0 : static_cast<double>(type_size(p.type))) >
+                static_cast<double>(in.remaining()) + 1.0)
+          return fail("list length " + std::to_string(static_cast<long long>(count_value)) + " is invalid");
+        const auto n = static_cast<size_t>(count_value);
+        const bool keep = is_face && static_cast<int>(pi) == face_list;
+        face.clear();
+        for (size_t k = 0; k < n; ++k) {
+          double v;
+          if (!in.read(p.type, v)) return read_fail();
+          if (keep) {
+            if (!(v >= 0 && v < static_cast<double>(vertex->count)))
+              return fail("vertex index " + std::to_string(static_cast<long long>(v)) + " out of range [0, " +
+                          std::to_string(vertex->count) + ")");
+            face.push_back(static_cast<uint32_t>(v));
+          }
+        }
+        for (size_t k = 2; k < face.size(); ++k) cloud.triangles.push_back({face[0], face[k - 1], face[k]});
+      }
+      if (!is_vertex) continue;
+      const Vec3 p(values[ix], values[iy], values[iz]);
+      if (!p.allFinite()) {
+        error = name + ": vertex " + std::to_string(item) + ": non-finite coordinate (" + std::to_string(p.x()) +
+                ", " + std::to_string(p.y()) + ", " + std::to_string(p.z()) + ")";
+        return false;
+      }
+      cloud.positions.push_back(p);
+      if (has_normals) {
+        Vec3 n(values[in_[0]], values[in_[1]], values[in_[2]]);
+        if (!n.allFinite()) {
+          error = name + ": vertex " + std::to_string(item) + ": non-finite normal";
+          return false;
+        }
+        const double len = n.norm();
+        cloud.normals.push_back(len > 0 ? Vec3(n / len) : Vec3::Zero());
+      }
+      if (has_colors) {
+        Vec3 c;
+        for (int k = 0; k < 3; ++k)
+          c[k] = values[ic[k]] * color_scale(vertex->properties[static_cast<size_t>(ic[k])].type);
+        if (!c.allFinite()) {
+          error = name + ": vertex " + std::to_string(item) + ": non-finite colour";
+          return false;
+        }
+        cloud.colors.push_back(c.cwiseMax(0.0).cwiseMin(1.0));
+      }
+    }
+  }
+  if (format != Format::kAscii && in.remaining() != 0) {
+    error = name + ": " + at_byte(in.pos()) + ": " + std::to_string(in.remaining()) +
+            " unexpected bytes after the last element (counts disagree with the file size)";
+    return false;
+  }
+  if (cloud.positions.empty()) {
+    error = name + ": no vertices";
+    return false;
+  }
+  return true;
+}
+
+bool parse_text(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error) {
+  cloud = PointCloud{};
+  size_t pos = 0;
+  int line_no = 0;
+  size_t columns = 0;
+  std::vector<double> row;
+  while (pos < size) {
+    size_t eol = pos;
+    while (eol < size && data[eol] != '\n') ++eol;
+    const char* begin = reinterpret_cast<const char*>(data + pos);
+    const char* end = reinterpret_cast<const char*>(data + eol);
+    pos = eol + 1;
+    ++line_no;
+    const char* hash = std::find(begin, end, '#');
+    end = hash;
+    row.clear();
+    const char* p = begin;
+    while (true) {
+      while (p < end && (std::isspace(static_cast<unsigned char>(*p)) || *p == ',')) ++p;
+      if (p >= end) break;
+      const char* stop = p;
+      while (stop < end && !std::isspace(static_cast<unsigned char>(*stop)) && *stop != ',') ++stop;
+      double v;
+      const auto r = std::from_chars(p, stop, v);
+      if (r.ec != std::errc() || r.ptr != stop) {
+        error = name + ": line " + std::to_string(line_no) + ": malformed number '" + std::string(p, stop) + "'";
+        return false;
+      }
+      if (!std::isfinite(v)) {
+        error = name + ": line " + std::to_string(line_no) + ": non-finite value";
+        return false;
+      }
+      row.push_back(v);
+      p = stop;
+    }
+    if (row.empty()) continue;
+    if (columns == 0) {
+      columns = row.size();
+      if (columns != 3 && columns != 6 && columns != 9) {
+        error = name + ": line " + std::to_string(line_no) + ": expected 3, 6 or 9 columns (x y z [nx ny nz] [r g b]), got " +
+                std::to_string(columns);
+        return false;
+      }
+    } else if (row.size() != columns) {
+      error = name + ": line " + std::to_string(line_no) + ": expected " + std::to_string(columns) + " columns, got " +
+              std::to_string(row.size());
+      return false;
+    }
+    cloud.positions.emplace_back(row[0], row[1], row[2]);
+    if (columns >= 6) {
+      Vec3 n(row[3], row[4], row[5]);
+      const double len = n.norm();
+      cloud.normals.push_back(len > 0 ? Vec3(n / len) : Vec3::Zero());
+    }
+    if (columns == 9) cloud.colors.push_back((Vec3(row[6], row[7], row[8]) / 255.0).cwiseMax(0.0).cwiseMin(1.0));
+  }
+  if (cloud.positions.empty()) {
+    error = name + ": no points";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+size_t count_duplicate_positions(const std::vector<Vec3>& points) {
+  std::vector<uint32_t> order(points.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  const auto less = [&](uint32_t a, uint32_t b) {
+    const Vec3 &p = points[a], &q = points[b];
+    return p.x() != q.x() ? p.x() < q.x() : p.y() != q.y() ? p.y() < q.y() : p.z() < q.z();
+  };
+  std::sort(order.begin(), order.end(), less);
+  size_t duplicates = 0;
+  for (size_t i = 1; i < order.size(); ++i) duplicates += points[order[i]] == points[order[i - 1]];
+  return duplicates;
+}
+
+bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
+                       std::string& error) {
+  const bool ok = size >= 3 && std::memcmp(data, "ply", 3) == 0 ? parse_ply(name, data, size, cloud, error)
+                                                                 : parse_text(name, data, size, cloud, error);
+  if (!ok) return false;
+  // Many points on one value: float32 coordinates far from the origin round
+  // onto a coarse lattice (at 1e7, steps of 1), and the scan collapses.
+  const size_t duplicates = count_duplicate_positions(cloud.positions);
+  if (duplicates >= 100 && duplicates * 100 >= cloud.size()) {
+    const Box3 box = bounding_box(cloud.positions);
+    const double far = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff());
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "%s: %zu of %zu points (%.1f %%) repeat another point's position exactly%s", name.c_str(),
+                  duplicates, cloud.size(), 100.0 * static_cast<double>(duplicates) / static_cast<double>(cloud.size()),
+                  far > 1e5 * std::max(box.diagonal(), 1e-300)
+                      ? "; the coordinates are far from the origin for their extent: float32 values there round onto a "
+                        "coarse lattice (subtract an offset before storing them as float)"
+                      : "");
+    cloud.warnings.push_back(text);
+  }
+  return true;
+}
+
+bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& error) {
+  std::vector<uint8_t> bytes;
+  if (!read_file(path, bytes, error)) return false;
+  return parse_point_cloud(path, bytes.data(), bytes.size(), cloud, error);
+}
+
+bool write_ply(const std::string& path, const PointCloud& cloud, std::string& error) {
+  std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by stipple\nelement vertex " +
+                       std::to_string(cloud.size()) + "\nproperty float x\nproperty float y\nproperty float z\n";
+  if (cloud.has_normals()) header += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (cloud.has_colors()) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  header += "end_header\n";
+  std::vector<uint8_t> out(header.begin(), header.end());
+  const size_t stride = 12 + (cloud.has_normals() ? 12 : 0) + (cloud.has_colors() ? 3 : 0);
+  out.reserve(out.size() + stride * cloud.size());
+  auto put_float = [&](double v) {
+    const float f = static_cast<float>(v);
+    uint8_t b[4];
+    std::memcpy(b, &f, 4);  // little-endian host (x86-64, ARM Linux)
+    out.insert(out.end(), b, b + 4);
+  };
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    for (int k = 0; k < 3; ++k) put_float(cloud.positions[i][k]);
+    if (cloud.has_normals())
+      for (int k = 0; k < 3; ++k) put_float(cloud.normals[i][k]);
+    if (cloud.has_colors())
+      for (int k = 0; k < 3; ++k)
+        out.push_back(static_cast<uint8_t>(std::lround(std::clamp(cloud.colors[i][k], 0.0, 1.0) * 255.0)));
+  }
+  return write_file_atomic(path, out, error);
+}
+
+}  // namespace stipple

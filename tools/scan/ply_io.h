@@ -1,0 +1,43 @@
+// stipple host — reading scans (PLY and plain text) and writing PLY.
+//
+// PLY: `ascii`, `binary_little_endian` and `binary_big_endian` 1.0. Vertex
+// element: x y z (any scalar type) required; nx ny nz optional; colour as
+// red/green/blue or diffuse_red/diffuse_green/diffuse_blue (uchar/ushort scaled
+// to [0, 1], float/double taken as [0, 1], other integer types by their
+// maximum). Faces (`vertex_indices` or `vertex_index` lists) are
+// fan-triangulated and kept for normal estimation. Other elements and
+// properties are skipped.
+//
+// Plain text (any file not starting with "ply"): one point per line,
+// `x y z`, `x y z nx ny nz` or `x y z nx ny nz r g b` (r g b in 0..255); `#`
+// starts a comment; every line must have the same number of columns.
+//
+// Errors are returned, never thrown, as "<path>: <where>: <what>", where
+// <where> names the header line, element index, property or byte offset.
+// Nothing is sized from a header count before the count is checked against
+// the bytes that remain, so a hostile header cannot cause a huge allocation.
+// Non-finite coordinates, normals or colours are rejected. A scan where at
+// least 1 % of the points (and 100 or more) repeat another point's position
+// exactly gets a warning in `cloud.warnings` (float32 collapse far from the
+// origin is the usual cause).
+#pragma once
+
+#include <string>
+
+#include "tools/scan/point_cloud.h"
+
+namespace stipple {
+
+bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& error);
+// Parses an in-memory file; `name` is used in error messages.
+bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
+                       std::string& error);
+
+// Points whose position equals an earlier point's (exact comparison).
+size_t count_duplicate_positions(const std::vector<Vec3>& points);
+
+// Writes binary little-endian PLY: float x y z, then float nx ny nz and uchar
+// red green blue when present.
+bool write_ply(const std::string& path, const PointCloud& cloud, std::string& error);
+
+}  // namespace stipple
