@@ -151,15 +151,16 @@ DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
     n.mean[a] = static_cast<int32_t>((v + (int64_t{1} << (shift - 1))) >> shift);
   }
   const FrameQ14 fp = decode_frame_q14(fp_, f[Field::kFpTheta], f[Field::kFpPhi], f[Field::kFpPsi]);
-  const int32_t* sp = sigma_p_ + 3u * f[Field::kSigmaP];
+  const int32_t* sp = sigma_p_mu(ClassId{f[Field::kSigmaP]});
   for (int k = 0; k < 3; ++k)
     for (int c = 0; c < 3; ++c) n.axis[k][c] = mul_q14(fp.axis[k][c], sp[k]);
   if (normals) {
     const FrameQ14 fn = decode_frame_q14(fn_, f[Field::kFnTheta], f[Field::kFnPhi], f[Field::kFnPsi]);
     for (int k = 0; k < 3; ++k)
       for (int c = 0; c < 3; ++c) n.normal_frame[k][c] = fn.axis[k][c];
-    n.sigma_n[0] = sigma_n_[2u * f[Field::kSigmaN]];
-    n.sigma_n[1] = sigma_n_[2u * f[Field::kSigmaN] + 1];
+    const int32_t* sn = sigma_n_q12(ClassId{f[Field::kSigmaN]});
+    n.sigma_n[0] = sn[0];
+    n.sigma_n[1] = sn[1];
   }
   if (color) {
     for (int c = 0; c < 3; ++c) {
@@ -167,7 +168,7 @@ DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
       n.color[c] = static_cast<uint8_t>((f.v[static_cast<int>(Field::kColorR) + c] * 255u + max / 2) / max);
     }
     const FrameQ14 fc = decode_frame_q14(fc_, f[Field::kFcTheta], f[Field::kFcPhi], f[Field::kFcPsi]);
-    const int32_t* sc = sigma_c_ + 3u * f[Field::kSigmaC];
+    const int32_t* sc = sigma_c_q12(ClassId{f[Field::kSigmaC]});
     for (int k = 0; k < 3; ++k)
       for (int c = 0; c < 3; ++c) n.color_axis[k][c] = mul_q14(fc.axis[k][c], sc[k]);
   }

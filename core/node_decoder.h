@@ -53,6 +53,12 @@ class NodeDecoder {
 
   // Extent of the box along each axis, in MU (the largest is 2^24).
   const int32_t* extent_mu() const { return extent_mu_; }
+  // A class's sigmas as the decoder holds them (for a GPU client's tables):
+  // sigma_p 3 values in MU, sigma_n 2 in Q12 radians, sigma_c 3 in Q12. The
+  // class must be below the header's count for that table.
+  const int32_t* sigma_p_mu(ClassId c) const { return sigma_p_ + 3u * index_of(c); }
+  const int32_t* sigma_n_q12(ClassId c) const { return sigma_n_ + 2u * index_of(c); }
+  const int32_t* sigma_c_q12(ClassId c) const { return sigma_c_ + 3u * index_of(c); }
 
  private:
   SpgHeader header_{};

@@ -1,17 +1,20 @@
 // Counts every heap call (operator new/delete and malloc/calloc/realloc/free)
 // and checks that core's per-frame paths make none after init: validating a
-// .spg, decoding every node, unpacking records. A positive control first
+// .spg, decoding every node, unpacking records, rasterizing, the whole
+// client, presenting to the null display. A positive control first
 // proves the counter sees allocations. Built without sanitizers only (they
 // replace malloc themselves). Prints "N passed, M failed".
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <new>
+#include <string>
 #include <vector>
 
 #include "core/node_decoder.h"
 #include "core/spg_format.h"
 #include "platform/file_io.h"
+#include "platform/null/null_display.h"
 #include "core/cut.h"
 #include "raster/client.h"
 #include "raster/point_raster.h"
@@ -155,6 +158,21 @@ int main(int argc, char** argv) {
   }
   check(client_ok && g_heap_calls.load() - before == 0,
         "client: 3 startups, 90 frames with cuts, puts, drops after init", g_heap_calls.load() - before);
+
+  // The display path: the null display converts and keeps every frame in
+  // storage sized when it was made.
+  stipple::NullDisplay display(240, 320, stipple::PixelFormat::kRgb565);
+  std::string display_error;
+  display.push_input(stipple::InputEvent{stipple::InputKind::kButtonDown, stipple::Button::kLeft, 0, 0});
+  before = g_heap_calls.load();
+  bool display_ok = true;
+  for (int frame = 0; frame < 100; ++frame) {
+    display_ok &= display.present(frame_pixels.data(), 240 * 2, 240, 320, stipple::PixelFormat::kRgb565, display_error);
+    stipple::InputEvent event;
+    while (display.poll(&event)) checksum += static_cast<int>(event.kind);
+  }
+  check(display_ok && display.frames() == 100 && g_heap_calls.load() - before == 0,
+        "100 frames presented to the null display", g_heap_calls.load() - before);
   std::printf("checksum %ld\n%d passed, %d failed\n", checksum, passed, failed);
   return failed == 0 ? 0 : 1;
 }

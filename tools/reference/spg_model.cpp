@@ -66,20 +66,20 @@ bool decode_spg(const std::string& name, const uint8_t* data, size_t size, Decod
     for (int a = 0; a < 3; ++a)
       node.position.mean[a] = dequantize_cell(f.v[a], model.bbox_min[a], model.bbox_max[a], layout.bits[a]);
     node.position.frame = decode_frame({f[Field::kFpTheta], f[Field::kFpPhi], f[Field::kFpPsi]}, fp_bits);
-    node.class_p = f[Field::kSigmaP];
-    node.position.sigma = model.sigma_p[node.class_p];
+    node.class_p = ClassId{f[Field::kSigmaP]};
+    node.position.sigma = model.sigma_p[index_of(node.class_p)];
     if (h.has_normals()) {
       node.normal_frame = decode_frame({f[Field::kFnTheta], f[Field::kFnPhi], f[Field::kFnPsi]}, fn_bits);
-      node.class_n = f[Field::kSigmaN];
-      node.sigma_n = model.sigma_n[node.class_n];
+      node.class_n = ClassId{f[Field::kSigmaN]};
+      node.sigma_n = model.sigma_n[index_of(node.class_n)];
     }
     if (h.has_color()) {
       node.color.mean = Vec3(dequantize_unit(f[Field::kColorR], layout.width(Field::kColorR)),
                              dequantize_unit(f[Field::kColorG], layout.width(Field::kColorG)),
                              dequantize_unit(f[Field::kColorB], layout.width(Field::kColorB)));
       node.color.frame = decode_frame({f[Field::kFcTheta], f[Field::kFcPhi], f[Field::kFcPsi]}, fc_bits);
-      node.class_c = f[Field::kSigmaC];
-      node.color.sigma = model.sigma_c[node.class_c];
+      node.class_c = ClassId{f[Field::kSigmaC]};
+      node.color.sigma = model.sigma_c[index_of(node.class_c)];
     }
   }
   // Internal point counts, children before parents (reverse BFS).

@@ -22,7 +22,7 @@ struct DecodedNode {
   uint32_t first_child = 0;
   uint8_t child_count = 0;
   uint16_t depth = 0;
-  uint16_t class_p = 0, class_n = 0, class_c = 0;
+  ClassId class_p{}, class_n{}, class_c{};  // indices into the model's class tables
   bool leaf() const { return child_count == 0; }
 };
 
