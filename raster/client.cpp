@@ -46,24 +46,7 @@ NodeCacheLimits cache_limits(const ClientConfig& c) {
   return l;
 }
 
-RendererConfig renderer_config(const ClientConfig& c) {
-  RendererConfig r;
-  r.raster = c.raster;
-  r.normals = c.normals;
-  r.color = c.color;
-  r.samples = c.samples;
-  r.source = c.source;
-  r.point_size = c.point_size;
-  r.quality_q8 = c.quality_q8;
-  r.projection = c.projection;
-  r.shading = c.shading;
-  r.sample_color = c.sample_color;
-  r.grey = c.grey;
-  r.lighting = c.lighting;
-  r.grey_rgb = c.grey_rgb;
-  r.clear_rgb = c.clear_rgb;
-  return r;
-}
+RendererConfig renderer_config(const ClientConfig& c) { return c; }
 
 const char* client_status_text(ClientStatus s) {
   switch (s) {

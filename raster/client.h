@@ -25,25 +25,14 @@
 
 namespace stipple {
 
-struct ClientConfig {
-  RasterConfig raster;                     // screen, pixel format, tiles, points per frame
+// The renderer's configuration (raster, normals/colour, samples, shading...)
+// and the cache's limits; `normals` and `color` size both.
+struct ClientConfig : RendererConfig {
   uint32_t node_capacity = 30000;          // nodes the cache holds
   bool cache_decoded = false;              // keep decoded nodes (sizeof(FixedNode) bytes each) instead of
                                            // packed records: no per-frame decode, ~7x the cache memory
-  bool normals = true, color = true;       // attributes the arena is sized for
   uint16_t max_classes[3] = {4096, 4096, 64};  // sigma_p, sigma_n, sigma_c tables
   uint8_t max_angle_bits = 10;             // widest angle field accepted
-  uint16_t samples = 1024;                 // Gaussian table entries = most points per node
-  GaussianSource source = GaussianSource::kSobol;
-  uint8_t point_size = 2;                  // 1..3 px (the paper drew 1.8 px points)
-  uint16_t quality_q8 = 256;               // points-per-node scale (256 = as measured)
-  Projection projection = Projection::kAffine;
-  ShadingMode shading = ShadingMode::kPerPoint;
-  bool sample_color = true;                // per-point colour from sigma_c (else the node's mean colour)
-  bool grey = false;                       // ignore the model's colour
-  Lighting lighting;
-  uint32_t grey_rgb = 0xD8D8D8;            // base colour without colour attributes
-  uint32_t clear_rgb = 0x000000;
 };
 
 // The two halves of a client configuration.
