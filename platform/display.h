@@ -42,6 +42,10 @@ class Display {
                                      PixelFormat format, std::string& error) = 0;
   // The next pending input event; false when there is none. Never blocks.
   virtual bool poll(InputEvent* event) = 0;
+  // The display's clock, microseconds from an arbitrary origin, never going
+  // back: frame pacing and the status line's rates. A monotonic wall clock
+  // unless a backend says otherwise (the null display's is simulated).
+  virtual uint64_t now_us() const;
 };
 
 }  // namespace stipple

@@ -7,8 +7,8 @@
 
 namespace stipple {
 
-NullDisplay::NullDisplay(uint16_t width, uint16_t height, PixelFormat format, std::string path)
-    : width_(width), height_(height), format_(format), path_(std::move(path)) {
+NullDisplay::NullDisplay(uint16_t width, uint16_t height, PixelFormat format, std::string path, uint32_t frame_us)
+    : width_(width), height_(height), format_(format), path_(std::move(path)), frame_us_(frame_us) {
   image_.width = width;
   image_.height = height;
   image_.rgb.assign(static_cast<size_t>(width) * height * 3, 0);
