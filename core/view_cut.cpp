@@ -1,0 +1,272 @@
+// stipple core — the view-dependent cut. See view_cut.h; the measurements
+// are in docs/figures.md.
+#include "core/view_cut.h"
+
+#include <algorithm>
+
+#include "core/cut.h"
+#include "core/fixed_trig.h"
+#include "core/gaussian_table.h"
+
+namespace stipple {
+
+struct ViewCut::Bound {
+  int32_t center[3];     // MU
+  int32_t radius;        // gamma * sigma_p1, MU
+  uint32_t first_child;  // id of the first child (children are adjacent)
+  int16_t normal[3];     // mean normal, Q14 (zero without normals)
+  uint16_t sigma_n1_q12;  // the normal spread (Q12 radians, saturated), 0 without normals
+  uint8_t children;
+  uint8_t pad[3];
+};
+static_assert(sizeof(ViewCut::Bound) == 32);
+
+struct ViewCut::Eval {
+  bool visible;   // to be sent if it stays in the cut
+  bool split;     // to be replaced by its children
+  uint32_t size;  // projected radius, 1/16 px (saturated)
+};
+
+namespace {
+
+constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
+
+struct Layout {
+  size_t bounds, sent_bits, fresh_bits, cut, sent, previous, sizes, entered, left, heap, total;
+};
+
+Layout layout_of(uint32_t n) {
+  Layout l{};
+  size_t at = 0;
+  auto take = [&](size_t bytes) {
+    const size_t here = at;
+    at += align8(bytes);
+    return here;
+  };
+  l.bounds = take(sizeof(ViewCut::Bound) * n);
+  l.sent_bits = take((size_t{n} + 7) / 8);
+  l.fresh_bits = take((size_t{n} + 7) / 8);
+  l.cut = take(4 * size_t{n});
+  l.sent = take(4 * size_t{n});
+  l.previous = take(4 * size_t{n});
+  l.sizes = take(4 * size_t{n});
+  l.entered = take(4 * size_t{n});
+  l.left = take(4 * size_t{n});
+  l.heap = take(8 * size_t{n});
+  l.total = at;
+  return l;
+}
+
+inline bool bit(const uint8_t* bits, uint32_t i) { return (bits[i >> 3] >> (i & 7)) & 1u; }
+inline void set_bit(uint8_t* bits, uint32_t i) { bits[i >> 3] = static_cast<uint8_t>(bits[i >> 3] | (1u << (i & 7))); }
+inline void clear_bit(uint8_t* bits, uint32_t i) { bits[i >> 3] = static_cast<uint8_t>(bits[i >> 3] & ~(1u << (i & 7))); }
+
+}  // namespace
+
+size_t view_cut_bytes(const SpgHeader& header) { return layout_of(header.node_count).total; }
+
+CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes) {
+  ready_ = false;
+  const uint32_t n = view.header.node_count;
+  const Layout l = layout_of(n);
+  if (bytes < l.total) return CutStatus::kStorageTooSmall;
+  uint8_t* base = static_cast<uint8_t*>(storage);
+  Bound* bounds = reinterpret_cast<Bound*>(base + l.bounds);
+  normals_ = view.header.has_normals();
+  uint32_t next_child = 1;
+  for (uint32_t i = 0; i < n; ++i) {
+    FixedNode node;
+    if (decoder.decode(view.records + size_t{i} * view.record_bytes, &node) != DecodeStatus::kOk)
+      return CutStatus::kBadView;
+    Bound& b = bounds[i];
+    for (int k = 0; k < 3; ++k) {
+      b.center[k] = node.mean[k];
+      b.normal[k] = node.normal_frame[2][k];
+    }
+    b.radius = node_radius_mu(node);
+    b.children = static_cast<uint8_t>(spg_child_count(view, i));
+    b.first_child = next_child;
+    next_child += b.children;
+    b.pad[0] = b.pad[1] = b.pad[2] = 0;
+    b.sigma_n1_q12 = static_cast<uint16_t>(!normals_ ? 0 : node.sigma_n[0] > 0xFFFF ? 0xFFFF : node.sigma_n[0] < 0 ? 0 : node.sigma_n[0]);
+  }
+  bounds_ = bounds;
+  node_count_ = n;
+  sent_bits_ = base + l.sent_bits;
+  fresh_bits_ = base + l.fresh_bits;
+  for (size_t i = 0; i < (size_t{n} + 7) / 8; ++i) sent_bits_[i] = fresh_bits_[i] = 0;
+  cut_ = reinterpret_cast<NodeId*>(base + l.cut);
+  sent_ = reinterpret_cast<NodeId*>(base + l.sent);
+  previous_ = reinterpret_cast<NodeId*>(base + l.previous);
+  sent_size_ = reinterpret_cast<uint32_t*>(base + l.sizes);
+  entered_ = reinterpret_cast<NodeId*>(base + l.entered);
+  left_ = reinterpret_cast<NodeId*>(base + l.left);
+  heap_ = reinterpret_cast<uint64_t*>(base + l.heap);
+  cut_count_ = sent_count_ = previous_count_ = entered_count_ = left_count_ = visited_ = 0;
+  ready_ = true;
+  return CutStatus::kOk;
+}
+
+ViewCut::Eval ViewCut::evaluate(uint32_t id) const {
+  const Bound& b = bounds_[id];
+  const Camera& cam = *camera_;
+  const CutParams& p = *params_;
+  Eval e{false, false, 0};
+  int32_t c[3];
+  camera_space(cam, b.center, c);
+  const int64_t r = b.radius, z = c[2];
+  if (z + r < cam.near_mu) return e;  // wholly behind the near plane
+  const bool crosses_near = z - r < cam.near_mu;
+  if (!crosses_near && p.cull_frustum) {
+    // Planes through the eye and the screen's edges: f X = +-cx Z, f Y = +-cy Z.
+    const int64_t fx = int64_t{cam.focal_q4} * c[0], fy = int64_t{cam.focal_q4} * c[1];
+    const int64_t cxz = int64_t{cam.center_q4[0]} * z, cyz = int64_t{cam.center_q4[1]} * z;
+    if (fx - cxz > r * hyp_x_ || -fx - cxz > r * hyp_x_ || fy - cyz > r * hyp_y_ || -fy - cyz > r * hyp_y_) return e;
+  }
+  // The normal cone: cone_gamma * sigma_n1 (Q12 radians) as a binary angle,
+  // 2^32 / (2 pi) = 683565275.6 per radian; no cone from a quarter turn up.
+  const int64_t gamma_q8 = b.children ? p.cone_gamma_q8 : p.leaf_cone_gamma_q8;
+  const int64_t cone_binary = ((int64_t{b.sigma_n1_q12} * gamma_q8 >> 8) * 683565276) >> 12;
+  if (p.cull_backfaces && normals_ && cone_binary < (int64_t{1} << 30)) {
+    const SinCosQ14 cone = sincos_q14(static_cast<uint32_t>(cone_binary));
+    // Facing away: the angle between the normal and d = eye - centre exceeds
+    // 90 degrees + the cone's half-angle + the angle the sphere subtends.
+    const int64_t d[3] = {int64_t{cam.eye[0]} - b.center[0], int64_t{cam.eye[1]} - b.center[1],
+                          int64_t{cam.eye[2]} - b.center[2]};
+    const uint64_t len = isqrt64(static_cast<uint64_t>(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
+    if (len > static_cast<uint64_t>(r)) {
+      const int64_t sin_b = (r << 14) / static_cast<int64_t>(len);
+      const int64_t cos_b = static_cast<int64_t>(isqrt64(static_cast<uint64_t>((int64_t{1} << 28) - sin_b * sin_b)));
+      const int64_t cos_ab = (cone.cos * cos_b - cone.sin * sin_b) >> 14;  // cos(alpha + beta)
+      const int64_t sin_ab = (cone.sin * cos_b + cone.cos * sin_b) >> 14;
+      const int64_t dot = b.normal[0] * d[0] + b.normal[1] * d[1] + b.normal[2] * d[2];  // Q14 x MU
+      if (cos_ab > 0 && dot < -((static_cast<int64_t>(len) * sin_ab))) return e;
+    }
+  }
+  e.visible = true;
+  if (crosses_near) {  // as large as it gets; split whenever it can be
+    e.size = 0xFFFFFFFFu;
+    e.split = b.children > 0;
+    return e;
+  }
+  // Projected radius r f / Z (1/16 px), saturated; the split compares the
+  // products (below 2^52), as the simple cut does.
+  const int64_t size = r * cam.focal_q4 / z;
+  e.size = size > 0xFFFFFFFE ? 0xFFFFFFFEu : static_cast<uint32_t>(size);
+  if (b.children == 0) return e;
+  e.split = r * cam.focal_q4 > int64_t{p.max_size_q4} * z;
+  if (e.split && p.window[0] < p.window[2]) {
+    // Only inside the refinement window: the projected circle must meet it.
+    const int64_t x = cam.center_q4[0] + int64_t{cam.focal_q4} * c[0] / z;
+    const int64_t y = cam.center_q4[1] + int64_t{cam.focal_q4} * c[1] / z;
+    e.split = x + size >= int64_t{p.window[0]} * 16 && x - size < int64_t{p.window[2]} * 16 &&
+              y + size >= int64_t{p.window[1]} * 16 && y - size < int64_t{p.window[3]} * 16;
+  }
+  return e;
+}
+
+void ViewCut::heap_push(uint32_t size, uint32_t node) {
+  uint64_t v = (uint64_t{size} << 32) | (~node & 0xFFFFFFFFu);
+  uint32_t i = heap_count_++;
+  while (i > 0 && heap_[(i - 1) / 2] < v) {
+    heap_[i] = heap_[(i - 1) / 2];
+    i = (i - 1) / 2;
+  }
+  heap_[i] = v;
+}
+
+uint64_t ViewCut::heap_pop() {
+  const uint64_t top = heap_[0], last = heap_[--heap_count_];
+  uint32_t i = 0;
+  for (;;) {
+    uint32_t c = 2 * i + 1;
+    if (c >= heap_count_) break;
+    if (c + 1 < heap_count_ && heap_[c + 1] > heap_[c]) ++c;
+    if (heap_[c] <= last) break;
+    heap_[i] = heap_[c];
+    i = c;
+  }
+  if (heap_count_ > 0) heap_[i] = last;
+  return top;
+}
+
+CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
+  if (!ready_) return CutStatus::kNotReady;
+  camera_ = &camera;
+  params_ = &params;
+  hyp_x_ = static_cast<int64_t>(isqrt64(static_cast<uint64_t>(int64_t{camera.focal_q4} * camera.focal_q4 +
+                                                               int64_t{camera.center_q4[0]} * camera.center_q4[0]))) + 1;
+  hyp_y_ = static_cast<int64_t>(isqrt64(static_cast<uint64_t>(int64_t{camera.focal_q4} * camera.focal_q4 +
+                                                               int64_t{camera.center_q4[1]} * camera.center_q4[1]))) + 1;
+  // The previous sent set is kept for the delta.
+  for (uint32_t i = 0; i < sent_count_; ++i) previous_[i] = sent_[i];
+  previous_count_ = sent_count_;
+  cut_count_ = sent_count_ = 0;
+  heap_count_ = 0;
+  visited_ = 0;
+
+  // Refinement, largest projected size first. The sent nodes so far are the
+  // finalized visible ones plus every node waiting in the heap (all visible).
+  const auto settle = [&](uint32_t id, const Eval& e) {
+    cut_[cut_count_++] = NodeId{id};
+    if (e.visible) {
+      sent_[sent_count_] = NodeId{id};
+      sent_size_[sent_count_++] = e.size;
+    }
+  };
+  const auto place = [&](uint32_t id) {
+    ++visited_;
+    const Eval e = evaluate(id);
+    if (e.split) heap_push(e.size, id);
+    else settle(id, e);
+  };
+  place(0);
+  bool room = true;
+  while (heap_count_ > 0) {
+    const uint64_t top = heap_pop();
+    const uint32_t id = ~static_cast<uint32_t>(top);
+    const Bound& b = bounds_[id];
+    if (room) {
+      // The split's cost: its visible children replace it.
+      uint32_t visible = 0;
+      for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(b.first_child + k).visible;
+      room = uint64_t{sent_count_} + heap_count_ + visible <= params.max_nodes;
+    }
+    if (!room) {  // the budget is spent: this node and all still waiting stay whole
+      settle(id, Eval{true, false, static_cast<uint32_t>(top >> 32)});
+      continue;
+    }
+    for (uint32_t k = 0; k < b.children; ++k) place(b.first_child + k);
+  }
+  // Sent nodes in id order (the order a client's cache is filled in), with
+  // their sizes: sorted as (id, size) pairs in the heap's storage.
+  for (uint32_t i = 0; i < sent_count_; ++i) heap_[i] = (uint64_t{index_of(sent_[i])} << 32) | sent_size_[i];
+  std::sort(heap_, heap_ + sent_count_);
+  for (uint32_t i = 0; i < sent_count_; ++i) {
+    sent_[i] = NodeId{static_cast<uint32_t>(heap_[i] >> 32)};
+    sent_size_[i] = static_cast<uint32_t>(heap_[i]);
+  }
+
+  // The delta against the previous sent set (bit sets, cleared by the lists).
+  entered_count_ = left_count_ = 0;
+  for (uint32_t i = 0; i < sent_count_; ++i) {
+    const uint32_t id = index_of(sent_[i]);
+    if (!bit(sent_bits_, id)) entered_[entered_count_++] = sent_[i];
+    set_bit(fresh_bits_, id);
+  }
+  for (uint32_t i = 0; i < previous_count_; ++i) {
+    const uint32_t id = index_of(previous_[i]);
+    if (!bit(fresh_bits_, id)) left_[left_count_++] = previous_[i];
+    clear_bit(sent_bits_, id);
+  }
+  for (uint32_t i = 0; i < sent_count_; ++i) {
+    const uint32_t id = index_of(sent_[i]);
+    set_bit(sent_bits_, id);
+    clear_bit(fresh_bits_, id);
+  }
+  camera_ = nullptr;
+  params_ = nullptr;
+  return CutStatus::kOk;
+}
+
+}  // namespace stipple
