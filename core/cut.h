@@ -27,6 +27,11 @@ struct CutRule {
   enum Kind : uint8_t { kLevel, kProjectedSize } kind = kLevel;
   uint16_t level = 0;
   int32_t max_size_q4 = 32;  // 2 px, the paper's split threshold
+  // For kProjectedSize through the view-dependent cut (core/view_cut.h, which
+  // the programs use; simple_cut ignores these): cull by frustum and normal
+  // cone, and refine only inside a window (px, empty: everywhere).
+  bool cull = true;
+  int32_t window[4] = {0, 0, 0, 0};
 };
 
 size_t cut_scratch_bytes(const SpgHeader& header);

@@ -18,8 +18,10 @@ const char kRenderHelp[] =
     "usage: stipple render MODEL.spg -o IMAGE.png [options]\n"
     "\n"
     "Renders a .spg file with the handheld client — fixed point, one arena, the\n"
-    "same bytes on every platform — in this process: a simple cut of the tree is\n"
-    "chosen for the camera, its records are handed to the client, one frame is\n"
+    "same bytes on every platform — in this process: the view-dependent cut of the\n"
+    "tree (core/view_cut.h: split above 2 px, largest first within the cache,\n"
+    "culled by frustum and normal cone) is taken for the camera, its records are\n"
+    "handed to the client, one frame is\n"
     "drawn and written as PNG (RGB565 frames expanded by bit replication).\n"
     "\n";
 
@@ -59,6 +61,7 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
     cli::Json j;
     j.str("model", name).integer("width", o.config.raster.width).integer("height", o.config.raster.height);
     j.integer("cut_nodes", static_cast<long long>(fixed.cut.size()))
+        .integer("cut_nodes_culled", fixed.culled_nodes)
         .integer("nodes_drawn", fixed.stats.nodes_drawn)
         .integer("nodes_culled", fixed.stats.nodes_culled)
         .integer("points", fixed.stats.points)
@@ -71,8 +74,9 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
     if (!output.empty()) j.str("output", output);
     std::printf("%s\n", j.done().c_str());
   } else {
-    std::printf("%s: %s nodes in the cut, %s drawn, %s points%s, arena %s bytes%s%s\n", name.c_str(),
-                cli::with_commas(fixed.cut.size()).c_str(), cli::with_commas(fixed.stats.nodes_drawn).c_str(),
+    std::printf("%s: %s nodes sent (%s culled in the cut), %s drawn, %s points%s, arena %s bytes%s%s\n", name.c_str(),
+                cli::with_commas(fixed.cut.size()).c_str(), cli::with_commas(fixed.culled_nodes).c_str(),
+                cli::with_commas(fixed.stats.nodes_drawn).c_str(),
                 cli::with_commas(fixed.stats.points).c_str(),
                 fixed.stats.points_dropped ? (" (" + cli::with_commas(fixed.stats.points_dropped) + " over budget)").c_str() : "",
                 cli::with_commas(fixed.arena_bytes).c_str(), output.empty() ? "" : (" -> " + output).c_str(),

@@ -137,10 +137,34 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     error = "--camera: the view is out of the camera's range";
     return false;
   }
-  std::vector<uint8_t> scratch(cut_scratch_bytes(view.header));
-  std::vector<uint32_t> cut(view.header.node_count);
-  cut.resize(simple_cut(view, rule, &decoder, &camera, scratch.data(), cut.data(), static_cast<uint32_t>(cut.size())));
-  config.node_capacity = std::max<uint32_t>(config.node_capacity, static_cast<uint32_t>(cut.size()));
+  std::vector<uint32_t> cut;
+  if (rule.kind == CutRule::kProjectedSize) {
+    // The view-dependent cut, within what the client's cache holds.
+    std::vector<uint64_t> cut_storage(view_cut_bytes(view.header) / 8 + 1);
+    ViewCut view_cut;
+    CutParams params;
+    params.max_size_q4 = rule.max_size_q4;
+    params.max_nodes = config.node_capacity;
+    params.cull_frustum = params.cull_backfaces = rule.cull;
+    params.width = config.raster.width;
+    params.height = config.raster.height;
+    for (int k = 0; k < 4; ++k) params.window[k] = rule.window[k];
+    if (view_cut.init(view, decoder, cut_storage.data(), cut_storage.size() * 8) != CutStatus::kOk ||
+        view_cut.update(camera, params) != CutStatus::kOk) {
+      error = "the view cut failed";
+      return false;
+    }
+    for (uint32_t i = 0; i < view_cut.sent_count(); ++i) cut.push_back(index_of(view_cut.sent()[i]));
+    out.cut_nodes = view_cut.cut_count();
+    out.culled_nodes = view_cut.culled_count();
+  } else {
+    std::vector<uint8_t> scratch(cut_scratch_bytes(view.header));
+    cut.resize(view.header.node_count);
+    cut.resize(simple_cut(view, rule, &decoder, &camera, scratch.data(), cut.data(), static_cast<uint32_t>(cut.size())));
+    config.node_capacity = std::max<uint32_t>(config.node_capacity, static_cast<uint32_t>(cut.size()));
+    out.cut_nodes = static_cast<uint32_t>(cut.size());
+    out.culled_nodes = 0;
+  }
 
   out.arena_bytes = client_arena_bytes(config);
   if (out.arena_bytes == 0) {

@@ -11,6 +11,7 @@
 
 #include "core/camera.h"
 #include "core/cut.h"
+#include "core/view_cut.h"
 #include "core/spg_format.h"
 #include "platform/image.h"
 #include "raster/client.h"
@@ -49,7 +50,9 @@ OrbitView orbit_view(const int32_t extent_mu[3], const ViewSpec& spec);
 struct FixedRender {
   std::vector<uint8_t> frame;  // config format, tightly packed rows
   Image image;
-  std::vector<uint32_t> cut;   // node ids drawn, breadth-first
+  std::vector<uint32_t> cut;   // node ids drawn (the cut's sent nodes), breadth-first
+  uint32_t cut_nodes = 0;      // the whole cut, culled nodes included
+  uint32_t culled_nodes = 0;   // in the cut, culled, not sent
   FrameStats stats;
   size_t arena_bytes = 0;
   Camera camera;
@@ -59,8 +62,10 @@ struct FixedRender {
 
 // Cuts the validated `view` by `rule` for the camera, feeds the client the
 // startup message and the cut's records, renders the frame `frames` times
-// (for timing; every frame is the same). config.node_capacity is raised to
-// the cut's size when smaller. `heap_probe`, when given, is asked for the
+// (for timing; every frame is the same). The projected-size rule goes
+// through the view-dependent cut, whose sent nodes never exceed
+// config.node_capacity (a coarser cut instead); for the level rule the
+// capacity is raised to the cut's size. `heap_probe`, when given, is asked for the
 // bytes of heap in use once the frames are drawn, while every buffer of the
 // run (the file's decoder, the cut, the client's arena, the frame) is alive.
 bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,

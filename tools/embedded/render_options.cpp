@@ -34,6 +34,10 @@ const char kRenderOptionsHelp[] =
     "  --max-size PX          split nodes whose projected 3.5-sigma radius exceeds PX\n"
     "                         pixels (default 2, the paper's threshold)\n"
     "  --level L              instead: the nodes at tree level L and the leaves above\n"
+    "  --no-cull              keep nodes outside the view and facing away (the cut\n"
+    "                         culls them by their sphere and normal cone by default)\n"
+    "  --window X0,Y0,X1,Y1   refine only nodes that project into this rectangle (px;\n"
+    "                         TOG05's on-demand mode)\n"
     "client:\n"
     "  --projection affine|reciprocal|exact   per-point projection (default affine)\n"
     "  --shading point|node|none              Lambert per sampled normal, per node, or\n"
@@ -47,8 +51,9 @@ const char kRenderOptionsHelp[] =
     "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
     "  --max-points N         frame budget (default 1048576)\n"
     "  --cache-decoded        cache decoded nodes (no per-frame decode; ~7x the memory)\n"
-    "  --cache N              nodes the client's cache holds (default 30000, raised\n"
-    "                         to the cut's size)\n";
+    "  --cache N              nodes the client's cache holds (default 30000): the\n"
+    "                         cut is coarser rather than larger (--level: raised to\n"
+    "                         the level's size)\n";
 
 bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error) {
   std::string v;
@@ -126,6 +131,15 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
   if (args.value("--max-points", v)) {
     if (!cli::parse_uint(v, 1u << 26, u) || u < 1) return error = "--max-points: expected 1..67108864, got '" + v + "'", false;
     c.raster.max_points = static_cast<uint32_t>(u);
+  }
+  if (args.flag("--no-cull")) o.rule.cull = false;
+  if (args.value("--window", v)) {
+    double w[4];
+    const size_t last = v.rfind(',');
+    if (last == std::string::npos || !cli::parse_vec3(v.substr(0, last), w) || !cli::parse_double(v.substr(last + 1), w[3]) ||
+        w[0] < 0 || w[1] < 0 || w[2] <= w[0] || w[3] <= w[1] || w[2] > 4096 || w[3] > 4096)
+      return error = "--window: expected X0,Y0,X1,Y1 in pixels with X0 < X1 and Y0 < Y1, got '" + v + "'", false;
+    for (int k = 0; k < 4; ++k) o.rule.window[k] = static_cast<int32_t>(w[k]);
   }
   if (args.value("--cache", v)) {
     if (!cli::parse_uint(v, 1u << 24, u) || u < 1) return error = "--cache: expected 1..16777216 nodes, got '" + v + "'", false;

@@ -1,5 +1,5 @@
 // stipple-handheld — the handheld client program: reads a .spg, takes a
-// simple cut for the camera, runs the fixed-point client over one arena and
+// view-dependent cut for the camera, runs the fixed-point client over one arena and
 // shows the frame on a Linux framebuffer or writes it as PPM. Builds for
 // every target in toolchains/; its frames are the same bytes everywhere
 // (`--crc` prints their CRC-32, which the golden-image tests check).
@@ -27,8 +27,8 @@ const char kUsage[] =
     "usage: stipple-handheld MODEL.spg [options]\n"
     "\n"
     "The handheld client: fixed point, one arena, no heap after start-up. Draws\n"
-    "a simple cut of MODEL.spg for an orbit camera (the same options and the same\n"
-    "pixels as `stipple render`).\n"
+    "the view-dependent cut of MODEL.spg for an orbit camera (the same options and\n"
+    "the same pixels as `stipple render`).\n"
     "\n";
 const char kUsageOutput[] =
     "program:\n"
