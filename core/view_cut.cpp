@@ -16,8 +16,9 @@ struct ViewCut::Bound {
   uint32_t first_child;  // id of the first child (children are adjacent)
   int16_t normal[3];     // mean normal, Q14 (zero without normals)
   uint16_t sigma_n1_q12;  // the normal spread (Q12 radians, saturated), 0 without normals
+  int16_t cone_sin_q14;   // sin of the default cone's half-angle (3.5 sigma_n1); > 16384: no cone
   uint8_t children;
-  uint8_t pad[3];
+  uint8_t pad;
 };
 static_assert(sizeof(ViewCut::Bound) == 32);
 
@@ -57,6 +58,15 @@ Layout layout_of(uint32_t n) {
   return l;
 }
 
+// sin of the normal cone's half-angle gamma * sigma_n1 (Q14); 0x7FFF (no
+// cone) from a quarter turn up. gamma * sigma_n1 (Q12 radians) as a binary
+// angle: 2^32 / (2 pi) = 683565275.6 per radian.
+int16_t cone_sin(uint16_t sigma_n1_q12, uint16_t gamma_q8) {
+  const int64_t binary = ((int64_t{sigma_n1_q12} * gamma_q8 >> 8) * 683565276) >> 12;
+  if (binary >= (int64_t{1} << 30)) return 0x7FFF;
+  return static_cast<int16_t>(sincos_q14(static_cast<uint32_t>(binary)).sin);
+}
+
 inline bool bit(const uint8_t* bits, uint32_t i) { return (bits[i >> 3] >> (i & 7)) & 1u; }
 inline void set_bit(uint8_t* bits, uint32_t i) { bits[i >> 3] = static_cast<uint8_t>(bits[i >> 3] | (1u << (i & 7))); }
 inline void clear_bit(uint8_t* bits, uint32_t i) { bits[i >> 3] = static_cast<uint8_t>(bits[i >> 3] & ~(1u << (i & 7))); }
@@ -87,8 +97,9 @@ CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* s
     b.children = static_cast<uint8_t>(spg_child_count(view, i));
     b.first_child = next_child;
     next_child += b.children;
-    b.pad[0] = b.pad[1] = b.pad[2] = 0;
+    b.pad = 0;
     b.sigma_n1_q12 = static_cast<uint16_t>(!normals_ ? 0 : node.sigma_n[0] > 0xFFFF ? 0xFFFF : node.sigma_n[0] < 0 ? 0 : node.sigma_n[0]);
+    b.cone_sin_q14 = cone_sin(b.sigma_n1_q12, CutParams{}.cone_gamma_q8);
   }
   bounds_ = bounds;
   node_count_ = n;
@@ -123,24 +134,26 @@ ViewCut::Eval ViewCut::evaluate(uint32_t id) const {
     const int64_t cxz = int64_t{cam.center_q4[0]} * z, cyz = int64_t{cam.center_q4[1]} * z;
     if (fx - cxz > r * hyp_x_ || -fx - cxz > r * hyp_x_ || fy - cyz > r * hyp_y_ || -fy - cyz > r * hyp_y_) return e;
   }
-  // The normal cone: cone_gamma * sigma_n1 (Q12 radians) as a binary angle,
-  // 2^32 / (2 pi) = 683565275.6 per radian; no cone from a quarter turn up.
-  const int64_t gamma_q8 = b.children ? p.cone_gamma_q8 : p.leaf_cone_gamma_q8;
-  const int64_t cone_binary = ((int64_t{b.sigma_n1_q12} * gamma_q8 >> 8) * 683565276) >> 12;
-  if (p.cull_backfaces && normals_ && cone_binary < (int64_t{1} << 30)) {
-    const SinCosQ14 cone = sincos_q14(static_cast<uint32_t>(cone_binary));
+  if (p.cull_backfaces && normals_) {
     // Facing away: the angle between the normal and d = eye - centre exceeds
-    // 90 degrees + the cone's half-angle + the angle the sphere subtends.
-    const int64_t d[3] = {int64_t{cam.eye[0]} - b.center[0], int64_t{cam.eye[1]} - b.center[1],
-                          int64_t{cam.eye[2]} - b.center[2]};
-    const uint64_t len = isqrt64(static_cast<uint64_t>(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-    if (len > static_cast<uint64_t>(r)) {
-      const int64_t sin_b = (r << 14) / static_cast<int64_t>(len);
-      const int64_t cos_b = static_cast<int64_t>(isqrt64(static_cast<uint64_t>((int64_t{1} << 28) - sin_b * sin_b)));
-      const int64_t cos_ab = (cone.cos * cos_b - cone.sin * sin_b) >> 14;  // cos(alpha + beta)
-      const int64_t sin_ab = (cone.sin * cos_b + cone.cos * sin_b) >> 14;
-      const int64_t dot = b.normal[0] * d[0] + b.normal[1] * d[1] + b.normal[2] * d[2];  // Q14 x MU
-      if (cos_ab > 0 && dot < -((static_cast<int64_t>(len) * sin_ab))) return e;
+    // 90 degrees + alpha (the cone's half-angle) + beta (the angle the sphere
+    // subtends, sin beta = r / |d|). Conservatively, with sin(alpha + beta)
+    // <= sin alpha + sin beta and an upper bound L >= |d|:
+    //   cos(n, d) < -(sin alpha + r / L)  <=  n . d < -(sin alpha L + r)
+    // (Q14 x MU). No square root or trigonometry per update.
+    const uint16_t gamma = b.children ? p.cone_gamma_q8 : p.leaf_cone_gamma_q8;
+    const int64_t sin_a = gamma == CutParams{}.cone_gamma_q8 ? b.cone_sin_q14 : cone_sin(b.sigma_n1_q12, gamma);
+    if (sin_a < 16384) {
+      const int64_t d[3] = {int64_t{cam.eye[0]} - b.center[0], int64_t{cam.eye[1]} - b.center[1],
+                            int64_t{cam.eye[2]} - b.center[2]};
+      const int64_t dot = b.normal[0] * d[0] + b.normal[1] * d[1] + b.normal[2] * d[2];
+      if (dot < 0) {
+        // |d| <= m + (a + b) / 2 for the largest |component| m and the others a, b.
+        const int64_t a0 = d[0] < 0 ? -d[0] : d[0], a1 = d[1] < 0 ? -d[1] : d[1], a2 = d[2] < 0 ? -d[2] : d[2];
+        const int64_t m = a0 > a1 ? (a0 > a2 ? a0 : a2) : (a1 > a2 ? a1 : a2);
+        const int64_t len = m + (a0 + a1 + a2 - m + 1) / 2;
+        if (dot < -(sin_a * len + (r << 14))) return e;
+      }
     }
   }
   e.visible = true;
@@ -205,8 +218,6 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
   heap_count_ = 0;
   visited_ = 0;
 
-  // Refinement, largest projected size first. The sent nodes so far are the
-  // finalized visible ones plus every node waiting in the heap (all visible).
   const auto settle = [&](uint32_t id, const Eval& e) {
     cut_[cut_count_++] = NodeId{id};
     if (e.visible) {
@@ -214,37 +225,63 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
       sent_size_[sent_count_++] = e.size;
     }
   };
-  const auto place = [&](uint32_t id) {
+  // Without a binding budget every splittable node splits, in any order:
+  // breadth first, which settles the nodes in id order (ids are breadth-first,
+  // children adjacent in their parents' order), so no sort is needed.
+  uint32_t* queue = reinterpret_cast<uint32_t*>(heap_);
+  uint32_t head = 0, tail = 0;
+  queue[tail++] = 0;
+  // A binding budget stops it early (too many sent, or too many visited for
+  // the budget: the greedy pass then costs what the budget allows).
+  const uint64_t visit_limit = 4 * uint64_t{params.max_nodes} + 8;
+  while (head < tail && sent_count_ <= params.max_nodes && visited_ <= visit_limit) {
+    const uint32_t id = queue[head++];
     ++visited_;
     const Eval e = evaluate(id);
-    if (e.split) heap_push(e.size, id);
-    else settle(id, e);
-  };
-  place(0);
-  bool room = true;
-  while (heap_count_ > 0) {
-    const uint64_t top = heap_pop();
-    const uint32_t id = ~static_cast<uint32_t>(top);
-    const Bound& b = bounds_[id];
-    if (room) {
-      // The split's cost: its visible children replace it.
-      uint32_t visible = 0;
-      for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(b.first_child + k).visible;
-      room = uint64_t{sent_count_} + heap_count_ + visible <= params.max_nodes;
-    }
-    if (!room) {  // the budget is spent: this node and all still waiting stay whole
-      settle(id, Eval{true, false, static_cast<uint32_t>(top >> 32)});
+    if (!e.split) {
+      settle(id, e);
       continue;
     }
-    for (uint32_t k = 0; k < b.children; ++k) place(b.first_child + k);
+    const Bound& b = bounds_[id];
+    for (uint32_t k = 0; k < b.children; ++k) queue[tail++] = b.first_child + k;
   }
-  // Sent nodes in id order (the order a client's cache is filled in), with
-  // their sizes: sorted as (id, size) pairs in the heap's storage.
-  for (uint32_t i = 0; i < sent_count_; ++i) heap_[i] = (uint64_t{index_of(sent_[i])} << 32) | sent_size_[i];
-  std::sort(heap_, heap_ + sent_count_);
-  for (uint32_t i = 0; i < sent_count_; ++i) {
-    sent_[i] = NodeId{static_cast<uint32_t>(heap_[i] >> 32)};
-    sent_size_[i] = static_cast<uint32_t>(heap_[i]);
+  if (head < tail || sent_count_ > params.max_nodes) {
+    // The budget binds: refine largest projected size first. The sent nodes
+    // so far are the settled visible ones plus every node waiting in the heap
+    // (all visible).
+    cut_count_ = sent_count_ = 0;
+    const auto place = [&](uint32_t id) {
+      ++visited_;
+      const Eval e = evaluate(id);
+      if (e.split) heap_push(e.size, id);
+      else settle(id, e);
+    };
+    place(0);
+    bool room = true;
+    while (heap_count_ > 0) {
+      const uint64_t top = heap_pop();
+      const uint32_t id = ~static_cast<uint32_t>(top);
+      const Bound& b = bounds_[id];
+      if (room && uint64_t{sent_count_} + heap_count_ + b.children > params.max_nodes) {
+        // The split's cost: its visible children replace it.
+        uint32_t visible = 0;
+        for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(b.first_child + k).visible;
+        room = uint64_t{sent_count_} + heap_count_ + visible <= params.max_nodes;
+      }
+      if (!room) {  // the budget is spent: this node and all still waiting stay whole
+        settle(id, Eval{true, false, static_cast<uint32_t>(top >> 32)});
+        continue;
+      }
+      for (uint32_t k = 0; k < b.children; ++k) place(b.first_child + k);
+    }
+    // Sent nodes in id order (the order a client's cache is filled in), with
+    // their sizes: sorted as (id, size) pairs in the heap's storage.
+    for (uint32_t i = 0; i < sent_count_; ++i) heap_[i] = (uint64_t{index_of(sent_[i])} << 32) | sent_size_[i];
+    std::sort(heap_, heap_ + sent_count_);
+    for (uint32_t i = 0; i < sent_count_; ++i) {
+      sent_[i] = NodeId{static_cast<uint32_t>(heap_[i] >> 32)};
+      sent_size_[i] = static_cast<uint32_t>(heap_[i]);
+    }
   }
 
   // The delta against the previous sent set (bit sets, cleared by the lists).

@@ -124,8 +124,13 @@ TEST(ViewCut, UpdatedEqualsFreshOverARandomWalk) {
     for (uint32_t id : sent) ASSERT_TRUE(walk.cut.is_sent(NodeId{id}));
     expect_antichain_cover(m, walk.cut);
     ASSERT_LE(walk.cut.sent_count(), p.max_nodes);
-    // The cost: the cut and the nodes above it, never the tree.
-    EXPECT_LE(walk.cut.visited(), 2 * walk.cut.cut_count() + 1);
+    // The cost: the cut and the nodes above it, never the tree (a binding
+    // budget adds the breadth-first pass it stopped, at most as large again).
+    if (p.max_nodes < walk.cut.node_count()) {
+      EXPECT_LE(walk.cut.visited(), 6 * walk.cut.cut_count() + 8) << i;
+    } else {
+      EXPECT_LE(walk.cut.visited(), 2 * walk.cut.cut_count() + 1) << i;
+    }
   }
 }
 
@@ -166,7 +171,8 @@ TEST(ViewCut, CullingRemovesBackFacesAndTheOffScreenAndNeverSendsThem) {
     const double removed = 1.0 - static_cast<double>(kept.size()) / static_cast<double>(all.size());
     std::printf("yaw %.0f: %zu of %zu nodes sent with culling (%.1f %% removed), %u culled in the cut\n", yaw,
                 kept.size(), all.size(), 100 * removed, culled.cut.culled_count());
-    // The paper's cones (3.5 sigma_n1) are conservative: 28-39 % here, where
+    // The paper's cones (3.5 sigma_n1), bounded without a square root, are
+    // conservative: 26-34 % here, where
     // 52-56 % of the leaves' mean normals face away (docs/figures.md).
     EXPECT_GE(removed, 0.25) << yaw;
     for (uint32_t i = 0; i < culled.cut.cut_count(); ++i) {

@@ -18,6 +18,7 @@
 #include "core/spg_format.h"
 #include "platform/file_io.h"
 #include "core/cut.h"
+#include "core/view_cut.h"
 #include "raster/client.h"
 #include "raster/point_raster.h"
 #include "tools/encoder/classify.h"
@@ -291,6 +292,36 @@ BENCHMARK(BM_ClientFrame)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
+
+// The view-dependent cut's update along a 120-step orbit of the scan at
+// 240x320 (arg 0: culling off/on): the server's cost per camera update.
+void BM_ViewCutUpdate(benchmark::State& state) {
+  const SpgView view = parsed_scan();
+  std::vector<uint8_t> storage(node_decoder_bytes(view.header));
+  NodeDecoder decoder;
+  if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk) std::abort();
+  std::vector<uint64_t> cut_storage(view_cut_bytes(view.header) / 8 + 1);
+  ViewCut cut;
+  if (cut.init(view, decoder, cut_storage.data(), cut_storage.size() * 8) != CutStatus::kOk) std::abort();
+  std::vector<Camera> cameras(120);
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    ViewSpec s;
+    s.yaw = 30 + 3.0 * static_cast<double>(i);
+    if (!orbit_camera(orbit_view(decoder.extent_mu(), s), 240, 320, &cameras[i])) std::abort();
+  }
+  CutParams p;
+  p.cull_frustum = p.cull_backfaces = state.range(0) != 0;
+  size_t i = 0;
+  double nodes = 0;
+  for (auto _ : state) {
+    if (cut.update(cameras[i++ % cameras.size()], p) != CutStatus::kOk) std::abort();
+    nodes += cut.cut_count();
+  }
+  state.counters["cut_nodes"] = nodes / static_cast<double>(state.iterations());
+  state.counters["ns_per_cut_node"] =
+      benchmark::Counter(nodes, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_ViewCutUpdate)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_KdNearest(benchmark::State& state) {
   const PointCloud& c = scan();
