@@ -1,0 +1,180 @@
+// stipple core — the node stream's protocol: frames, messages, and an
+// incremental frame reader over caller storage (docs/protocol.md is the
+// byte-level specification).
+//
+// A frame is an 8-byte header — type (u8), flags (u8, 0), sequence (u16, +1
+// per frame in each direction, wrapping), payload length (u32) — then the
+// payload, then the CRC-32 of header and payload (u32). Integers are
+// little-endian. A payload is at most kMaxPayload bytes; node batches are
+// split across frames to fit. On a serial line every frame is COBS-encoded
+// and ends with a zero byte (core/cobs.h), so a receiver resynchronises
+// after line noise; on a socket frames follow each other as they are.
+//
+// Everything here is integer-only, allocation-free and exception-free:
+// writers fill a caller buffer and return the bytes written (0 when it is
+// too small); the reader validates every field before use and reports the
+// first fault with a status a host turns into a message.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "core/camera.h"
+#include "core/node_format.h"
+
+namespace stipple {
+
+inline constexpr uint16_t kProtocolVersion = 1;
+inline constexpr size_t kFrameHeaderBytes = 8;
+inline constexpr size_t kFrameTrailerBytes = 4;
+inline constexpr size_t kMaxPayload = 65536;  // a node batch of ~3,000 17-byte records
+inline constexpr size_t kMaxFrameBytes = kFrameHeaderBytes + kMaxPayload + kFrameTrailerBytes;
+
+enum class MessageType : uint8_t {
+  // Client -> server.
+  kHello = 0x01,      // version, screen, pixel format, attributes wanted, cache capacity
+  kCamera = 0x02,     // a camera update (and the cut's threshold and refinement window)
+  kKeepAlive = 0x03,  // either direction, empty
+  kClose = 0x04,      // either direction: a reason code
+  // Server -> client.
+  kStartup = 0x81,    // the startup message (.spg header and class tables) for the attributes asked
+  kNodes = 0x82,      // nodes entering the client's cut: count, then (id, record) each
+  kDrop = 0x83,       // nodes leaving it: count, then ids
+  kUpdateEnd = 0x84,  // the update for a camera is complete: the camera's sequence, the cut's size
+  kError = 0x85,      // a fault the server saw in the client's stream: code and frame sequence
+};
+
+bool message_type_known(uint8_t type);
+const char* message_type_name(uint8_t type);  // "hello", ... "unknown"
+
+enum class FrameStatus : uint8_t {
+  kOk = 0,
+  kNeedMore,        // reader: no whole frame yet
+  kBadFlags,        // a flags byte other than 0
+  kUnknownType,     // a type this version does not define
+  kOversized,       // payload length beyond kMaxPayload (or the reader's storage)
+  kBadChecksum,     // CRC-32 mismatch
+  kOutOfSequence,   // sequence differs from the one expected
+  kBadPayload,      // a message whose payload does not parse (length, count, range)
+  kTruncated,       // the stream ended inside a frame
+};
+
+const char* frame_status_text(FrameStatus s);
+
+// Writes one frame around `payload` into out[0 .. capacity); returns its
+// length, or 0 when it does not fit or the payload is too long.
+size_t write_frame(MessageType type, uint16_t sequence, const uint8_t* payload, size_t payload_bytes, uint8_t* out,
+                   size_t capacity);
+
+// A frame as the reader hands it out: its payload points into the reader's storage.
+struct Frame {
+  MessageType type = MessageType::kKeepAlive;
+  uint16_t sequence = 0;
+  const uint8_t* payload = nullptr;
+  size_t payload_bytes = 0;
+};
+
+// Reads frames from a byte stream fed in pieces of any size, over a caller
+// buffer of at least kMaxFrameBytes (or smaller, to refuse larger frames).
+// After a fault the reader stays in it (every call returns the fault again)
+// until reset(): on a socket the stream cannot be trusted past a bad frame.
+class FrameReader {
+ public:
+  void init(uint8_t* storage, size_t bytes);
+  void reset();  // forget buffered bytes and faults; expect sequence 0
+  // Appends bytes; returns how many were taken (fewer when the buffer is full
+  // and a frame must be taken out first with next()).
+  size_t feed(const uint8_t* data, size_t size);
+  // The next whole frame: kOk and *frame, kNeedMore, or a fault. The frame's
+  // payload stays valid until the next call of next() or feed().
+  [[nodiscard]] FrameStatus next(Frame* frame);
+  // The stream ended: kTruncated if bytes of a frame are pending, else kOk.
+  FrameStatus finish() const {
+    return fault_ != FrameStatus::kOk ? fault_ : used_ > consumed_ ? FrameStatus::kTruncated : FrameStatus::kOk;
+  }
+  // Where the fault was: the sequence the reader expected.
+  uint16_t expected_sequence() const { return expected_; }
+  size_t buffered() const { return used_ - consumed_; }
+
+ private:
+  uint8_t* buffer_ = nullptr;
+  size_t capacity_ = 0, used_ = 0, consumed_ = 0;
+  uint16_t expected_ = 0;
+  FrameStatus fault_ = FrameStatus::kOk;
+};
+
+// ---- Messages: fixed layouts, each with a writer (payload bytes) and a parser.
+
+inline constexpr uint8_t kWantNormals = 1, kWantColor = 2;
+
+struct Hello {
+  uint16_t version = kProtocolVersion;
+  uint16_t width = 240, height = 320;
+  uint8_t pixel_format = 0;     // 0 RGB565, 1 RGB888
+  uint8_t attributes = kWantNormals | kWantColor;  // what the client will use
+  uint32_t cache_capacity = 30000;                 // nodes the client can hold
+};
+inline constexpr size_t kHelloBytes = 12;
+size_t write_hello(const Hello& h, uint8_t out[kHelloBytes]);
+[[nodiscard]] bool parse_hello(const uint8_t* payload, size_t size, Hello* out);
+
+struct CameraUpdate {
+  uint32_t sequence = 0;  // the client's camera number, echoed in kUpdateEnd
+  Camera camera;
+  int32_t max_size_q4 = 32;
+  int32_t window[4] = {0, 0, 0, 0};  // refinement window, px; empty: everywhere
+};
+inline constexpr size_t kCameraUpdateBytes = 4 + 17 * 4 + 4 + 16;
+size_t write_camera_update(const CameraUpdate& c, uint8_t out[kCameraUpdateBytes]);
+// Checks the camera's ranges as the client's renderer would (focal length,
+// near/far, eye); false when a field is out of range.
+[[nodiscard]] bool parse_camera_update(const uint8_t* payload, size_t size, CameraUpdate* out);
+
+struct UpdateEnd {
+  uint32_t camera_sequence = 0;
+  uint32_t sent_nodes = 0;  // the cut's size once this update is applied
+};
+inline constexpr size_t kUpdateEndBytes = 8;
+size_t write_update_end(const UpdateEnd& u, uint8_t out[kUpdateEndBytes]);
+[[nodiscard]] bool parse_update_end(const uint8_t* payload, size_t size, UpdateEnd* out);
+
+enum class CloseReason : uint8_t { kNormal = 0, kBadFrame, kBadHello, kUnsupported, kServerFull, kShutdown, kTimeout };
+const char* close_reason_text(CloseReason r);
+
+// kClose and kError: a reason and, for kError, the frame status and the
+// sequence of the frame at fault.
+struct Fault {
+  CloseReason reason = CloseReason::kNormal;
+  FrameStatus status = FrameStatus::kOk;
+  uint16_t sequence = 0;
+};
+inline constexpr size_t kFaultBytes = 4;
+size_t write_fault(const Fault& f, uint8_t out[kFaultBytes]);
+[[nodiscard]] bool parse_fault(const uint8_t* payload, size_t size, Fault* out);
+
+// kNodes: u32 count, then count x (u32 id, record_bytes record). The payload
+// must be exactly that long and every id below node_count.
+// kDrop: u32 count, then count x u32 id.
+// Node batches: how many fit one frame.
+inline constexpr uint32_t nodes_per_frame(size_t record_bytes) {
+  return static_cast<uint32_t>((kMaxPayload - 4) / (4 + record_bytes));
+}
+inline constexpr uint32_t kDropsPerFrame = static_cast<uint32_t>((kMaxPayload - 4) / 4);
+// A parsed batch: the entries stay in the payload; read them with node_at / drop_at.
+struct NodeBatch {
+  uint32_t count = 0;
+  size_t record_bytes = 0;
+  const uint8_t* entries = nullptr;
+  NodeId id(uint32_t i) const;
+  const uint8_t* record(uint32_t i) const { return entries + size_t{i} * (4 + record_bytes) + 4; }
+};
+[[nodiscard]] bool parse_nodes(const uint8_t* payload, size_t size, size_t record_bytes, uint32_t node_count,
+                               NodeBatch* out);
+struct DropBatch {
+  uint32_t count = 0;
+  const uint8_t* ids = nullptr;
+  NodeId id(uint32_t i) const;
+};
+[[nodiscard]] bool parse_drop(const uint8_t* payload, size_t size, uint32_t node_count, DropBatch* out);
+
+}  // namespace stipple

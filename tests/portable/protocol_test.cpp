@@ -1,0 +1,244 @@
+// The node stream's protocol (core/protocol.h, core/cobs.h): frames round
+// trip through the incremental reader however the bytes are split; every
+// class of malformed frame is refused with its status and the reader stays
+// in it; message payloads parse only when every field is in range; COBS
+// round trips at its block boundaries and a deframer resynchronises after
+// line noise.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "core/cobs.h"
+#include "core/protocol.h"
+#include "core/spg_format.h"
+#include "tests/portable/test_files.h"
+
+namespace stipple {
+namespace {
+
+void store_u32le_for_test(uint8_t* p, uint32_t v) {
+  for (int i = 0; i < 4; ++i) p[i] = static_cast<uint8_t>(v >> (8 * i));
+}
+
+std::vector<uint8_t> frame(MessageType type, uint16_t seq, const std::vector<uint8_t>& payload) {
+  std::vector<uint8_t> out(kMaxFrameBytes);
+  const size_t n = write_frame(type, seq, payload.data(), payload.size(), out.data(), out.size());
+  EXPECT_GT(n, 0u);
+  out.resize(n);
+  return out;
+}
+
+struct Reader {
+  std::vector<uint8_t> storage = std::vector<uint8_t>(kMaxFrameBytes);
+  FrameReader r;
+  Reader() { r.init(storage.data(), storage.size()); }
+};
+
+TEST(Protocol, FramesRoundTripInPiecesOfAnySize) {
+  std::vector<uint8_t> stream;
+  std::vector<std::vector<uint8_t>> payloads;
+  std::mt19937 rng(3);
+  for (uint16_t s = 0; s < 40; ++s) {
+    std::vector<uint8_t> p(rng() % 300);
+    for (uint8_t& b : p) b = static_cast<uint8_t>(rng());
+    payloads.push_back(p);
+    const std::vector<uint8_t> f = frame(MessageType::kNodes, s, p);
+    stream.insert(stream.end(), f.begin(), f.end());
+  }
+  for (size_t piece : {size_t{1}, size_t{7}, size_t{4096}}) {
+    Reader rd;
+    size_t got = 0;
+    for (size_t at = 0; at < stream.size();) {
+      at += rd.r.feed(stream.data() + at, std::min(piece, stream.size() - at));
+      Frame f;
+      FrameStatus s;
+      while ((s = rd.r.next(&f)) == FrameStatus::kOk) {
+        ASSERT_EQ(f.sequence, got);
+        ASSERT_EQ(std::vector<uint8_t>(f.payload, f.payload + f.payload_bytes), payloads[got]);
+        ++got;
+      }
+      ASSERT_EQ(s, FrameStatus::kNeedMore);
+    }
+    EXPECT_EQ(got, payloads.size()) << piece;
+    EXPECT_EQ(rd.r.finish(), FrameStatus::kOk);
+  }
+  // A payload too long for a frame is refused by the writer.
+  std::vector<uint8_t> big(kMaxPayload + 1), out(kMaxFrameBytes + 8);
+  EXPECT_EQ(write_frame(MessageType::kNodes, 0, big.data(), big.size(), out.data(), out.size()), 0u);
+}
+
+TEST(Protocol, EveryMalformedFrameClassIsRefusedAndTheReaderStaysConsistent) {
+  const std::vector<uint8_t> good = frame(MessageType::kKeepAlive, 0, {1, 2, 3});
+  struct Case {
+    const char* what;
+    std::vector<uint8_t> bytes;
+    FrameStatus expect;
+  };
+  std::vector<Case> cases;
+  {
+    std::vector<uint8_t> b = good;
+    b[9] ^= 0x10;  // a payload bit
+    cases.push_back({"bad CRC", b, FrameStatus::kBadChecksum});
+  }
+  {
+    std::vector<uint8_t> b = good;
+    b[0] = 0x7E;
+    cases.push_back({"unknown type", b, FrameStatus::kUnknownType});
+  }
+  {
+    std::vector<uint8_t> b = good;
+    b[1] = 1;
+    cases.push_back({"flags", b, FrameStatus::kBadFlags});
+  }
+  {
+    std::vector<uint8_t> b = good;
+    store_u32le_for_test(b.data() + 4, static_cast<uint32_t>(kMaxPayload + 1));
+    cases.push_back({"oversized", b, FrameStatus::kOversized});
+  }
+  cases.push_back({"out of sequence", frame(MessageType::kKeepAlive, 5, {}), FrameStatus::kOutOfSequence});
+  for (const Case& c : cases) {
+    Reader rd;
+    rd.r.feed(c.bytes.data(), c.bytes.size());
+    Frame f;
+    EXPECT_EQ(rd.r.next(&f), c.expect) << c.what;
+    // The fault sticks (the stream cannot be trusted past it) until reset.
+    EXPECT_EQ(rd.r.next(&f), c.expect) << c.what;
+    EXPECT_EQ(rd.r.feed(good.data(), good.size()), 0u) << c.what;
+    rd.r.reset();
+    rd.r.feed(good.data(), good.size());
+    EXPECT_EQ(rd.r.next(&f), FrameStatus::kOk) << c.what;
+  }
+  // Truncated: the stream ends inside a frame.
+  Reader rd;
+  rd.r.feed(good.data(), good.size() - 1);
+  Frame f;
+  EXPECT_EQ(rd.r.next(&f), FrameStatus::kNeedMore);
+  EXPECT_EQ(rd.r.finish(), FrameStatus::kTruncated);
+  // A reader with less storage than a frame refuses it as oversized.
+  std::vector<uint8_t> small(64);
+  FrameReader tiny;
+  tiny.init(small.data(), small.size());
+  const std::vector<uint8_t> long_frame = frame(MessageType::kNodes, 0, std::vector<uint8_t>(100, 7));
+  tiny.feed(long_frame.data(), long_frame.size());
+  EXPECT_EQ(tiny.next(&f), FrameStatus::kOversized);
+  for (FrameStatus s : {FrameStatus::kBadChecksum, FrameStatus::kOutOfSequence, FrameStatus::kTruncated})
+    EXPECT_STRNE(frame_status_text(s), "unknown status");
+}
+
+TEST(Protocol, MessagesParseOnlyInRange) {
+  uint8_t buf[kCameraUpdateBytes];
+  Hello h;
+  h.width = 320;
+  h.height = 240;
+  h.attributes = kWantNormals;
+  h.cache_capacity = 12345;
+  ASSERT_EQ(write_hello(h, buf), kHelloBytes);
+  Hello back;
+  ASSERT_TRUE(parse_hello(buf, kHelloBytes, &back));
+  EXPECT_EQ(back.width, 320);
+  EXPECT_EQ(back.attributes, kWantNormals);
+  EXPECT_EQ(back.cache_capacity, 12345u);
+  EXPECT_FALSE(parse_hello(buf, kHelloBytes - 1, &back));
+  buf[7] = 0x80;  // an attribute this version does not know
+  EXPECT_FALSE(parse_hello(buf, kHelloBytes, &back));
+
+  CameraUpdate c;
+  c.sequence = 9;
+  ASSERT_TRUE(orbit_camera(OrbitView{}, 240, 320, &c.camera));
+  c.window[2] = 100;
+  c.window[3] = 50;
+  ASSERT_EQ(write_camera_update(c, buf), kCameraUpdateBytes);
+  CameraUpdate cb;
+  ASSERT_TRUE(parse_camera_update(buf, kCameraUpdateBytes, &cb));
+  EXPECT_EQ(cb.sequence, 9u);
+  EXPECT_EQ(std::memcmp(&cb.camera, &c.camera, sizeof c.camera), 0);
+  EXPECT_EQ(cb.window[2], 100);
+  store_u32le_for_test(buf + 4 + 12 * 4, 0);  // focal length 0
+  EXPECT_FALSE(parse_camera_update(buf, kCameraUpdateBytes, &cb));
+
+  // Node batches: exact length, ids below the tree's size.
+  std::vector<uint8_t> p(4 + 2 * (4 + 13));
+  store_u32le_for_test(p.data(), 2);
+  store_u32le_for_test(p.data() + 4, 7);
+  store_u32le_for_test(p.data() + 4 + 17, 99);
+  NodeBatch nb;
+  ASSERT_TRUE(parse_nodes(p.data(), p.size(), 13, 100, &nb));
+  EXPECT_EQ(index_of(nb.id(1)), 99u);
+  EXPECT_EQ(nb.record(1), p.data() + 4 + 17 + 4);
+  EXPECT_FALSE(parse_nodes(p.data(), p.size(), 13, 99, &nb));       // id 99 out of range
+  EXPECT_FALSE(parse_nodes(p.data(), p.size() - 1, 13, 100, &nb));  // truncated
+  store_u32le_for_test(p.data(), 0xFFFFFFFFu);
+  EXPECT_FALSE(parse_nodes(p.data(), p.size(), 13, 100, &nb));  // a count the payload cannot hold
+  DropBatch db;
+  std::vector<uint8_t> d = {1, 0, 0, 0, 5, 0, 0, 0};
+  ASSERT_TRUE(parse_drop(d.data(), d.size(), 6, &db));
+  EXPECT_EQ(index_of(db.id(0)), 5u);
+  EXPECT_FALSE(parse_drop(d.data(), d.size(), 5, &db));
+  Fault fault{CloseReason::kBadFrame, FrameStatus::kBadChecksum, 77}, fb;
+  uint8_t fbuf[kFaultBytes];
+  write_fault(fault, fbuf);
+  ASSERT_TRUE(parse_fault(fbuf, kFaultBytes, &fb));
+  EXPECT_EQ(fb.sequence, 77);
+  fbuf[0] = 200;
+  EXPECT_FALSE(parse_fault(fbuf, kFaultBytes, &fb));
+}
+
+TEST(Cobs, RoundTripsAtBlockBoundaries) {
+  std::mt19937 rng(11);
+  for (size_t n : {size_t{0}, size_t{1}, size_t{253}, size_t{254}, size_t{255}, size_t{508}, size_t{1000}}) {
+    for (int kind = 0; kind < 3; ++kind) {
+      std::vector<uint8_t> data(n);
+      for (uint8_t& b : data) b = kind == 0 ? 0 : kind == 1 ? static_cast<uint8_t>(1 + rng() % 255) : static_cast<uint8_t>(rng() % 4);
+      std::vector<uint8_t> enc(cobs_bound(n));
+      const size_t m = cobs_encode(data.data(), n, enc.data(), enc.size());
+      ASSERT_GT(m, 0u);
+      for (size_t i = 0; i + 1 < m; ++i) ASSERT_NE(enc[i], 0) << n << " " << kind;
+      ASSERT_EQ(enc[m - 1], 0);
+      std::vector<uint8_t> dec(n + 1);
+      ASSERT_EQ(cobs_decode(enc.data(), m - 1, dec.data()), n) << n << " " << kind;
+      dec.resize(n);
+      EXPECT_EQ(dec, data) << n << " " << kind;
+    }
+  }
+  uint8_t out[4];
+  EXPECT_EQ(cobs_encode(out, 3, out, 4), 0u);  // capacity below the bound
+  const uint8_t bad[] = {5, 1, 2};  // a code pointing past the packet
+  EXPECT_EQ(cobs_decode(bad, 3, out), SIZE_MAX);
+}
+
+TEST(Cobs, DeframerResynchronisesAfterNoise) {
+  std::vector<uint8_t> line;
+  std::vector<std::vector<uint8_t>> sent;
+  for (uint16_t s = 0; s < 20; ++s) {
+    const std::vector<uint8_t> f = frame(MessageType::kKeepAlive, s, std::vector<uint8_t>(30 + s, static_cast<uint8_t>(s)));
+    sent.push_back(f);
+    std::vector<uint8_t> enc(cobs_bound(f.size()));
+    enc.resize(cobs_encode(f.data(), f.size(), enc.data(), enc.size()));
+    if (s == 5) enc[10] ^= 0x04;                  // a bit flip: the frame's CRC fails
+    if (s == 9) enc.erase(enc.begin() + 3, enc.begin() + 8);  // dropped bytes
+    if (s == 13) enc.insert(enc.begin() + 4, 200, 0x55);      // a burst of noise
+    line.insert(line.end(), enc.begin(), enc.end());
+  }
+  std::vector<uint8_t> storage(512);
+  CobsDeframer d;
+  d.init(storage.data(), storage.size());
+  std::vector<int> good;
+  for (uint8_t byte : line) {
+    if (d.push(byte) != CobsStatus::kPacket) continue;
+    // Each packet is checked as a frame on its own (its CRC).
+    const size_t n = d.packet_bytes();
+    if (n >= kFrameHeaderBytes + kFrameTrailerBytes &&
+        load_u32le(d.packet() + n - 4) == crc32(d.packet(), n - 4))
+      good.push_back(load_u16le(d.packet() + 2));
+  }
+  std::vector<int> expect;
+  for (int s = 0; s < 20; ++s)
+    if (s != 5 && s != 9 && s != 13) expect.push_back(s);
+  EXPECT_EQ(good, expect);
+}
+
+}  // namespace
+}  // namespace stipple
