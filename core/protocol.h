@@ -27,7 +27,10 @@ namespace stipple {
 inline constexpr uint16_t kProtocolVersion = 1;
 inline constexpr size_t kFrameHeaderBytes = 8;
 inline constexpr size_t kFrameTrailerBytes = 4;
-inline constexpr size_t kMaxPayload = 65536;  // a node batch of ~3,000 17-byte records
+// The largest payload: a startup message with the default client's largest
+// class tables (4096 + 4096 + 64 classes: 82,764 bytes) fits; node batches
+// are split to stay below it.
+inline constexpr size_t kMaxPayload = 98304;
 inline constexpr size_t kMaxFrameBytes = kFrameHeaderBytes + kMaxPayload + kFrameTrailerBytes;
 
 enum class MessageType : uint8_t {

@@ -8,7 +8,7 @@ size_t table_words(const uint16_t class_count[3]) {
   return 3 * size_t{class_count[0]} + 2 * size_t{class_count[1]} + 3 * size_t{class_count[2]};
 }
 
-uint8_t* write_startup(const SpgHeader& h, const SpgClassTables& t, uint8_t* out) {
+void write_fixed_header(const SpgHeader& h, uint8_t* out) {
   using namespace spg_offset;
   for (int i = 0; i < 4; ++i) out[kMagic + i] = kSpgMagic[i];
   store_u16le(out + kVersion, h.version);
@@ -24,6 +24,10 @@ uint8_t* write_startup(const SpgHeader& h, const SpgClassTables& t, uint8_t* out
   for (int i = 0; i < 6; ++i) store_u32le(out + kBboxMin + 4 * i, h.bbox_bits[i]);
   for (int c = 0; c < 3; ++c) store_u16le(out + kClassCounts + 2 * c, h.class_count[c]);
   store_u16le(out + kReserved, 0);
+}
+
+uint8_t* write_startup(const SpgHeader& h, const SpgClassTables& t, uint8_t* out) {
+  write_fixed_header(h, out);
   uint8_t* at = out + kSpgFixedHeaderBytes;
   const uint32_t* tables[3] = {t.sigma_p, t.sigma_n, t.sigma_c};
   const size_t per_class[3] = {3, 2, 3};
@@ -74,6 +78,26 @@ SpgWriteStatus spg_write_startup(const SpgHeader& h, const SpgClassTables& class
     if (h.class_count[c] > 0 && table == nullptr) return SpgWriteStatus::kBadHeader;
   }
   write_startup(h, classes, out);
+  SpgView view;
+  size_t used = 0;
+  const SpgResult r = spg_parse_startup(out, n, &view, &used);
+  if (!r.ok()) return status_of(r.error);
+  *written = n;
+  return SpgWriteStatus::kOk;
+}
+
+SpgWriteStatus spg_write_startup_le(const SpgHeader& h, const uint8_t* sigma_p, const uint8_t* sigma_n,
+                                    const uint8_t* sigma_c, uint8_t* out, size_t capacity, size_t* written) {
+  const size_t n = spg_startup_bytes(h.class_count);
+  if (capacity < n) return SpgWriteStatus::kOutputTooSmall;
+  const uint8_t* tables[3] = {sigma_p, sigma_n, sigma_c};
+  for (int c = 0; c < 3; ++c)
+    if (h.class_count[c] > 0 && tables[c] == nullptr) return SpgWriteStatus::kBadHeader;
+  write_fixed_header(h, out);
+  uint8_t* at = out + kSpgFixedHeaderBytes;
+  const size_t per_class[3] = {12, 8, 12};
+  for (int c = 0; c < 3; ++c)
+    for (size_t i = 0; i < per_class[c] * h.class_count[c]; ++i) *at++ = tables[c][i];
   SpgView view;
   size_t used = 0;
   const SpgResult r = spg_parse_startup(out, n, &view, &used);

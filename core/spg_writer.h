@@ -66,6 +66,11 @@ size_t spg_write_bound(const SpgHeader& header);
 [[nodiscard]] SpgWriteStatus spg_write_startup(const SpgHeader& header, const SpgClassTables& classes, uint8_t* out,
                                                size_t capacity, size_t* written);
 
+// The same from class tables as they lie in a file (little-endian float32
+// bytes, e.g. an SpgView's): what a server sends without converting them.
+[[nodiscard]] SpgWriteStatus spg_write_startup_le(const SpgHeader& header, const uint8_t* sigma_p, const uint8_t* sigma_n,
+                                                  const uint8_t* sigma_c, uint8_t* out, size_t capacity, size_t* written);
+
 inline void store_u16le(uint8_t* p, uint16_t v) {
   p[0] = static_cast<uint8_t>(v);
   p[1] = static_cast<uint8_t>(v >> 8);

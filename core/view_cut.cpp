@@ -118,6 +118,14 @@ CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* s
   return CutStatus::kOk;
 }
 
+void ViewCut::reset() {
+  for (uint32_t i = 0; i < sent_count_; ++i) {
+    const uint32_t id = index_of(sent_[i]);
+    sent_bits_[id >> 3] = static_cast<uint8_t>(sent_bits_[id >> 3] & ~(1u << (id & 7)));
+  }
+  cut_count_ = sent_count_ = previous_count_ = entered_count_ = left_count_ = visited_ = 0;
+}
+
 ViewCut::Eval ViewCut::evaluate(uint32_t id) const {
   const Bound& b = bounds_[id];
   const Camera& cam = *camera_;

@@ -67,6 +67,9 @@ class ViewCut {
   // init only. Builds the bounds table; the cut starts empty.
   [[nodiscard]] CutStatus init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes);
 
+  // Forgets the sent set (the next update reports every sent node as entered).
+  void reset();
+
   // Re-derives the cut for `camera`; entered() and left() are the change of
   // the sent set since the previous update (everything, the first time).
   [[nodiscard]] CutStatus update(const Camera& camera, const CutParams& params);

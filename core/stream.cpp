@@ -1,0 +1,211 @@
+// stipple core — the two ends of a node stream. See stream.h and docs/protocol.md.
+#include "core/stream.h"
+
+#include "core/spg_writer.h"
+
+namespace stipple {
+namespace {
+
+constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
+
+bool is_normal_field(int f) { return f >= static_cast<int>(Field::kFnTheta) && f <= static_cast<int>(Field::kSigmaN); }
+bool is_color_field(int f) { return f >= static_cast<int>(Field::kColorR); }
+
+}  // namespace
+
+SpgHeader reduced_header(const SpgHeader& full, uint8_t attributes) {
+  SpgHeader h = full;
+  const bool normals = full.has_normals() && (attributes & kWantNormals);
+  const bool color = full.has_color() && (attributes & kWantColor);
+  h.flags = static_cast<uint16_t>((normals ? kAttrNormals : 0) | (color ? kAttrColor : 0));
+  for (int f = 0; f < kFieldCount; ++f)
+    if ((!normals && is_normal_field(f)) || (!color && is_color_field(f))) h.layout.bits[f] = 0;
+  if (!normals) h.class_count[1] = 0;
+  if (!color) h.class_count[2] = 0;
+  return h;
+}
+
+void transcode_record(const RecordLayout& from, const RecordLayout& to, const uint8_t* in, uint8_t* out) {
+  NodeFields f = unpack_record(from, in);
+  for (int k = 0; k < kFieldCount; ++k)
+    if (to.bits[k] == 0) f.v[k] = 0;
+  pack_record(to, f, out);
+}
+
+size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity) {
+  const SpgHeader h = reduced_header(view.header, attributes);
+  size_t written = 0;
+  if (spg_write_startup_le(h, view.sigma_p, h.class_count[1] ? view.sigma_n : nullptr,
+                           h.class_count[2] ? view.sigma_c : nullptr, out, capacity, &written) != SpgWriteStatus::kOk)
+    return 0;
+  return written;
+}
+
+size_t StreamSender::storage_bytes(const SpgHeader& header) {
+  return align8(view_cut_bytes(header)) + align8(kMaxPayload) + kMaxFrameBytes;
+}
+
+bool StreamSender::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes) {
+  if (bytes < storage_bytes(view.header)) return false;
+  uint8_t* base = static_cast<uint8_t*>(storage);
+  const size_t cut_bytes = align8(view_cut_bytes(view.header));
+  if (cut_.init(view, decoder, base, cut_bytes) != CutStatus::kOk) return false;
+  payload_ = base + cut_bytes;
+  frame_ = payload_ + align8(kMaxPayload);
+  view_ = &view;
+  started_ = false;
+  sequence_ = 0;
+  bytes_sent_ = 0;
+  return true;
+}
+
+bool StreamSender::send(MessageType type, const uint8_t* payload, size_t size, FrameSink sink, void* context) {
+  const size_t n = write_frame(type, sequence_, payload, size, frame_, kMaxFrameBytes);
+  if (n == 0 || !sink(context, frame_, n)) return false;
+  ++sequence_;
+  bytes_sent_ += n;
+  return true;
+}
+
+bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
+  if (view_ == nullptr || hello.version != kProtocolVersion) return false;
+  reduced_ = reduced_header(view_->header, hello.attributes);
+  reduced_record_bytes_ = static_cast<size_t>(reduced_.layout.record_bytes());
+  capacity_ = hello.cache_capacity;
+  cut_.reset();  // a fresh client: its cut starts empty, so the first update sends it all
+  const size_t n = write_reduced_startup(*view_, hello.attributes, payload_, kMaxPayload);
+  if (n == 0) return false;
+  started_ = true;
+  return send(MessageType::kStartup, payload_, n, sink, context);
+}
+
+bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context) {
+  if (!started_) return false;
+  CutParams p;
+  p.max_size_q4 = camera.max_size_q4;
+  p.max_nodes = capacity_;
+  p.cull_frustum = p.cull_backfaces = cull;
+  for (int k = 0; k < 4; ++k) p.window[k] = camera.window[k];
+  if (cut_.update(camera.camera, p) != CutStatus::kOk) return false;
+  // Drops first, so a full client cache makes room before new nodes arrive.
+  for (uint32_t done = 0; done < cut_.left_count();) {
+    const uint32_t n = cut_.left_count() - done < kDropsPerFrame ? cut_.left_count() - done : kDropsPerFrame;
+    store_u32le(payload_, n);
+    for (uint32_t i = 0; i < n; ++i) store_u32le(payload_ + 4 + 4 * size_t{i}, index_of(cut_.left()[done + i]));
+    if (!send(MessageType::kDrop, payload_, 4 + 4 * size_t{n}, sink, context)) return false;
+    done += n;
+  }
+  const uint32_t per_frame = nodes_per_frame(reduced_record_bytes_);
+  const size_t stride = 4 + reduced_record_bytes_;
+  for (uint32_t done = 0; done < cut_.entered_count();) {
+    const uint32_t n = cut_.entered_count() - done < per_frame ? cut_.entered_count() - done : per_frame;
+    store_u32le(payload_, n);
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t id = index_of(cut_.entered()[done + i]);
+      uint8_t* entry = payload_ + 4 + size_t{i} * stride;
+      store_u32le(entry, id);
+      transcode_record(view_->header.layout, reduced_.layout, view_->records + size_t{id} * view_->record_bytes, entry + 4);
+    }
+    if (!send(MessageType::kNodes, payload_, 4 + size_t{n} * stride, sink, context)) return false;
+    done += n;
+  }
+  const UpdateEnd end{camera.sequence, cut_.sent_count()};
+  uint8_t buf[kUpdateEndBytes];
+  write_update_end(end, buf);
+  return send(MessageType::kUpdateEnd, buf, kUpdateEndBytes, sink, context);
+}
+
+const char* receive_status_text(ReceiveStatus s) {
+  switch (s) {
+    case ReceiveStatus::kOk: return "ok";
+    case ReceiveStatus::kBadFrame: return "a frame was refused";
+    case ReceiveStatus::kBadMessage: return "a message was malformed or out of order";
+    case ReceiveStatus::kCacheRefused: return "the node cache refused the startup or a node";
+    case ReceiveStatus::kClosed: return "the server closed the stream";
+  }
+  return "unknown status";
+}
+
+void StreamReceiver::init(NodeCache* cache, uint8_t* reader_storage, size_t bytes) {
+  cache_ = cache;
+  reader_.init(reader_storage, bytes);
+  status_ = ReceiveStatus::kOk;
+  frame_status_ = FrameStatus::kOk;
+  cache_status_ = CacheStatus::kOk;
+  fault_ = Fault{};
+  has_update_end_ = false;
+  bytes_ = 0;
+  frames_ = 0;
+}
+
+ReceiveStatus StreamReceiver::apply(const Frame& f) {
+  ++frames_;
+  const auto refused = [&](CacheStatus s) {
+    cache_status_ = s;
+    return ReceiveStatus::kCacheRefused;
+  };
+  switch (f.type) {
+    case MessageType::kStartup: {
+      const CacheStatus s = cache_->load_startup(f.payload, f.payload_bytes);
+      if (s != CacheStatus::kOk) return refused(s);
+      has_update_end_ = false;
+      return ReceiveStatus::kOk;
+    }
+    case MessageType::kNodes: {
+      NodeBatch b;
+      if (!cache_->ready() ||
+          !parse_nodes(f.payload, f.payload_bytes, cache_->record_bytes(), cache_->header().node_count, &b))
+        return ReceiveStatus::kBadMessage;
+      for (uint32_t i = 0; i < b.count; ++i) {
+        const CacheStatus s = cache_->put(b.id(i), b.record(i), b.record_bytes);
+        if (s != CacheStatus::kOk) return refused(s);
+      }
+      return ReceiveStatus::kOk;
+    }
+    case MessageType::kDrop: {
+      DropBatch b;
+      if (!cache_->ready() || !parse_drop(f.payload, f.payload_bytes, cache_->header().node_count, &b))
+        return ReceiveStatus::kBadMessage;
+      for (uint32_t i = 0; i < b.count; ++i) {
+        const CacheStatus s = cache_->drop(b.id(i));
+        if (s != CacheStatus::kOk) return refused(s);
+      }
+      return ReceiveStatus::kOk;
+    }
+    case MessageType::kUpdateEnd: {
+      UpdateEnd u;
+      if (!parse_update_end(f.payload, f.payload_bytes, &u)) return ReceiveStatus::kBadMessage;
+      last_update_ = u;
+      has_update_end_ = true;
+      return ReceiveStatus::kOk;
+    }
+    case MessageType::kKeepAlive: return ReceiveStatus::kOk;
+    case MessageType::kClose:
+    case MessageType::kError: {
+      if (!parse_fault(f.payload, f.payload_bytes, &fault_)) return ReceiveStatus::kBadMessage;
+      return ReceiveStatus::kClosed;
+    }
+    default: return ReceiveStatus::kBadMessage;  // a client -> server message
+  }
+}
+
+ReceiveStatus StreamReceiver::receive(const uint8_t* data, size_t size) {
+  size_t at = 0;
+  while (status_ == ReceiveStatus::kOk) {
+    at += reader_.feed(data + at, size - at);
+    Frame f;
+    FrameStatus s;
+    while (status_ == ReceiveStatus::kOk && (s = reader_.next(&f)) == FrameStatus::kOk) status_ = apply(f);
+    if (status_ != ReceiveStatus::kOk) break;
+    if (s != FrameStatus::kNeedMore) {
+      frame_status_ = s;
+      status_ = ReceiveStatus::kBadFrame;
+      break;
+    }
+    if (at == size) break;
+  }
+  bytes_ += size;
+  return status_;
+}
+
+}  // namespace stipple

@@ -1,0 +1,116 @@
+// stipple core — the two ends of a node stream, over core/protocol frames.
+//
+// Server side, per client (StreamSender): the startup message reduced to the
+// attributes the client asked for (a grey screen gets no colour, a client
+// without lighting no normals — smaller records), and, per camera update,
+// the change of the client's view-dependent cut (core/view_cut.h) as drop
+// and node batches with each record transcoded to the reduced layout, then
+// an update-end marker. Client side (StreamReceiver): frames applied to a
+// NodeCache — startup adopted, nodes put, drops dropped — with every id and
+// length checked, and the converged state reported.
+//
+// Both are integer-only and allocation-free over caller storage; neither
+// touches a socket: bytes go to and come from a transport (platform/).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "core/node_cache.h"
+#include "core/protocol.h"
+#include "core/spg_format.h"
+#include "core/view_cut.h"
+
+namespace stipple {
+
+// The header a client asking for `attributes` (kWantNormals | kWantColor)
+// receives: attributes the model lacks or the client does not want are
+// removed from the flags, the layout and the class counts.
+SpgHeader reduced_header(const SpgHeader& full, uint8_t attributes);
+
+// A record of layout `from` in layout `to` (the same fields minus the removed
+// attributes: their fields are dropped, the others keep their values).
+void transcode_record(const RecordLayout& from, const RecordLayout& to, const uint8_t* in, uint8_t* out);
+
+// Writes the reduced startup message (header and the wanted class tables)
+// into out[0 .. capacity); returns its length or 0 when it does not fit.
+size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity);
+
+// Where a sender's frames go: called with each whole frame (a transport's
+// write, a queue); false stops the update (the link is gone).
+using FrameSink = bool (*)(void* context, const uint8_t* frame, size_t size);
+
+class StreamSender {
+ public:
+  // Storage for one client of a model: view_cut_bytes plus a frame buffer.
+  static size_t storage_bytes(const SpgHeader& header);
+  // `view` and `decoder` must outlive the sender.
+  [[nodiscard]] bool init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes);
+  // The client's hello: sends the reduced startup. False for a hello the
+  // server cannot serve (version) — the caller sends a close.
+  [[nodiscard]] bool start(const Hello& hello, FrameSink sink, void* context);
+  // One camera update: the cut's change as drop and node batches, then an
+  // update-end. Returns false when the sink refused a frame.
+  [[nodiscard]] bool update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context);
+  const ViewCut& cut() const { return cut_; }
+  uint64_t bytes_sent() const { return bytes_sent_; }
+  uint16_t next_sequence() const { return sequence_; }
+
+ private:
+  bool send(MessageType type, const uint8_t* payload, size_t size, FrameSink sink, void* context);
+
+  const SpgView* view_ = nullptr;
+  ViewCut cut_;
+  uint8_t* payload_ = nullptr;  // kMaxPayload
+  uint8_t* frame_ = nullptr;    // kMaxFrameBytes
+  SpgHeader reduced_{};
+  size_t reduced_record_bytes_ = 0;
+  uint32_t capacity_ = 0;
+  uint16_t sequence_ = 0;
+  uint64_t bytes_sent_ = 0;
+  bool started_ = false;
+};
+
+enum class ReceiveStatus : uint8_t {
+  kOk = 0,
+  kBadFrame,       // the frame reader refused a frame (frame_status() says why)
+  kBadMessage,     // a message that does not parse, or arrives before the startup
+  kCacheRefused,   // the node cache refused the startup or a node (cache_status() says why)
+  kClosed,         // the server closed the stream (fault() says why)
+};
+
+const char* receive_status_text(ReceiveStatus s);
+
+class StreamReceiver {
+ public:
+  // `reader_storage` holds the frame reader's buffer (kMaxFrameBytes).
+  void init(NodeCache* cache, uint8_t* reader_storage, size_t bytes);
+  // Takes bytes from the link; applies every whole frame. A fault sticks.
+  [[nodiscard]] ReceiveStatus receive(const uint8_t* data, size_t size);
+  // The last update-end seen: the camera it answered and the cut's size.
+  bool converged(uint32_t camera_sequence) const {
+    return has_update_end_ && last_update_.camera_sequence == camera_sequence;
+  }
+  const UpdateEnd& last_update() const { return last_update_; }
+  FrameStatus frame_status() const { return frame_status_; }
+  CacheStatus cache_status() const { return cache_status_; }
+  const Fault& fault() const { return fault_; }
+  uint64_t bytes_received() const { return bytes_; }
+  uint32_t frames() const { return frames_; }
+
+ private:
+  ReceiveStatus apply(const Frame& frame);
+
+  NodeCache* cache_ = nullptr;
+  FrameReader reader_;
+  ReceiveStatus status_ = ReceiveStatus::kOk;
+  FrameStatus frame_status_ = FrameStatus::kOk;
+  CacheStatus cache_status_ = CacheStatus::kOk;
+  Fault fault_{};
+  UpdateEnd last_update_{};
+  bool has_update_end_ = false;
+  uint64_t bytes_ = 0;
+  uint32_t frames_ = 0;
+};
+
+}  // namespace stipple
