@@ -52,13 +52,14 @@ class StreamSender {
   // One camera update: the cut's change as drop and node batches, then an
   // update-end. Returns false when the sink refused a frame.
   [[nodiscard]] bool update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context);
+  // Any other message in the stream's sequence (keep-alive, close, error).
+  [[nodiscard]] bool send(MessageType type, const uint8_t* payload, size_t size, FrameSink sink, void* context);
   const ViewCut& cut() const { return cut_; }
+  bool started() const { return started_; }
   uint64_t bytes_sent() const { return bytes_sent_; }
   uint16_t next_sequence() const { return sequence_; }
 
  private:
-  bool send(MessageType type, const uint8_t* payload, size_t size, FrameSink sink, void* context);
-
   const SpgView* view_ = nullptr;
   ViewCut cut_;
   uint8_t* payload_ = nullptr;  // kMaxPayload

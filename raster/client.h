@@ -81,6 +81,8 @@ class Client {
 
   const NodeDecoder& decoder() const { return cache_.decoder(); }
   const NodeCache& cache() const { return cache_; }
+  // The cache itself, for whatever fills it from a stream (core/stream.h).
+  NodeCache& cache() { return cache_; }
 
  private:
   NodeCache cache_;

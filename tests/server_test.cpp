@@ -1,0 +1,276 @@
+// The server and its clients (tools/server, tools/embedded/remote.h): over a
+// loopback pipe and over TCP on 127.0.0.1, every converged frame a client
+// draws equals, byte for byte, the frame `stipple render` draws from the
+// file for the same camera; eight clients at once are served while a ninth
+// stalls (never reads) and a tenth vanishes mid-frame; a client that sends
+// a corrupt frame is told why and closed, and the others carry on.
+#include <gtest/gtest.h>
+
+#include <sys/socket.h>
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <cstring>
+#include <thread>
+
+#include "platform/file_io.h"
+#include "platform/loopback/loopback_transport.h"
+#include "platform/tcp/tcp_transport.h"
+#include "test_util.h"
+#include "tools/embedded/embedded.h"
+#include "tools/embedded/remote.h"
+#include "tools/server/server.h"
+
+namespace stipple {
+namespace {
+
+std::vector<uint8_t> bunny_file() { return test::fixture("tests/golden/bunny_v1.spg"); }
+
+ClientConfig device() {
+  ClientConfig c;
+  c.raster = RasterConfig{240, 320, 5, PixelFormat::kRgb565, 200000};
+  c.node_capacity = 8000;
+  return c;
+}
+
+// The camera `stipple render --camera yaw,20` uses for the bunny, and its frame.
+struct Local {
+  std::vector<uint8_t> file = bunny_file();
+  SpgView view;
+  Local() { EXPECT_TRUE(spg_parse(file.data(), file.size(), &view).ok()); }
+  ViewSpec spec(double yaw) const {
+    ViewSpec s;
+    std::string error;
+    EXPECT_TRUE(parse_view(std::to_string(yaw) + ",20", s, error));
+    return s;
+  }
+  FixedRender render(double yaw) const {
+    FixedRender out;
+    std::string error;
+    CutRule rule{CutRule::kProjectedSize, 0, 32};
+    EXPECT_TRUE(render_fixed(view, file.data(), device(), rule, spec(yaw), out, error)) << error;
+    return out;
+  }
+};
+
+// A remote client's frame for the same view.
+std::vector<uint8_t> remote_frame(RemoteModel& remote, const Local& local, double yaw, std::string& error) {
+  std::vector<uint32_t> storage(node_decoder_bytes(local.view.header) / 4 + 1);
+  NodeDecoder decoder;
+  EXPECT_EQ(decoder.init(local.view, storage.data(), storage.size() * 4), DecodeStatus::kOk);
+  Camera c;
+  EXPECT_TRUE(orbit_camera(orbit_view(decoder.extent_mu(), resolve_view(local.spec(yaw), remote.header(), decoder.extent_mu())),
+                           240, 320, &c));
+  const int32_t window[4] = {0, 0, 0, 0};
+  std::vector<uint8_t> frame(240 * 320 * 2);
+  if (!remote.view(c, 32, window, error) || !remote.render(c, frame.data(), 240 * 2, nullptr, error)) return {};
+  return frame;
+}
+
+// A transport the server may own that forwards to one it must not (a loopback end).
+struct Borrowed final : Transport {
+  Transport& t;
+  explicit Borrowed(Transport& to) : t(to) {}
+  TransportStatus read(uint8_t* out, size_t capacity, size_t* moved) override { return t.read(out, capacity, moved); }
+  TransportStatus write(const uint8_t* data, size_t size, size_t* moved) override { return t.write(data, size, moved); }
+  void close() override { t.close(); }
+  const char* last_error() const override { return t.last_error(); }
+};
+
+TEST(Server, LoopbackFramesEqualTheLocalRender) {
+  const Local local;
+  Server server;
+  std::string error;
+  std::vector<std::string> log;
+  ServerOptions o;
+  o.log = [&](const std::string& line) { log.push_back(line); };
+  ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
+  LoopbackPipe pipe;
+  server.add_client(std::make_unique<Borrowed>(pipe.server()), -1, "loopback");
+  RemoteModel remote;
+  RemoteModel::Options ro;
+  ro.pump = [](void* s) {
+    static_cast<Server*>(s)->step(0);
+    return true;
+  };
+  ro.pump_context = &server;
+  ASSERT_TRUE(remote.connect(pipe.client(), device(), ro, error)) << error;
+  for (double yaw : {30.0, 60.0, 90.0, 200.0, 30.0}) {
+    const std::vector<uint8_t> frame = remote_frame(remote, local, yaw, error);
+    ASSERT_FALSE(frame.empty()) << error;
+    const FixedRender expected = local.render(yaw);
+    EXPECT_EQ(frame, expected.frame) << "yaw " << yaw;
+    EXPECT_EQ(remote.client().node_count(), expected.cut.size());
+  }
+  const std::vector<ClientReport> r = server.report();
+  ASSERT_EQ(r.size(), 1u);
+  EXPECT_EQ(r[0].updates, 5u);
+  EXPECT_EQ(r[0].bytes_out, remote.bytes_received());
+  ASSERT_GE(log.size(), 2u);
+  EXPECT_NE(log[1].find("hello 240x320 rgb565, attributes normals colour, cache 8000 nodes"), std::string::npos) << log[1];
+}
+
+// The server on 127.0.0.1 in its own thread; clients connect over TCP.
+struct TcpServer {
+  Server server;
+  std::atomic<bool> stop{false};
+  std::thread thread;
+  std::vector<std::string> log;
+  std::mutex log_mutex, step_mutex;
+  std::vector<ClientReport> report() {
+    std::lock_guard<std::mutex> lock(step_mutex);
+    return server.report();
+  }
+  explicit TcpServer(uint32_t max_clients = 64) {
+    std::string error;
+    ServerOptions o;
+    o.max_clients = max_clients;
+    o.log = [this](const std::string& line) {
+      std::lock_guard<std::mutex> lock(log_mutex);
+      log.push_back(line);
+    };
+    EXPECT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
+    EXPECT_TRUE(server.listen_tcp("127.0.0.1", 0, error)) << error;
+    thread = std::thread([this] {
+      while (!stop) {
+        std::lock_guard<std::mutex> lock(step_mutex);
+        server.step(20);
+      }
+    });
+  }
+  ~TcpServer() {
+    stop = true;
+    thread.join();
+  }
+  bool logged(const std::string& what) {
+    std::lock_guard<std::mutex> lock(log_mutex);
+    for (const std::string& l : log)
+      if (l.find(what) != std::string::npos) return true;
+    return false;
+  }
+};
+
+int connect_to(uint16_t port) {
+  int fd = -1;
+  std::string error;
+  EXPECT_TRUE(tcp_connect("127.0.0.1", port, 2000, &fd, error)) << error;
+  return fd;
+}
+
+TEST(Server, EightTcpClientsBesideAStalledOneAndOneThatVanishes) {
+  const Local local;
+  TcpServer s;
+  // A client that says hello, asks for a view and never reads: its queue
+  // fills its socket; nobody else may wait for it.
+  // A 2 KB receive buffer: the cold start alone (~47 KB) does not fit.
+  const int stalled_fd = connect_to(s.server.port());
+  const int small = 2048;
+  setsockopt(stalled_fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+  TcpTransport stalled(stalled_fd, "stalled");
+  {
+    uint8_t payload[kCameraUpdateBytes], frame[256];
+    write_hello(Hello{}, payload);
+    size_t n = write_frame(MessageType::kHello, 0, payload, kHelloBytes, frame, sizeof frame), moved = 0;
+    ASSERT_EQ(stalled.write(frame, n, &moved), TransportStatus::kOk);
+    for (uint16_t k = 0; k < 50; ++k) {  // many cameras: only the latest is kept while it stalls
+      CameraUpdate u;
+      u.sequence = k;
+      OrbitView o;
+      o.yaw = k * 0x04000000u;
+      ASSERT_TRUE(orbit_camera(o, 240, 320, &u.camera));
+      write_camera_update(u, payload);
+      n = write_frame(MessageType::kCamera, static_cast<uint16_t>(1 + k), payload, kCameraUpdateBytes, frame, sizeof frame);
+      ASSERT_EQ(stalled.write(frame, n, &moved), TransportStatus::kOk);
+    }
+  }
+  // One that sends half a frame and hangs up.
+  {
+    TcpTransport vanishing(connect_to(s.server.port()), "vanishing");
+    uint8_t payload[kHelloBytes], frame[64];
+    write_hello(Hello{}, payload);
+    const size_t n = write_frame(MessageType::kHello, 0, payload, kHelloBytes, frame, sizeof frame);
+    size_t moved = 0;
+    ASSERT_EQ(vanishing.write(frame, n / 2, &moved), TransportStatus::kOk);
+  }
+  std::atomic<int> good{0};
+  std::vector<std::thread> clients;
+  for (int k = 0; k < 8; ++k)
+    clients.emplace_back([&, k] {
+      TcpTransport t(connect_to(s.server.port()), "client");
+      RemoteModel remote;
+      RemoteModel::Options ro;
+      ro.fd = t.fd();
+      std::string error;
+      if (!remote.connect(t, device(), ro, error)) return;
+      bool all = true;
+      for (int step = 0; step < 4; ++step) {
+        const double yaw = 30.0 * k + 20.0 * step;
+        const std::vector<uint8_t> frame = remote_frame(remote, local, yaw, error);
+        all = all && !frame.empty() && frame == local.render(yaw).frame;
+      }
+      if (all) ++good;
+    });
+  for (std::thread& t : clients) t.join();
+  EXPECT_EQ(good.load(), 8);
+  // The stalled client got one update (it never drained it) for its 50 cameras.
+  bool seen = false;
+  for (const ClientReport& r : s.report())
+    if (r.hello && r.updates <= 1) seen = true;
+  EXPECT_TRUE(seen);
+  for (int i = 0; i < 100 && !s.logged("disconnected mid-frame"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_TRUE(s.logged("disconnected mid-frame"));
+}
+
+TEST(Server, ACorruptFrameIsAnsweredWithItsFaultAndClosed) {
+  TcpServer s;
+  TcpTransport t(connect_to(s.server.port()), "corrupt");
+  uint8_t payload[kHelloBytes], frame[64];
+  write_hello(Hello{}, payload);
+  const size_t n = write_frame(MessageType::kHello, 0, payload, kHelloBytes, frame, sizeof frame);
+  frame[9] ^= 0x40;  // a payload bit: the CRC fails
+  size_t moved = 0;
+  ASSERT_EQ(t.write(frame, n, &moved), TransportStatus::kOk);
+  // The answer: an error frame naming the fault, then the end of the stream.
+  std::vector<uint8_t> reader_storage(kMaxFrameBytes);
+  FrameReader reader;
+  reader.init(reader_storage.data(), reader_storage.size());
+  Frame f;
+  bool got_error = false, closed = false;
+  for (int i = 0; i < 200 && !closed; ++i) {
+    uint8_t buf[256];
+    size_t got = 0;
+    const TransportStatus st = t.read(buf, sizeof buf, &got);
+    if (st == TransportStatus::kClosed) closed = true;
+    if (got) reader.feed(buf, got);
+    while (reader.next(&f) == FrameStatus::kOk) {
+      Fault fault;
+      if (f.type == MessageType::kError && parse_fault(f.payload, f.payload_bytes, &fault)) {
+        got_error = true;
+        EXPECT_EQ(fault.status, FrameStatus::kBadChecksum);
+        EXPECT_EQ(fault.sequence, 0);
+      }
+    }
+    if (!closed) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_TRUE(got_error);
+  EXPECT_TRUE(closed);
+  EXPECT_TRUE(s.logged("frame 0: frame CRC-32 mismatch"));
+}
+
+TEST(Server, AFullServerSaysSo) {
+  TcpServer s(1);
+  TcpTransport first(connect_to(s.server.port()), "first");
+  for (int i = 0; i < 50 && s.report().empty(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  TcpTransport second(connect_to(s.server.port()), "second");
+  RemoteModel remote;
+  RemoteModel::Options ro;
+  ro.fd = second.fd();
+  ro.timeout_ms = 3000;
+  std::string error;
+  EXPECT_FALSE(remote.connect(second, device(), ro, error));
+  EXPECT_NE(error.find("the server has no room for another client"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace stipple

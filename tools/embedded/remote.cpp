@@ -1,0 +1,108 @@
+// stipple — the client end of the node stream. See remote.h.
+#include "tools/embedded/remote.h"
+
+#include <poll.h>
+
+#include <chrono>
+
+namespace stipple {
+
+bool RemoteModel::send(MessageType type, const uint8_t* payload, size_t size, std::string& error) {
+  const size_t n = write_frame(type, sequence_, payload, size, frame_.data(), frame_.size());
+  for (size_t at = 0; at < n;) {
+    size_t moved = 0;
+    const TransportStatus s = transport_->write(frame_.data() + at, n - at, &moved);
+    if (s == TransportStatus::kClosed || s == TransportStatus::kError)
+      return error = std::string("the server went away: ") + transport_->last_error(), false;
+    at += moved;
+    if (moved == 0) {
+      if (options_.pump && !options_.pump(options_.pump_context)) return error = "stopped", false;
+      if (options_.fd >= 0) {
+        pollfd p{options_.fd, POLLOUT, 0};
+        poll(&p, 1, 100);
+      }
+    }
+  }
+  ++sequence_;
+  bytes_sent_ += n;
+  return true;
+}
+
+bool RemoteModel::done(Awaited what) const {
+  return what == Awaited::kStartup ? client_.cache().ready() : receiver_.converged(awaited_camera_);
+}
+
+bool RemoteModel::wait(Awaited what, std::string& error) {
+  const auto start = std::chrono::steady_clock::now();
+  uint8_t buf[16384];
+  while (!done(what)) {
+    size_t got = 0;
+    const TransportStatus s = transport_->read(buf, sizeof buf, &got);
+    if (s == TransportStatus::kOk && got > 0) {
+      const ReceiveStatus r = receiver_.receive(buf, got);
+      if (r == ReceiveStatus::kClosed)
+        return error = std::string("the server closed the stream: ") + close_reason_text(receiver_.fault().reason), false;
+      if (r == ReceiveStatus::kBadFrame)
+        return error = std::string("a frame from the server was refused: ") + frame_status_text(receiver_.frame_status()), false;
+      if (r == ReceiveStatus::kCacheRefused)
+        return error = std::string("the client refused the server's data: ") + cache_status_text(receiver_.cache_status()), false;
+      if (r != ReceiveStatus::kOk) return error = receive_status_text(r), false;
+      continue;
+    }
+    if (s == TransportStatus::kClosed || s == TransportStatus::kError)
+      return error = std::string("the server went away") + (s == TransportStatus::kError ? std::string(": ") + transport_->last_error() : ""), false;
+    if (std::chrono::steady_clock::now() - start > std::chrono::milliseconds(options_.timeout_ms))
+      return error = "no answer from the server within " + std::to_string(options_.timeout_ms) + " ms", false;
+    if (options_.pump && !options_.pump(options_.pump_context)) return error = "stopped", false;
+    if (options_.fd >= 0) {
+      pollfd p{options_.fd, POLLIN, 0};
+      poll(&p, 1, 100);
+    }
+  }
+  return true;
+}
+
+bool RemoteModel::connect(Transport& transport, const ClientConfig& config, const Options& options, std::string& error) {
+  transport_ = &transport;
+  options_ = options;
+  const size_t bytes = client_arena_bytes(config);
+  if (bytes == 0) return error = "invalid client configuration", false;
+  arena_.assign(bytes / 8 + 1, 0);
+  if (client_.init(config, arena_.data(), arena_.size() * 8) != ClientStatus::kOk)
+    return error = "the client could not be set up", false;
+  reader_storage_.assign(kMaxFrameBytes, 0);
+  frame_.assign(kMaxFrameBytes, 0);
+  receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
+  Hello h;
+  h.width = config.raster.width;
+  h.height = config.raster.height;
+  h.pixel_format = config.raster.format == PixelFormat::kRgb888 ? 1 : 0;
+  h.attributes = static_cast<uint8_t>((config.normals && config.shading != ShadingMode::kNone ? kWantNormals : 0) |
+                                      (config.color && !config.grey ? kWantColor : 0));
+  h.cache_capacity = config.node_capacity;
+  uint8_t payload[kHelloBytes];
+  write_hello(h, payload);
+  if (!send(MessageType::kHello, payload, kHelloBytes, error)) return false;
+  return wait(Awaited::kStartup, error);
+}
+
+bool RemoteModel::view(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error) {
+  CameraUpdate u;
+  u.sequence = camera_sequence_;
+  u.camera = camera;
+  u.max_size_q4 = max_size_q4;
+  for (int k = 0; k < 4; ++k) u.window[k] = window[k];
+  uint8_t payload[kCameraUpdateBytes];
+  write_camera_update(u, payload);
+  if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
+  awaited_camera_ = camera_sequence_++;
+  return wait(Awaited::kUpdateEnd, error);
+}
+
+bool RemoteModel::render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats, std::string& error) {
+  const ClientStatus s = client_.render(camera, frame, stride, stats);
+  if (s != ClientStatus::kOk) return error = std::string("client: ") + client_status_text(s), false;
+  return true;
+}
+
+}  // namespace stipple

@@ -1,0 +1,59 @@
+// stipple — a model served over a transport, seen through the fixed-point
+// client: the client end of the node stream for the programs (`stipple
+// render --connect`, `stipple-handheld --connect`). It sends the hello,
+// receives the startup into the client's cache, and for each camera sends
+// the update and applies what comes back until the update-end: then the
+// client's cache holds the view's cut and render() draws it.
+//
+// The transport is any platform/transport.h backend; `pump`, when given, is
+// called while waiting (a loopback server in the same process steps there),
+// else the socket `fd` is polled. Allocates at start-up only.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/protocol.h"
+#include "core/stream.h"
+#include "platform/transport.h"
+#include "raster/client.h"
+
+namespace stipple {
+
+class RemoteModel {
+ public:
+  struct Options {
+    int fd = -1;                    // polled while waiting; -1: use pump
+    bool (*pump)(void* context) = nullptr;  // false: stop waiting
+    void* pump_context = nullptr;
+    int timeout_ms = 15000;         // the longest wait for the server
+  };
+  // `config` sizes the client (screen, cache capacity, attributes asked for).
+  bool connect(Transport& transport, const ClientConfig& config, const Options& options, std::string& error);
+  // Sends the camera and waits for its update-end.
+  bool view(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error);
+  bool render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats, std::string& error);
+  Client& client() { return client_; }
+  const SpgHeader& header() const { return client_.cache().header(); }
+  uint64_t bytes_received() const { return receiver_.bytes_received(); }
+  uint64_t bytes_sent() const { return bytes_sent_; }
+
+ private:
+  bool send(MessageType type, const uint8_t* payload, size_t size, std::string& error);
+  enum class Awaited : uint8_t { kStartup, kUpdateEnd };
+  bool done(Awaited what) const;
+  bool wait(Awaited what, std::string& error);
+
+  Transport* transport_ = nullptr;
+  Options options_;
+  std::vector<uint64_t> arena_;
+  Client client_;
+  std::vector<uint8_t> reader_storage_, frame_;
+  StreamReceiver receiver_;
+  uint16_t sequence_ = 0;
+  uint32_t camera_sequence_ = 0, awaited_camera_ = 0;
+  uint64_t bytes_sent_ = 0;
+};
+
+}  // namespace stipple

@@ -1,0 +1,231 @@
+// stipple server — see server.h; the protocol is docs/protocol.md.
+#include "tools/server/server.h"
+
+#include <poll.h>
+
+#include <cstdio>
+
+#include "platform/tcp/tcp_transport.h"
+
+namespace stipple {
+
+struct Server::Client {
+  uint32_t id = 0;
+  std::unique_ptr<Transport> transport;
+  int fd = -1;
+  std::string name;
+  std::vector<uint64_t> sender_storage;
+  StreamSender sender;
+  uint8_t in_storage[4096];  // client -> server frames are small; larger ones are refused
+  FrameReader reader;
+  std::vector<uint8_t> out;  // frames not yet written
+  size_t out_at = 0;
+  bool hello = false, pending = false, closing = false, gone = false;
+  CameraUpdate camera;
+  ClientReport report;
+
+  static bool sink(void* self, const uint8_t* frame, size_t size) {
+    auto* c = static_cast<Client*>(self);
+    c->out.insert(c->out.end(), frame, frame + size);
+    return true;
+  }
+  bool idle() const { return out_at == out.size(); }
+};
+
+Server::Server() = default;
+Server::~Server() {
+  if (listen_fd_ >= 0) {
+    TcpTransport closer(listen_fd_, "");  // closes the listening socket
+  }
+}
+
+void Server::log(const std::string& line) const {
+  if (options_.log) options_.log(line);
+}
+
+bool Server::init(std::vector<uint8_t> file, const std::string& name, const ServerOptions& options, std::string& error) {
+  file_ = std::move(file);
+  name_ = name;
+  options_ = options;
+  const SpgResult r = spg_parse(file_.data(), file_.size(), &view_);
+  if (!r.ok()) return error = name + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error), false;
+  decoder_storage_.assign(node_decoder_bytes(view_.header) / 4 + 1, 0);
+  if (decoder_.init(view_, decoder_storage_.data(), decoder_storage_.size() * 4) != DecodeStatus::kOk)
+    return error = name + ": the angle fields are wider than the decoder supports", false;
+  return true;
+}
+
+bool Server::listen_tcp(const std::string& host, uint16_t port, std::string& error) {
+  if (!tcp_listen(host, port, &listen_fd_, &port_, error)) return false;
+  log("listening on " + (host.find(':') != std::string::npos ? "[" + host + "]" : host) + ":" + std::to_string(port_));
+  return true;
+}
+
+void Server::add_client(std::unique_ptr<Transport> transport, int fd, const std::string& name) {
+  auto c = std::make_unique<Client>();
+  c->id = next_id_++;
+  c->transport = std::move(transport);
+  c->fd = fd;
+  c->name = "client " + std::to_string(c->id) + " (" + name + ")";
+  c->report.name = c->name;
+  c->reader.init(c->in_storage, sizeof c->in_storage);
+  if (clients_.size() >= options_.max_clients) {
+    // No room: a close frame, then gone. The sender is not needed for it.
+    log(c->name + ": refused, " + std::to_string(clients_.size()) + " clients already");
+    uint8_t payload[kFaultBytes], frame[64];
+    write_fault(Fault{CloseReason::kServerFull, FrameStatus::kOk, 0}, payload);
+    const size_t n = write_frame(MessageType::kClose, 0, payload, kFaultBytes, frame, sizeof frame);
+    size_t moved = 0;
+    (void)c->transport->write(frame, n, &moved);
+    c->transport->close();
+    return;
+  }
+  c->sender_storage.assign(StreamSender::storage_bytes(view_.header) / 8 + 1, 0);
+  if (!c->sender.init(view_, decoder_, c->sender_storage.data(), c->sender_storage.size() * 8)) {
+    log(c->name + ": could not be set up");
+    return;
+  }
+  log(c->name + ": connected");
+  clients_.push_back(std::move(c));
+}
+
+void Server::close_client(Client& c, CloseReason reason, FrameStatus status, uint16_t sequence, const std::string& why) {
+  if (c.closing) return;
+  uint8_t payload[kFaultBytes];
+  write_fault(Fault{reason, status, sequence}, payload);
+  (void)c.sender.send(reason == CloseReason::kBadFrame ? MessageType::kError : MessageType::kClose, payload, kFaultBytes,
+                      Client::sink, &c);
+  c.closing = true;
+  log(c.name + ": closing: " + why);
+}
+
+void Server::handle(Client& c, const Frame& f) {
+  switch (f.type) {
+    case MessageType::kHello: {
+      Hello h;
+      if (!parse_hello(f.payload, f.payload_bytes, &h))
+        return close_client(c, CloseReason::kBadHello, FrameStatus::kBadPayload, f.sequence, "a malformed hello");
+      if (h.version != kProtocolVersion)
+        return close_client(c, CloseReason::kUnsupported, FrameStatus::kOk, f.sequence,
+                            "protocol version " + std::to_string(h.version));
+      if (!c.sender.start(h, Client::sink, &c))
+        return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "the hello could not be served");
+      c.hello = c.report.hello = true;
+      char line[160];
+      std::snprintf(line, sizeof line, "%s: hello %ux%u %s, attributes%s%s, cache %u nodes", c.name.c_str(), h.width,
+                    h.height, h.pixel_format ? "rgb888" : "rgb565", h.attributes & kWantNormals ? " normals" : "",
+                    h.attributes & kWantColor ? " colour" : "", h.cache_capacity);
+      log(line);
+      return;
+    }
+    case MessageType::kCamera: {
+      CameraUpdate u;
+      if (!c.hello || !parse_camera_update(f.payload, f.payload_bytes, &u))
+        return close_client(c, CloseReason::kBadFrame, FrameStatus::kBadPayload, f.sequence,
+                            c.hello ? "a malformed camera update" : "a camera update before the hello");
+      c.camera = u;  // only the latest counts
+      c.pending = true;
+      return;
+    }
+    case MessageType::kKeepAlive: (void)c.sender.send(MessageType::kKeepAlive, nullptr, 0, Client::sink, &c); return;
+    case MessageType::kClose:
+      log(c.name + ": closed by the client");
+      c.gone = true;
+      return;
+    default:
+      return close_client(c, CloseReason::kBadFrame, FrameStatus::kUnknownType, f.sequence,
+                          std::string("a ") + message_type_name(static_cast<uint8_t>(f.type)) + " message from a client");
+  }
+}
+
+size_t Server::step(int timeout_ms) {
+  // Wait for any socket: the listener, readable clients, clients with output.
+  std::vector<pollfd> fds;
+  bool unpolled = false;
+  if (listen_fd_ >= 0) fds.push_back({listen_fd_, POLLIN, 0});
+  for (const auto& c : clients_) {
+    if (c->fd < 0) unpolled = true;
+    else fds.push_back({c->fd, static_cast<short>(POLLIN | (c->idle() ? 0 : POLLOUT)), 0});
+  }
+  if (!fds.empty()) poll(fds.data(), static_cast<nfds_t>(fds.size()), unpolled ? 0 : timeout_ms);
+  for (std::string peer; listen_fd_ >= 0;) {
+    const int fd = tcp_accept(listen_fd_, &peer);
+    if (fd < 0) break;
+    add_client(std::make_unique<TcpTransport>(fd, peer), fd, peer);
+  }
+  for (auto& owned : clients_) {
+    Client& c = *owned;
+    // In: every whole frame; a fault closes the client with its reason.
+    uint8_t buf[4096];
+    for (int rounds = 0; rounds < 16 && !c.closing && !c.gone; ++rounds) {
+      size_t got = 0;
+      const TransportStatus s = c.transport->read(buf, sizeof buf, &got);
+      if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
+        log(c.name + ": disconnected" + (s == TransportStatus::kError ? std::string(": ") + c.transport->last_error() : "") +
+            (c.reader.buffered() > 0 ? " mid-frame" : ""));
+        c.gone = true;
+        break;
+      }
+      if (s != TransportStatus::kOk || got == 0) break;
+      c.report.bytes_in += got;
+      for (size_t at = 0; at < got && !c.closing && !c.gone;) {
+        at += c.reader.feed(buf + at, got - at);
+        Frame f;
+        FrameStatus fs = FrameStatus::kNeedMore;
+        while (!c.closing && !c.gone && (fs = c.reader.next(&f)) == FrameStatus::kOk) handle(c, f);
+        if (!c.closing && !c.gone && fs != FrameStatus::kNeedMore)
+          close_client(c, CloseReason::kBadFrame, fs, c.reader.expected_sequence(),
+                       std::string("frame ") + std::to_string(c.reader.expected_sequence()) + ": " + frame_status_text(fs));
+      }
+    }
+    // An update only when everything before it is written: a stalled client
+    // keeps just its latest camera.
+    if (c.pending && c.idle() && !c.closing && !c.gone) {
+      c.out.clear();
+      c.out_at = 0;
+      c.pending = false;
+      if (c.sender.update(c.camera, options_.cull, Client::sink, &c)) {
+        ++c.report.updates;
+        c.report.cut_nodes = c.sender.cut().sent_count();
+      }
+    }
+    // Out: as much as the link takes now.
+    while (!c.idle() && !c.gone) {
+      size_t moved = 0;
+      const TransportStatus s = c.transport->write(c.out.data() + c.out_at, c.out.size() - c.out_at, &moved);
+      c.out_at += moved;
+      c.report.bytes_out += moved;
+      if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
+        log(c.name + ": disconnected while sending");
+        c.gone = true;
+      }
+      if (s != TransportStatus::kOk || moved == 0) break;
+    }
+    if (c.idle() && c.out.size() > (1u << 20)) {  // keep the queue's memory bounded
+      c.out.clear();
+      c.out.shrink_to_fit();
+      c.out_at = 0;
+    }
+    if (c.closing && c.idle()) c.gone = true;
+  }
+  for (size_t i = 0; i < clients_.size();) {
+    if (clients_[i]->gone) {
+      Client& c = *clients_[i];
+      log(c.name + ": removed after " + std::to_string(c.report.updates) + " updates, " +
+          std::to_string(c.report.bytes_out) + " bytes sent");
+      c.transport->close();
+      clients_.erase(clients_.begin() + static_cast<long>(i));
+    } else {
+      ++i;
+    }
+  }
+  return clients_.size();
+}
+
+std::vector<ClientReport> Server::report() const {
+  std::vector<ClientReport> out;
+  for (const auto& c : clients_) out.push_back(c->report);
+  return out;
+}
+
+}  // namespace stipple
