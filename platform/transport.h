@@ -33,4 +33,18 @@ class Transport {
   virtual const char* last_error() const = 0;
 };
 
+// A transport that forwards to another it does not own (a loopback end,
+// which its pipe owns), for code that takes ownership of a transport.
+class TransportRef final : public Transport {
+ public:
+  explicit TransportRef(Transport& to) : to_(to) {}
+  TransportStatus read(uint8_t* out, size_t capacity, size_t* moved) override { return to_.read(out, capacity, moved); }
+  TransportStatus write(const uint8_t* data, size_t size, size_t* moved) override { return to_.write(data, size, moved); }
+  void close() override { to_.close(); }
+  const char* last_error() const override { return to_.last_error(); }
+
+ private:
+  Transport& to_;
+};
+
 }  // namespace stipple

@@ -26,6 +26,7 @@ const Command kCommands[] = {
     {"levels", "bits per point and PSNR of each tree level's cut (the trade)", stipple::cmd_levels},
     {"render", "draw a .spg with the fixed-point handheld client -> .png", stipple::cmd_render},
     {"cut", "the view-dependent cut along an orbit: nodes, culling, bytes of change", stipple::cmd_cut},
+    {"serve", "serve a model's view-dependent cuts to clients over TCP", stipple::cmd_serve},
     {"ppn-table", "measure the points-per-node table with the client's rasterizer", stipple::cmd_ppn_table},
     {"image-diff", "compare two PNG images byte for byte, write a diff image", stipple::cmd_image_diff},
     {"image-crc", "CRC-32 of PNG images' pixels (what stipple-handheld --crc prints)", stipple::cmd_image_crc},

@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +12,10 @@
 #include "platform/progress.h"
 #include "tools/cli/cli.h"
 #include "tools/cli/render_output.h"
+#include "platform/loopback/loopback_transport.h"
+#include "platform/tcp/tcp_transport.h"
+#include "tools/embedded/remote.h"
+#include "tools/server/server.h"
 
 namespace stipple {
 namespace {
@@ -26,6 +32,14 @@ const char kRenderHelp[] =
     "\n";
 
 const char kRenderHelpOutput[] =
+    "streaming:\n"
+    "  --connect HOST:PORT    receive the model from `stipple serve` instead of a file\n"
+    "                         (MODEL.spg is then not given)\n"
+    "  --path orbit:N         N cameras about the up axis from the view's yaw; -o names\n"
+    "                         a folder of frame_NNNN.png and frames.log (nodes, points,\n"
+    "                         bytes received per frame). On a local file the frames\n"
+    "                         come through an in-process server over loopback, the\n"
+    "                         same bytes as over TCP once each view has converged\n"
     "output:\n"
     "  --reference            draw with the double-precision reference renderer instead\n"
     "  --psnr                 also render the reference and report PSNR against it\n"
@@ -89,6 +103,78 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
   return 0;
 }
 
+// Frames through the node stream: from a server over TCP, or from an
+// in-process server over loopback for a local file.
+int render_stream(const std::string& source, bool remote, const RenderOptions& o, uint32_t steps, bool folder,
+                  const std::string& output) {
+  std::string error;
+  Server local;
+  LoopbackPipe pipe;
+  std::unique_ptr<TcpTransport> tcp;
+  Transport* link = nullptr;
+  RemoteModel model;
+  RemoteModel::Options ro;
+  if (remote) {
+    std::string host;
+    uint16_t port = 0;
+    int fd = -1;
+    if (!parse_host_port(source, "127.0.0.1", host, port, error) || !tcp_connect(host, port, 5000, &fd, error))
+      return cli::fail("render: --connect " + error);
+    tcp = std::make_unique<TcpTransport>(fd, source);
+    link = tcp.get();
+    ro.fd = fd;
+  } else {
+    std::vector<uint8_t> file;
+    if (!read_file(source, file, error)) return cli::fail(error);
+    ServerOptions so;
+    so.cull = o.rule.cull;
+    if (!local.init(std::move(file), source, so, error)) return cli::fail(error);
+    local.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
+    link = &pipe.client();
+    ro.pump = [](void* s) {
+      static_cast<Server*>(s)->step(0);
+      return true;
+    };
+    ro.pump_context = &local;
+  }
+  if (!model.connect(*link, o.config, ro, error)) return cli::fail(source + ": " + error);
+  if (folder) std::filesystem::create_directories(output);
+  // The view as render resolves it, from the header the server sent.
+  const SpgHeader& h = model.header();
+  const int32_t* extent = model.client().decoder().extent_mu();
+  const ViewSpec base = resolve_view(o.view, h, extent);
+  std::string log;
+  const size_t stride = size_t{o.config.raster.width} * bytes_per_pixel(o.config.raster.format);
+  std::vector<uint8_t> frame(stride * o.config.raster.height);
+  Image image;
+  uint64_t received = model.bytes_received();
+  for (uint32_t k = 0; k < steps; ++k) {
+    ViewSpec s = base;
+    s.yaw = base.yaw + 360.0 * k / steps;
+    Camera c;
+    if (!orbit_camera(orbit_view(extent, s), o.config.raster.width, o.config.raster.height, &c))
+      return cli::fail("render: the view is out of the camera's range");
+    FrameStats stats;
+    if (!model.view(c, o.rule.max_size_q4, o.rule.window, error) || !model.render(c, frame.data(), stride, &stats, error))
+      return cli::fail(source + ": " + error);
+    image_from_frame(frame.data(), stride, o.config.raster.width, o.config.raster.height, o.config.raster.format, image);
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04u.png", k);
+    const std::string png = folder ? output + "/" + name : output;
+    if (!write_png(png, image, error)) return cli::fail(error);
+    char line[160];
+    std::snprintf(line, sizeof line, "%s nodes %u points %u bytes_received %llu\n", name, stats.nodes, stats.points,
+                  static_cast<unsigned long long>(model.bytes_received() - received));
+    received = model.bytes_received();
+    log += line;
+  }
+  if (folder && !write_file_atomic(output + "/frames.log", std::vector<uint8_t>(log.begin(), log.end()), error))
+    return cli::fail(error);
+  std::printf("%s: %u frame%s through the %s, %llu bytes received -> %s\n", source.c_str(), steps, steps == 1 ? "" : "s",
+              remote ? "network" : "loopback", static_cast<unsigned long long>(model.bytes_received()), output.c_str());
+  return 0;
+}
+
 int cmd_render(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) {
@@ -98,8 +184,9 @@ int cmd_render(int argc, char** argv) {
     return 0;
   }
   RenderOptions o;
-  std::string error, output;
+  std::string error, output, connect, path;
   if (!args.value("-o", output)) args.value("--output", output);
+  const bool remote = args.value("--connect", connect), has_path = args.value("--path", path);
   const bool reference = args.flag("--reference"), psnr = args.flag("--psnr"), json = args.flag("--json");
   std::string frames_text;
   unsigned long long frames = 1;
@@ -109,6 +196,14 @@ int cmd_render(int argc, char** argv) {
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("render: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("render: unknown option '" + args.unknown_option() + "'");
+  if (remote || has_path) {
+    unsigned long long steps = 1;
+    if (has_path && (path.rfind("orbit:", 0) != 0 || !cli::parse_uint(path.substr(6), 100000, steps) || steps == 0))
+      return cli::fail("render: --path: expected orbit:N with N in 1..100000, got '" + path + "'");
+    if (remote != files.empty()) return cli::fail(remote ? "render: --connect takes no MODEL.spg" : "render: expected one .spg file");
+    if (output.empty()) return cli::fail(has_path ? "render: -o FOLDER is required with --path" : "render: -o IMAGE.png is required");
+    return render_stream(remote ? connect : files[0], remote, o, static_cast<uint32_t>(steps), has_path, output);
+  }
   if (files.size() != 1) return cli::fail("render: expected one .spg file (see stipple render --help)");
   if (output.empty() && !psnr && frames == 1) return cli::fail("render: -o IMAGE.png is required");
   std::vector<uint8_t> file;

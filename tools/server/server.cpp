@@ -185,7 +185,9 @@ size_t Server::step(int timeout_ms) {
       c.out_at = 0;
       c.pending = false;
       if (c.sender.update(c.camera, options_.cull, Client::sink, &c)) {
-        ++c.report.updates;
+        if (c.report.updates++ == 0)
+          log(c.name + ": first cut " + std::to_string(c.sender.cut().sent_count()) + " nodes, " +
+              std::to_string(c.out.size()) + " bytes");
         c.report.cut_nodes = c.sender.cut().sent_count();
       }
     }
@@ -211,8 +213,8 @@ size_t Server::step(int timeout_ms) {
   for (size_t i = 0; i < clients_.size();) {
     if (clients_[i]->gone) {
       Client& c = *clients_[i];
-      log(c.name + ": removed after " + std::to_string(c.report.updates) + " updates, " +
-          std::to_string(c.report.bytes_out) + " bytes sent");
+      log(c.name + ": removed after " + std::to_string(c.report.updates) + " updates (last cut " +
+          std::to_string(c.report.cut_nodes) + " nodes), " + std::to_string(c.report.bytes_out) + " bytes sent");
       c.transport->close();
       clients_.erase(clients_.begin() + static_cast<long>(i));
     } else {
