@@ -4,9 +4,10 @@
 # must equal those rendered from the file through the in-process loopback,
 # the first must equal `stipple render` of the same view, and the server
 # must log the client's connect, hello, first cut and removal.
-# usage: cli_stream.sh STIPPLE MODEL.spg WORKDIR
+# Then the handheld program: --connect draws the CRC it draws from the file.
+# usage: cli_stream.sh STIPPLE STIPPLE-HANDHELD MODEL.spg WORKDIR
 set -euo pipefail
-S=$1 MODEL=$2 W=$3
+S=$1 H=$2 MODEL=$3 W=$4
 rm -rf "$W" && mkdir -p "$W"
 "$S" serve "$MODEL" --tcp 127.0.0.1:0 --once >"$W/serve.out" 2>"$W/serve.err" &
 server=$!
@@ -26,4 +27,12 @@ done
 for what in "connected" "hello 240x320 rgb565, attributes normals colour, cache 30000 nodes" "first cut" "removed after 6 updates"; do
   grep -q "$what" "$W/serve.err" || { echo "the server log lacks '$what'"; cat "$W/serve.err"; exit 1; }
 done
-echo "6 frames over TCP equal the loopback frames; server log complete"
+"$S" serve "$MODEL" --tcp 127.0.0.1:0 --once >"$W/serve2.out" 2>"$W/serve2.err" &
+server=$!
+for _ in $(seq 100); do grep -q "serving on port" "$W/serve2.out" && break; sleep 0.05; done
+port=$(sed -n 's/.*serving on port \([0-9]*\)$/\1/p' "$W/serve2.out")
+remote=$("$H" --connect "127.0.0.1:$port" --camera 90,20 --crc | grep '^crc32')
+wait $server
+local=$("$H" "$MODEL" --camera 90,20 --crc | grep '^crc32')
+[ "$remote" = "$local" ] || { echo "stipple-handheld --connect: $remote, from the file: $local"; exit 1; }
+echo "6 frames over TCP equal the loopback frames; server log complete; stipple-handheld --connect $remote"

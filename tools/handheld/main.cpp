@@ -18,6 +18,9 @@
 #include "platform/fbdev/fbdev_display.h"
 #include "platform/file_io.h"
 #include "platform/null/null_display.h"
+#include "platform/progress.h"
+#include "platform/tcp/tcp_transport.h"
+#include "tools/embedded/remote.h"
 #include "tools/embedded/embedded.h"
 #include "tools/embedded/render_options.h"
 
@@ -25,6 +28,7 @@ namespace {
 
 const char kUsage[] =
     "usage: stipple-handheld MODEL.spg [options]\n"
+    "       stipple-handheld --connect HOST:PORT [options]\n"
     "\n"
     "The handheld client: fixed point, one arena, no heap after start-up. Draws\n"
     "the view-dependent cut of MODEL.spg for an orbit camera (the same options and\n"
@@ -32,6 +36,8 @@ const char kUsage[] =
     "\n";
 const char kUsageOutput[] =
     "program:\n"
+    "  --connect HOST:PORT    receive the nodes from `stipple serve` (no MODEL.spg):\n"
+    "                         the server cuts for this view, the client draws\n"
     "  --frames N             draw N frames (timing; default 1)\n"
     "  -o FRAME.ppm           write the frame (headless)\n"
     "  --fbdev DEVICE         show the frame on a framebuffer (e.g. /dev/fb0)\n"
@@ -73,11 +79,13 @@ int run(int argc, char** argv) {
     return fail("--frames: expected 1..100000, got '" + v + "'");
   if (!args.value("-o", output)) args.value("--output", output);
   args.value("--fbdev", fbdev);
+  std::string connect;
+  const bool remote = args.value("--connect", connect);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return fail(args.error());
   if (!args.unknown_option().empty()) return fail("unknown option '" + args.unknown_option() + "' (see --help)");
-  if (files.size() != 1) return fail("expected one .spg file (see --help)");
-  const std::string& model = files[0];
+  if (files.size() != (remote ? 0u : 1u)) return fail(remote ? "--connect takes no .spg file" : "expected one .spg file (see --help)");
+  const std::string model = remote ? connect : files[0];
   ClientConfig& config = o.config;
   const bool sized = o.sized;
 
@@ -93,14 +101,46 @@ int run(int argc, char** argv) {
   }
 
   std::vector<uint8_t> file;
-  if (!read_file(model, file, error)) return fail(error);
-  SpgView spg;
-  const SpgResult r = spg_parse(file.data(), file.size(), &spg);
-  if (!r.ok()) return fail(model + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error));
   FixedRender frame;
-  if (!render_fixed(spg, file.data(), config, o.rule, o.view, frame, error, static_cast<int>(frames),
-                    memory ? heap_in_use : nullptr))
-    return fail(model + ": " + error);
+  if (remote) {
+    // The nodes come over the wire: the server cuts, this client draws.
+    std::string host;
+    uint16_t port = 0;
+    int fd = -1;
+    if (!parse_host_port(connect, "127.0.0.1", host, port, error) || !tcp_connect(host, port, 5000, &fd, error))
+      return fail("--connect " + error);
+    TcpTransport link(fd, connect);
+    RemoteModel server;
+    RemoteModel::Options ro;
+    ro.fd = fd;
+    if (!server.connect(link, config, ro, error)) return fail(model + ": " + error);
+    const int32_t* extent = server.client().decoder().extent_mu();
+    Camera camera;
+    if (!orbit_camera(orbit_view(extent, resolve_view(o.view, server.header(), extent)), config.raster.width,
+                      config.raster.height, &camera))
+      return fail("--camera: the view is out of the camera's range");
+    if (!server.view(camera, o.rule.max_size_q4, o.rule.window, error)) return fail(model + ": " + error);
+    const size_t row = static_cast<size_t>(config.raster.width) * bytes_per_pixel(config.raster.format);
+    frame.frame.assign(row * config.raster.height, 0);
+    for (unsigned long long f = 0; f < frames; ++f) {
+      const double start = monotonic_seconds();
+      if (!server.render(camera, frame.frame.data(), row, &frame.stats, error)) return fail(model + ": " + error);
+      frame.frame_seconds.push_back(monotonic_seconds() - start);
+    }
+    frame.heap_bytes = memory ? heap_in_use() : 0;
+    frame.arena_bytes = client_arena_bytes(config);
+    frame.cut.resize(server.client().node_count());
+    image_from_frame(frame.frame.data(), row, config.raster.width, config.raster.height, config.raster.format, frame.image);
+    std::printf("%s: %llu bytes received\n", model.c_str(), static_cast<unsigned long long>(server.bytes_received()));
+  } else {
+    if (!read_file(model, file, error)) return fail(error);
+    SpgView spg;
+    const SpgResult r = spg_parse(file.data(), file.size(), &spg);
+    if (!r.ok()) return fail(model + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error));
+    if (!render_fixed(spg, file.data(), config, o.rule, o.view, frame, error, static_cast<int>(frames),
+                      memory ? heap_in_use : nullptr))
+      return fail(model + ": " + error);
+  }
   std::vector<double> t = frame.frame_seconds;
   std::sort(t.begin(), t.end());
   std::printf("%s: %zu nodes, %u points, arena %zu bytes, frame %.3f ms (median of %lu)\n", model.c_str(), frame.cut.size(),
