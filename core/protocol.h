@@ -162,6 +162,9 @@ size_t write_fault(const Fault& f, uint8_t out[kFaultBytes]);
 inline constexpr uint32_t nodes_per_frame(size_t record_bytes) {
   return static_cast<uint32_t>((kMaxPayload - 4) / (4 + record_bytes));
 }
+// What a server puts in one node batch: small enough that a client over a
+// 115,200-baud line has its first nodes 0.7 s after the startup.
+inline constexpr size_t kNodeBatchBytes = 8192;
 inline constexpr uint32_t kDropsPerFrame = static_cast<uint32_t>((kMaxPayload - 4) / 4);
 // A parsed batch: the entries stay in the payload; read them with node_at / drop_at.
 struct NodeBatch {

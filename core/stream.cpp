@@ -95,7 +95,9 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
     if (!send(MessageType::kDrop, payload_, 4 + 4 * size_t{n}, sink, context)) return false;
     done += n;
   }
-  const uint32_t per_frame = nodes_per_frame(reduced_record_bytes_);
+  // Batches of at most kNodeBatchBytes, coarse nodes first (ids are
+  // breadth-first): on a slow link the first arrive soon after the startup.
+  const uint32_t per_frame = static_cast<uint32_t>((kNodeBatchBytes - 4) / (4 + reduced_record_bytes_));
   const size_t stride = 4 + reduced_record_bytes_;
   for (uint32_t done = 0; done < cut_.entered_count();) {
     const uint32_t n = cut_.entered_count() - done < per_frame ? cut_.entered_count() - done : per_frame;

@@ -20,6 +20,7 @@
 #include "core/cut.h"
 #include "core/view_cut.h"
 #include "raster/client.h"
+#include "tools/server/link_timing.h"
 #include "raster/point_raster.h"
 #include "tools/encoder/classify.h"
 #include "tools/encoder/encoder.h"
@@ -322,6 +323,37 @@ void BM_ViewCutUpdate(benchmark::State& state) {
       benchmark::Counter(nodes, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_ViewCutUpdate)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// Time to the first image and to the converged view over an emulated link
+// (platform/shaper, simulated clock: the figures are link time, not CPU
+// time), 240x320, then a 12-step orbit. Arg: 0 115,200-baud serial, 1 USB 1.1, 2 802.11b.
+void BM_LinkTime(benchmark::State& state) {
+  const std::vector<uint8_t>& spg = encoded_scan();
+  const SpgView view = parsed_scan();
+  std::vector<uint8_t> storage(node_decoder_bytes(view.header));
+  NodeDecoder decoder;
+  if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk) std::abort();
+  std::vector<Camera> cameras(13);
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    ViewSpec s;
+    s.yaw = 30 + 30.0 * static_cast<double>(i);
+    if (!orbit_camera(orbit_view(decoder.extent_mu(), s), 240, 320, &cameras[i])) std::abort();
+  }
+  const LinkProfile links[] = {kSerial115200, kUsb11, k80211b};
+  const LinkProfile link = links[state.range(0)];
+  ClientConfig c;
+  c.raster = RasterConfig{240, 320, 5, PixelFormat::kRgb565, 200000};
+  LinkTiming t;
+  std::string error;
+  for (auto _ : state)
+    if (!time_over_link(spg, link, link, c, cameras, t, error)) state.SkipWithError(error.c_str());
+  state.counters["first_image_s"] = t.first_image_s;
+  state.counters["converged_s"] = t.converged_s;
+  state.counters["orbit_step_s"] = t.orbit_step_s;
+  state.counters["bytes"] = static_cast<double>(t.bytes_down);
+  state.counters["cut_nodes"] = t.cut_nodes;
+}
+BENCHMARK(BM_LinkTime)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 void BM_KdNearest(benchmark::State& state) {
   const PointCloud& c = scan();
