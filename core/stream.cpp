@@ -42,14 +42,14 @@ size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* o
 }
 
 size_t StreamSender::storage_bytes(const SpgHeader& header) {
-  return align8(view_cut_bytes(header)) + align8(kMaxPayload) + kMaxFrameBytes;
+  return align8(view_cut_state_bytes(header)) + align8(kMaxPayload) + kMaxFrameBytes;
 }
 
-bool StreamSender::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes) {
+bool StreamSender::init(const SpgView& view, const CutBounds& bounds, void* storage, size_t bytes) {
   if (bytes < storage_bytes(view.header)) return false;
   uint8_t* base = static_cast<uint8_t*>(storage);
-  const size_t cut_bytes = align8(view_cut_bytes(view.header));
-  if (cut_.init(view, decoder, base, cut_bytes) != CutStatus::kOk) return false;
+  const size_t cut_bytes = align8(view_cut_state_bytes(view.header));
+  if (cut_.init(bounds, base, cut_bytes) != CutStatus::kOk) return false;
   payload_ = base + cut_bytes;
   frame_ = payload_ + align8(kMaxPayload);
   view_ = &view;
@@ -71,6 +71,8 @@ bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
   if (view_ == nullptr || hello.version != kProtocolVersion) return false;
   reduced_ = reduced_header(view_->header, hello.attributes);
   reduced_record_bytes_ = static_cast<size_t>(reduced_.layout.record_bytes());
+  same_layout_ = true;
+  for (int f = 0; f < kFieldCount; ++f) same_layout_ = same_layout_ && reduced_.layout.bits[f] == view_->header.layout.bits[f];
   capacity_ = hello.cache_capacity;
   cut_.reset();  // a fresh client: its cut starts empty, so the first update sends it all
   const size_t n = write_reduced_startup(*view_, hello.attributes, payload_, kMaxPayload);
@@ -106,7 +108,11 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
       const uint32_t id = index_of(cut_.entered()[done + i]);
       uint8_t* entry = payload_ + 4 + size_t{i} * stride;
       store_u32le(entry, id);
-      transcode_record(view_->header.layout, reduced_.layout, view_->records + size_t{id} * view_->record_bytes, entry + 4);
+      const uint8_t* record = view_->records + size_t{id} * view_->record_bytes;
+      if (same_layout_)
+        for (size_t b = 0; b < reduced_record_bytes_; ++b) entry[4 + b] = record[b];
+      else
+        transcode_record(view_->header.layout, reduced_.layout, record, entry + 4);
     }
     if (!send(MessageType::kNodes, payload_, 4 + size_t{n} * stride, sink, context)) return false;
     done += n;

@@ -42,10 +42,11 @@ using FrameSink = bool (*)(void* context, const uint8_t* frame, size_t size);
 
 class StreamSender {
  public:
-  // Storage for one client of a model: view_cut_bytes plus a frame buffer.
+  // Storage for one client of a model: its cut's state (the bounds are the
+  // model's, shared by every client) plus a payload and a frame buffer.
   static size_t storage_bytes(const SpgHeader& header);
-  // `view` and `decoder` must outlive the sender.
-  [[nodiscard]] bool init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes);
+  // `view` and `bounds` must outlive the sender.
+  [[nodiscard]] bool init(const SpgView& view, const CutBounds& bounds, void* storage, size_t bytes);
   // The client's hello: sends the reduced startup. False for a hello the
   // server cannot serve (version) — the caller sends a close.
   [[nodiscard]] bool start(const Hello& hello, FrameSink sink, void* context);
@@ -66,6 +67,7 @@ class StreamSender {
   uint8_t* frame_ = nullptr;    // kMaxFrameBytes
   SpgHeader reduced_{};
   size_t reduced_record_bytes_ = 0;
+  bool same_layout_ = true;  // the client takes every attribute: records are copied as they are
   uint32_t capacity_ = 0;
   uint16_t sequence_ = 0;
   uint64_t bytes_sent_ = 0;

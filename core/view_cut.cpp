@@ -33,9 +33,10 @@ namespace {
 constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
 
 struct Layout {
-  size_t bounds, sent_bits, fresh_bits, cut, sent, previous, sizes, entered, left, heap, total;
+  size_t sent_bits, fresh_bits, cut, sent, previous, sizes, entered, left, heap, total;
 };
 
+// The per-client state (the bounds are separate).
 Layout layout_of(uint32_t n) {
   Layout l{};
   size_t at = 0;
@@ -44,7 +45,6 @@ Layout layout_of(uint32_t n) {
     at += align8(bytes);
     return here;
   };
-  l.bounds = take(sizeof(ViewCut::Bound) * n);
   l.sent_bits = take((size_t{n} + 7) / 8);
   l.fresh_bits = take((size_t{n} + 7) / 8);
   l.cut = take(4 * size_t{n});
@@ -73,15 +73,16 @@ inline void clear_bit(uint8_t* bits, uint32_t i) { bits[i >> 3] = static_cast<ui
 
 }  // namespace
 
-size_t view_cut_bytes(const SpgHeader& header) { return layout_of(header.node_count).total; }
+size_t CutBounds::bytes(const SpgHeader& header) { return align8(sizeof(ViewCut::Bound) * header.node_count); }
+size_t view_cut_state_bytes(const SpgHeader& header) { return layout_of(header.node_count).total; }
+size_t view_cut_bytes(const SpgHeader& header) { return CutBounds::bytes(header) + view_cut_state_bytes(header); }
 
-CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes) {
-  ready_ = false;
+CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes) {
+  bounds_ = nullptr;
   const uint32_t n = view.header.node_count;
-  const Layout l = layout_of(n);
-  if (bytes < l.total) return CutStatus::kStorageTooSmall;
-  uint8_t* base = static_cast<uint8_t*>(storage);
-  Bound* bounds = reinterpret_cast<Bound*>(base + l.bounds);
+  if (bytes < CutBounds::bytes(view.header)) return CutStatus::kStorageTooSmall;
+  using Bound = ViewCut::Bound;
+  Bound* bounds = static_cast<Bound*>(storage);
   normals_ = view.header.has_normals();
   uint32_t next_child = 1;
   for (uint32_t i = 0; i < n; ++i) {
@@ -103,6 +104,28 @@ CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* s
   }
   bounds_ = bounds;
   node_count_ = n;
+  return CutStatus::kOk;
+}
+
+CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes) {
+  ready_ = false;
+  const size_t bound_bytes = CutBounds::bytes(view.header);
+  if (bytes < view_cut_bytes(view.header)) return CutStatus::kStorageTooSmall;
+  const CutStatus s = own_.init(view, decoder, storage, bound_bytes);
+  if (s != CutStatus::kOk) return s;
+  return init(own_, static_cast<uint8_t*>(storage) + bound_bytes, bytes - bound_bytes);
+}
+
+CutStatus ViewCut::init(const CutBounds& shared, void* storage, size_t bytes) {
+  ready_ = false;
+  if (shared.bounds_ == nullptr) return CutStatus::kNotReady;
+  const uint32_t n = shared.node_count_;
+  const Layout l = layout_of(n);
+  if (bytes < l.total) return CutStatus::kStorageTooSmall;
+  uint8_t* base = static_cast<uint8_t*>(storage);
+  bounds_ = static_cast<const Bound*>(shared.bounds_);
+  node_count_ = n;
+  normals_ = shared.normals_;
   sent_bits_ = base + l.sent_bits;
   fresh_bits_ = base + l.fresh_bits;
   for (size_t i = 0; i < (size_t{n} + 7) / 8; ++i) sent_bits_[i] = fresh_bits_[i] = 0;

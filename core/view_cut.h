@@ -58,14 +58,36 @@ enum class CutStatus : uint8_t {
   kNotReady,         // update before a successful init
 };
 
-// Storage for a tree of `header.node_count` nodes: 64 1/4 bytes a node.
+// The per-node bounds a cut is derived from (32 bytes a node), built once
+// per model and shared, read-only, by every client's cut.
+class CutBounds {
+ public:
+  static size_t bytes(const SpgHeader& header);
+  // `view` from spg_parse, `decoder` initialised on it; both are read during
+  // init only.
+  [[nodiscard]] CutStatus init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes);
+  uint32_t node_count() const { return node_count_; }
+
+ private:
+  friend class ViewCut;
+  const void* bounds_ = nullptr;
+  uint32_t node_count_ = 0;
+  bool normals_ = false;
+};
+
+// Storage for one cut of a tree of `header.node_count` nodes: with its own
+// bounds, 64 1/4 bytes a node (view_cut_bytes); over shared bounds, 32 1/4
+// (view_cut_state_bytes).
 size_t view_cut_bytes(const SpgHeader& header);
+size_t view_cut_state_bytes(const SpgHeader& header);
 
 class ViewCut {
  public:
   // `view` from spg_parse, `decoder` initialised on it; both are read during
-  // init only. Builds the bounds table; the cut starts empty.
+  // init only. Builds its own bounds table; the cut starts empty.
   [[nodiscard]] CutStatus init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes);
+  // Over shared bounds, which must outlive the cut.
+  [[nodiscard]] CutStatus init(const CutBounds& bounds, void* storage, size_t bytes);
 
   // Forgets the sent set (the next update reports every sent node as entered).
   void reset();
@@ -101,6 +123,7 @@ class ViewCut {
   void heap_push(uint32_t size, uint32_t node);
   uint64_t heap_pop();
 
+  CutBounds own_;  // when init built the bounds itself
   const Bound* bounds_ = nullptr;
   uint32_t node_count_ = 0;
   bool normals_ = false;

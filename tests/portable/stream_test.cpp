@@ -22,10 +22,14 @@ struct Model {
   SpgView view;
   std::vector<uint32_t> decoder_storage;
   NodeDecoder decoder;
+  std::vector<uint64_t> bounds_storage;
+  CutBounds bounds;
   Model() : file(test::fixture("tests/golden/bunny_v1.spg")) {
     EXPECT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
     decoder_storage.resize(node_decoder_bytes(view.header) / 4 + 1);
     EXPECT_EQ(decoder.init(view, decoder_storage.data(), decoder_storage.size() * 4), DecodeStatus::kOk);
+    bounds_storage.resize(CutBounds::bytes(view.header) / 8 + 1);
+    EXPECT_EQ(bounds.init(view, decoder, bounds_storage.data(), bounds_storage.size() * 8), CutStatus::kOk);
   }
 };
 const Model& bunny() {
@@ -75,7 +79,7 @@ TEST(Stream, ClientFramesEqualAFreshLocalLoadAfterEveryUpdate) {
   const Model& m = bunny();
   std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
   StreamSender sender;
-  ASSERT_TRUE(sender.init(m.view, m.decoder, sender_storage.data(), sender_storage.size() * 8));
+  ASSERT_TRUE(sender.init(m.view, m.bounds, sender_storage.data(), sender_storage.size() * 8));
   Device client;
   std::vector<uint8_t> reader_storage(kMaxFrameBytes);
   StreamReceiver receiver;
@@ -120,7 +124,7 @@ TEST(Stream, FewerAttributesMeanSmallerRecordsAndTheirPicture) {
   const Model& m = bunny();
   std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
   StreamSender sender;
-  ASSERT_TRUE(sender.init(m.view, m.decoder, sender_storage.data(), sender_storage.size() * 8));
+  ASSERT_TRUE(sender.init(m.view, m.bounds, sender_storage.data(), sender_storage.size() * 8));
   Device grey, flat(8000, ShadingMode::kNone);
   std::vector<uint8_t> reader_storage(kMaxFrameBytes);
   StreamReceiver receiver;
@@ -149,7 +153,7 @@ TEST(Stream, CorruptOrReorderedStreamsAreRefusedAndTheCacheStaysConsistent) {
   const Model& m = bunny();
   std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
   StreamSender sender;
-  ASSERT_TRUE(sender.init(m.view, m.decoder, sender_storage.data(), sender_storage.size() * 8));
+  ASSERT_TRUE(sender.init(m.view, m.bounds, sender_storage.data(), sender_storage.size() * 8));
   Link link;
   ASSERT_TRUE(sender.start(Hello{}, Link::sink, &link));
   CameraUpdate u;

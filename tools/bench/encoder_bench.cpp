@@ -21,6 +21,8 @@
 #include "core/view_cut.h"
 #include "raster/client.h"
 #include "tools/server/link_timing.h"
+#include "tools/server/server.h"
+#include "platform/loopback/loopback_transport.h"
 #include "raster/point_raster.h"
 #include "tools/encoder/classify.h"
 #include "tools/encoder/encoder.h"
@@ -354,6 +356,68 @@ void BM_LinkTime(benchmark::State& state) {
   state.counters["cut_nodes"] = t.cut_nodes;
 }
 BENCHMARK(BM_LinkTime)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// One server core, N loopback clients each sending a camera per round (a
+// 120-step orbit each, staggered) and draining what comes back unread: the
+// server's cost per camera update. Counter: updates per second.
+void BM_ServerClients(benchmark::State& state) {
+  const std::vector<uint8_t>& spg = encoded_scan();
+  const SpgView view = parsed_scan();
+  std::vector<uint8_t> storage(node_decoder_bytes(view.header));
+  NodeDecoder decoder;
+  if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk) std::abort();
+  std::vector<Camera> cameras(120);
+  for (size_t i = 0; i < cameras.size(); ++i) {
+    ViewSpec s;
+    s.yaw = 3.0 * static_cast<double>(i);
+    if (!orbit_camera(orbit_view(decoder.extent_mu(), s), 240, 320, &cameras[i])) std::abort();
+  }
+  const int n = static_cast<int>(state.range(0));
+  Server server;
+  std::string error;
+  if (!server.init(spg, "model", ServerOptions{}, error)) std::abort();
+  std::vector<std::unique_ptr<LoopbackPipe>> pipes;
+  std::vector<uint16_t> seq(static_cast<size_t>(n), 0);
+  uint8_t payload[kCameraUpdateBytes], frame[256], sink[65536];
+  const auto send = [&](int k, MessageType type, size_t size) {
+    const size_t len = write_frame(type, seq[static_cast<size_t>(k)]++, payload, size, frame, sizeof frame);
+    size_t moved = 0;
+    (void)pipes[static_cast<size_t>(k)]->client().write(frame, len, &moved);
+  };
+  const auto drain = [&] {
+    for (auto& p : pipes) {
+      size_t got = 0;
+      while (p->client().read(sink, sizeof sink, &got) == TransportStatus::kOk && got > 0) {
+      }
+    }
+  };
+  for (int k = 0; k < n; ++k) {
+    pipes.push_back(std::make_unique<LoopbackPipe>(1 << 22));
+    server.add_client(std::make_unique<TransportRef>(pipes.back()->server()), -1, "bench");
+    write_hello(Hello{}, payload);
+    send(k, MessageType::kHello, kHelloBytes);
+  }
+  server.step(0);
+  drain();
+  size_t round = 0;
+  const auto one_round = [&] {
+    for (int k = 0; k < n; ++k) {
+      CameraUpdate u;
+      u.sequence = static_cast<uint32_t>(round);
+      u.camera = cameras[(round + static_cast<size_t>(k) * 7) % cameras.size()];
+      write_camera_update(u, payload);
+      send(k, MessageType::kCamera, kCameraUpdateBytes);
+    }
+    server.step(0);
+    drain();
+    ++round;
+  };
+  one_round();  // the cold start (every client's whole first cut) is not the steady state
+  for (auto _ : state) one_round();
+  state.counters["updates_per_s"] =
+      benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_ServerClients)->Arg(64)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 void BM_KdNearest(benchmark::State& state) {
   const PointCloud& c = scan();

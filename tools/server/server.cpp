@@ -52,6 +52,9 @@ bool Server::init(std::vector<uint8_t> file, const std::string& name, const Serv
   decoder_storage_.assign(node_decoder_bytes(view_.header) / 4 + 1, 0);
   if (decoder_.init(view_, decoder_storage_.data(), decoder_storage_.size() * 4) != DecodeStatus::kOk)
     return error = name + ": the angle fields are wider than the decoder supports", false;
+  bounds_storage_.assign(CutBounds::bytes(view_.header) / 8 + 1, 0);
+  if (bounds_.init(view_, decoder_, bounds_storage_.data(), bounds_storage_.size() * 8) != CutStatus::kOk)
+    return error = name + ": the cut's bounds could not be built", false;
   return true;
 }
 
@@ -81,7 +84,7 @@ void Server::add_client(std::unique_ptr<Transport> transport, int fd, const std:
     return;
   }
   c->sender_storage.assign(StreamSender::storage_bytes(view_.header) / 8 + 1, 0);
-  if (!c->sender.init(view_, decoder_, c->sender_storage.data(), c->sender_storage.size() * 8)) {
+  if (!c->sender.init(view_, bounds_, c->sender_storage.data(), c->sender_storage.size() * 8)) {
     log(c->name + ": could not be set up");
     return;
   }

@@ -68,6 +68,8 @@ class Server {
   SpgView view_{};
   std::vector<uint32_t> decoder_storage_;
   NodeDecoder decoder_;
+  std::vector<uint64_t> bounds_storage_;
+  CutBounds bounds_;  // the model's, shared by every client's cut
   ServerOptions options_;
   int listen_fd_ = -1;
   uint16_t port_ = 0;
