@@ -85,6 +85,9 @@ class FrameReader {
  public:
   void init(uint8_t* storage, size_t bytes);
   void reset();  // forget buffered bytes and faults; expect sequence 0
+  // The sequence the next frame must carry (a serial line's packets are
+  // checked one by one: the receiver decides what a gap means).
+  void expect(uint16_t sequence) { expected_ = sequence; }
   // Appends bytes; returns how many were taken (fewer when the buffer is full
   // and a frame must be taken out first with next()).
   size_t feed(const uint8_t* data, size_t size);

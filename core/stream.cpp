@@ -78,6 +78,7 @@ bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
   const size_t n = write_reduced_startup(*view_, hello.attributes, payload_, kMaxPayload);
   if (n == 0) return false;
   started_ = true;
+  sequence_ = 0;  // a new stream (a serial client says hello again to resynchronise)
   return send(MessageType::kStartup, payload_, n, sink, context);
 }
 

@@ -13,6 +13,7 @@
 #include "tools/cli/cli.h"
 #include "tools/cli/render_output.h"
 #include "platform/loopback/loopback_transport.h"
+#include "platform/serial/serial_transport.h"
 #include "platform/tcp/tcp_transport.h"
 #include "tools/embedded/remote.h"
 #include "tools/server/server.h"
@@ -35,6 +36,8 @@ const char kRenderHelpOutput[] =
     "streaming:\n"
     "  --connect HOST:PORT    receive the model from `stipple serve` instead of a file\n"
     "                         (MODEL.spg is then not given)\n"
+    "  --serial DEV           the same over a serial line (`stipple serve --serial`);\n"
+    "  --baud N               its rate (default 115200)\n"
     "  --path orbit:N         N cameras about the up axis from the view's yaw; -o names\n"
     "                         a folder of frame_NNNN.png and frames.log (nodes, points,\n"
     "                         bytes received per frame). On a local file the frames\n"
@@ -114,7 +117,16 @@ int render_stream(const std::string& source, bool remote, const RenderOptions& o
   Transport* link = nullptr;
   RemoteModel model;
   RemoteModel::Options ro;
-  if (remote) {
+  std::unique_ptr<SerialTransport> serial_line;
+  if (remote && source.rfind("serial:", 0) == 0) {
+    const std::string dev = source.substr(7, source.rfind('@') - 7);
+    const uint32_t baud = static_cast<uint32_t>(std::stoul(source.substr(source.rfind('@') + 1)));
+    serial_line = std::make_unique<SerialTransport>();
+    if (!serial_line->open(dev, baud, error)) return cli::fail("render: --serial " + error);
+    link = serial_line.get();
+    ro.fd = serial_line->fd();
+    ro.serial = true;
+  } else if (remote) {
     std::string host;
     uint16_t port = 0;
     int fd = -1;
@@ -186,7 +198,13 @@ int cmd_render(int argc, char** argv) {
   RenderOptions o;
   std::string error, output, connect, path;
   if (!args.value("-o", output)) args.value("--output", output);
-  const bool remote = args.value("--connect", connect), has_path = args.value("--path", path);
+  std::string serial_dev, baud_text;
+  const bool over_serial = args.value("--serial", serial_dev);
+  unsigned long long baud = 115200;
+  if (args.value("--baud", baud_text) && !cli::parse_uint(baud_text, 4000000, baud))
+    return cli::fail("render: --baud: expected a rate, got '" + baud_text + "'");
+  const bool remote = args.value("--connect", connect) || over_serial, has_path = args.value("--path", path);
+  if (over_serial) connect = "serial:" + serial_dev + "@" + std::to_string(baud);
   const bool reference = args.flag("--reference"), psnr = args.flag("--psnr"), json = args.flag("--json");
   std::string frames_text;
   unsigned long long frames = 1;

@@ -1,11 +1,13 @@
 // stipple serve — serves a model's view-dependent cuts over TCP.
 #include <csignal>
+#include <memory>
 #include <cstdio>
 #include <ctime>
 #include <string>
 #include <vector>
 
 #include "platform/file_io.h"
+#include "platform/serial/serial_transport.h"
 #include "platform/tcp/tcp_transport.h"
 #include "tools/cli/cli.h"
 #include "tools/server/server.h"
@@ -14,7 +16,8 @@ namespace stipple {
 namespace {
 
 const char kServeHelp[] =
-    "usage: stipple serve MODEL.spg [--tcp [ADDR:]PORT] [--max-clients N] [--no-cull] [--once]\n"
+    "usage: stipple serve MODEL.spg [--tcp [ADDR:]PORT] [--serial DEV [--baud N]] [--max-clients N]\n"
+    "                     [--no-cull] [--once]\n"
     "\n"
     "Serves the model to clients (`stipple render --connect`, `stipple-handheld\n"
     "--connect`, the emulator): each gets the startup for the attributes it asks\n"
@@ -25,6 +28,9 @@ const char kServeHelp[] =
     "  --tcp [ADDR:]PORT   listen there (default 127.0.0.1:7878: loopback unless told\n"
     "                      otherwise; [::1]:PORT for IPv6, 0.0.0.0:PORT for every\n"
     "                      interface; port 0 picks a free one and prints it)\n"
+    "  --serial DEV        also serve the client at the other end of a serial line\n"
+    "                      (e.g. /dev/ttyACM0; COBS framing, docs/protocol.md)\n"
+    "  --baud N            its rate (default 115200)\n"
     "  --max-clients N     refuse more clients than this at once (default 64)\n"
     "  --no-cull           send nodes outside the view and facing away too\n"
     "  --once              exit once the last client has gone\n";
@@ -49,6 +55,11 @@ int cmd_serve(int argc, char** argv) {
     o.max_clients = static_cast<uint32_t>(u);
   }
   o.cull = !args.flag("--no-cull");
+  std::string serial;
+  const bool has_serial = args.value("--serial", serial);
+  unsigned long long baud = 115200;
+  if (args.value("--baud", v) && !cli::parse_uint(v, 4000000, baud))
+    return cli::fail("serve: --baud: expected a rate, got '" + v + "'");
   const bool once = args.flag("--once");
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("serve: " + args.error());
@@ -68,6 +79,12 @@ int cmd_serve(int argc, char** argv) {
   Server server;
   if (!server.init(std::move(file), files[0], o, error) || !server.listen_tcp(host, port, error))
     return cli::fail("serve: " + error);
+  if (has_serial) {
+    auto line = std::make_unique<SerialTransport>();
+    if (!line->open(serial, static_cast<uint32_t>(baud), error)) return cli::fail("serve: --serial " + error);
+    const int fd = line->fd();
+    server.add_client(std::move(line), fd, serial, true);
+  }
   std::printf("%s: serving on port %u\n", files[0].c_str(), server.port());
   std::fflush(stdout);
   std::signal(SIGINT, on_signal);

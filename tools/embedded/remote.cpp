@@ -8,10 +8,15 @@
 namespace stipple {
 
 bool RemoteModel::send(MessageType type, const uint8_t* payload, size_t size, std::string& error) {
-  const size_t n = write_frame(type, sequence_, payload, size, frame_.data(), frame_.size());
+  size_t n = write_frame(type, sequence_, payload, size, frame_.data(), frame_.size());
+  const uint8_t* bytes = frame_.data();
+  if (options_.serial) {
+    n = cobs_encode(frame_.data(), n, cobs_out_.data(), cobs_out_.size());
+    bytes = cobs_out_.data();
+  }
   for (size_t at = 0; at < n;) {
     size_t moved = 0;
-    const TransportStatus s = transport_->write(frame_.data() + at, n - at, &moved);
+    const TransportStatus s = transport_->write(bytes + at, n - at, &moved);
     if (s == TransportStatus::kClosed || s == TransportStatus::kError)
       return error = std::string("the server went away: ") + transport_->last_error(), false;
     at += moved;
@@ -39,14 +44,7 @@ bool RemoteModel::wait(Awaited what, std::string& error) {
     size_t got = 0;
     const TransportStatus s = transport_->read(buf, sizeof buf, &got);
     if (s == TransportStatus::kOk && got > 0) {
-      const ReceiveStatus r = receiver_.receive(buf, got);
-      if (r == ReceiveStatus::kClosed)
-        return error = std::string("the server closed the stream: ") + close_reason_text(receiver_.fault().reason), false;
-      if (r == ReceiveStatus::kBadFrame)
-        return error = std::string("a frame from the server was refused: ") + frame_status_text(receiver_.frame_status()), false;
-      if (r == ReceiveStatus::kCacheRefused)
-        return error = std::string("the client refused the server's data: ") + cache_status_text(receiver_.cache_status()), false;
-      if (r != ReceiveStatus::kOk) return error = receive_status_text(r), false;
+      if (!take(buf, got, error)) return false;
       continue;
     }
     if (s == TransportStatus::kClosed || s == TransportStatus::kError)
@@ -62,6 +60,67 @@ bool RemoteModel::wait(Awaited what, std::string& error) {
   return true;
 }
 
+bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
+  bytes_received_ += size;
+  const auto fail = [&](ReceiveStatus r) {
+    if (r == ReceiveStatus::kClosed)
+      error = std::string("the server closed the stream: ") + close_reason_text(receiver_.fault().reason);
+    else if (r == ReceiveStatus::kBadFrame)
+      error = std::string("a frame from the server was refused: ") + frame_status_text(receiver_.frame_status());
+    else if (r == ReceiveStatus::kCacheRefused)
+      error = std::string("the client refused the server's data: ") + cache_status_text(receiver_.cache_status());
+    else
+      error = receive_status_text(r);
+    return false;
+  };
+  if (!options_.serial) {
+    const ReceiveStatus r = receiver_.receive(data, size);
+    return r == ReceiveStatus::kOk || fail(r);
+  }
+  // A serial line: packet by packet. Noise costs a resync: a hello, then the
+  // stream again from its startup, then the view again.
+  for (size_t i = 0; i < size; ++i) {
+    const CobsStatus cs = deframer_.push(data[i]);
+    // A damaged packet: resynchronise (again, if the startup itself may have
+    // been the damaged one: the server starts over at each hello).
+    if (cs == CobsStatus::kDropped && !resync(error)) return false;
+    if (cs != CobsStatus::kPacket) continue;
+    const uint8_t* p = deframer_.packet();
+    const size_t n = deframer_.packet_bytes();
+    if (resyncing_) {
+      // Only a whole, valid startup that opens a stream ends the resync.
+      const bool whole = n >= kFrameHeaderBytes + kFrameTrailerBytes && load_u32le(p + n - 4) == crc32(p, n - 4);
+      if (!whole && !resync(error)) return false;
+      if (!whole || p[0] != static_cast<uint8_t>(MessageType::kStartup) || load_u16le(p + 2) != 0) continue;
+      receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
+      resyncing_ = false;
+      const ReceiveStatus r = receiver_.receive(p, n);
+      if (r != ReceiveStatus::kOk) return fail(r);
+      if (has_camera_) {
+        uint8_t payload[kCameraUpdateBytes];
+        write_camera_update(last_camera_, payload);
+        if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
+      }
+      continue;
+    }
+    const ReceiveStatus r = receiver_.receive(p, n);
+    if (r == ReceiveStatus::kBadFrame) {  // damaged, or one went missing before it
+      if (!resync(error)) return false;
+      continue;
+    }
+    if (r != ReceiveStatus::kOk) return fail(r);
+  }
+  return true;
+}
+
+bool RemoteModel::resync(std::string& error) {
+  resyncing_ = true;
+  ++resyncs_;
+  uint8_t payload[kHelloBytes];
+  write_hello(hello_, payload);
+  return send(MessageType::kHello, payload, kHelloBytes, error);
+}
+
 bool RemoteModel::connect(Transport& transport, const ClientConfig& config, const Options& options, std::string& error) {
   transport_ = &transport;
   options_ = options;
@@ -73,6 +132,9 @@ bool RemoteModel::connect(Transport& transport, const ClientConfig& config, cons
   reader_storage_.assign(kMaxFrameBytes, 0);
   frame_.assign(kMaxFrameBytes, 0);
   receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
+  cobs_storage_.assign(kMaxFrameBytes + 16, 0);
+  cobs_out_.assign(cobs_bound(kMaxFrameBytes), 0);
+  deframer_.init(cobs_storage_.data(), cobs_storage_.size());
   Hello h;
   h.width = config.raster.width;
   h.height = config.raster.height;
@@ -80,6 +142,7 @@ bool RemoteModel::connect(Transport& transport, const ClientConfig& config, cons
   h.attributes = static_cast<uint8_t>((config.normals && config.shading != ShadingMode::kNone ? kWantNormals : 0) |
                                       (config.color && !config.grey ? kWantColor : 0));
   h.cache_capacity = config.node_capacity;
+  hello_ = h;
   uint8_t payload[kHelloBytes];
   write_hello(h, payload);
   if (!send(MessageType::kHello, payload, kHelloBytes, error)) return false;
@@ -92,6 +155,8 @@ bool RemoteModel::view(const Camera& camera, int32_t max_size_q4, const int32_t 
   u.camera = camera;
   u.max_size_q4 = max_size_q4;
   for (int k = 0; k < 4; ++k) u.window[k] = window[k];
+  last_camera_ = u;
+  has_camera_ = true;
   uint8_t payload[kCameraUpdateBytes];
   write_camera_update(u, payload);
   if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;

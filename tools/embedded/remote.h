@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/cobs.h"
 #include "core/protocol.h"
 #include "core/stream.h"
 #include "platform/transport.h"
@@ -28,6 +29,8 @@ class RemoteModel {
     bool (*pump)(void* context) = nullptr;  // false: stop waiting
     void* pump_context = nullptr;
     int timeout_ms = 15000;         // the longest wait for the server
+    bool serial = false;            // COBS-framed frames; a damaged or missing one makes the
+                                    // client say hello again and ask for its view afresh
   };
   // `config` sizes the client (screen, cache capacity, attributes asked for).
   bool connect(Transport& transport, const ClientConfig& config, const Options& options, std::string& error);
@@ -36,14 +39,17 @@ class RemoteModel {
   bool render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats, std::string& error);
   Client& client() { return client_; }
   const SpgHeader& header() const { return client_.cache().header(); }
-  uint64_t bytes_received() const { return receiver_.bytes_received(); }
+  uint64_t bytes_received() const { return bytes_received_; }
   uint64_t bytes_sent() const { return bytes_sent_; }
+  uint32_t resyncs() const { return resyncs_; }
 
  private:
   bool send(MessageType type, const uint8_t* payload, size_t size, std::string& error);
   enum class Awaited : uint8_t { kStartup, kUpdateEnd };
   bool done(Awaited what) const;
   bool wait(Awaited what, std::string& error);
+  bool take(const uint8_t* data, size_t size, std::string& error);  // bytes from the link
+  bool resync(std::string& error);
 
   Transport* transport_ = nullptr;
   Options options_;
@@ -53,7 +59,13 @@ class RemoteModel {
   StreamReceiver receiver_;
   uint16_t sequence_ = 0;
   uint32_t camera_sequence_ = 0, awaited_camera_ = 0;
-  uint64_t bytes_sent_ = 0;
+  uint64_t bytes_sent_ = 0, bytes_received_ = 0;
+  std::vector<uint8_t> cobs_storage_, cobs_out_;
+  CobsDeframer deframer_;
+  bool resyncing_ = false, has_camera_ = false;
+  uint32_t resyncs_ = 0;
+  Hello hello_;
+  CameraUpdate last_camera_;
 };
 
 }  // namespace stipple

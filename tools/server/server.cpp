@@ -5,6 +5,7 @@
 
 #include <cstdio>
 
+#include "core/cobs.h"
 #include "platform/tcp/tcp_transport.h"
 
 namespace stipple {
@@ -21,12 +22,22 @@ struct Server::Client {
   std::vector<uint8_t> out;  // frames not yet written
   size_t out_at = 0;
   bool hello = false, pending = false, closing = false, gone = false;
+  bool serial = false;
+  std::vector<uint8_t> cobs_storage;
+  CobsDeframer deframer;
+  uint32_t dropped_packets = 0;
   CameraUpdate camera;
   ClientReport report;
 
   static bool sink(void* self, const uint8_t* frame, size_t size) {
     auto* c = static_cast<Client*>(self);
-    c->out.insert(c->out.end(), frame, frame + size);
+    if (!c->serial) {
+      c->out.insert(c->out.end(), frame, frame + size);
+      return true;
+    }
+    const size_t at = c->out.size();
+    c->out.resize(at + cobs_bound(size));
+    c->out.resize(at + cobs_encode(frame, size, c->out.data() + at, c->out.size() - at));
     return true;
   }
   bool idle() const { return out_at == out.size(); }
@@ -64,8 +75,13 @@ bool Server::listen_tcp(const std::string& host, uint16_t port, std::string& err
   return true;
 }
 
-void Server::add_client(std::unique_ptr<Transport> transport, int fd, const std::string& name) {
+void Server::add_client(std::unique_ptr<Transport> transport, int fd, const std::string& name, bool serial) {
   auto c = std::make_unique<Client>();
+  c->serial = serial;
+  if (serial) {
+    c->cobs_storage.assign(sizeof c->in_storage + 16, 0);
+    c->deframer.init(c->cobs_storage.data(), c->cobs_storage.size());
+  }
   c->id = next_id_++;
   c->transport = std::move(transport);
   c->fd = fd;
@@ -105,6 +121,12 @@ void Server::close_client(Client& c, CloseReason reason, FrameStatus status, uin
 void Server::handle(Client& c, const Frame& f) {
   switch (f.type) {
     case MessageType::kHello: {
+      if (c.hello && c.serial) {  // a serial client resynchronising: the stream starts over
+        c.out.clear();
+        c.out_at = 0;
+        c.pending = false;
+        log(c.name + ": hello again (resynchronising), " + std::to_string(c.dropped_packets) + " packets dropped so far");
+      }
       Hello h;
       if (!parse_hello(f.payload, f.payload_bytes, &h))
         return close_client(c, CloseReason::kBadHello, FrameStatus::kBadPayload, f.sequence, "a malformed hello");
@@ -171,6 +193,26 @@ size_t Server::step(int timeout_ms) {
       }
       if (s != TransportStatus::kOk || got == 0) break;
       c.report.bytes_in += got;
+      if (c.serial) {
+        // Packet by packet: a damaged one is dropped (noise), any sequence is
+        // taken (cameras are idempotent, a hello restarts the stream).
+        for (size_t i = 0; i < got && !c.closing && !c.gone; ++i) {
+          const CobsStatus cs = c.deframer.push(buf[i]);
+          if (cs == CobsStatus::kDropped) ++c.dropped_packets;
+          if (cs != CobsStatus::kPacket) continue;
+          if (c.deframer.packet_bytes() < kFrameHeaderBytes) {
+            ++c.dropped_packets;
+            continue;
+          }
+          c.reader.reset();
+          c.reader.expect(load_u16le(c.deframer.packet() + 2));
+          c.reader.feed(c.deframer.packet(), c.deframer.packet_bytes());
+          Frame f;
+          if (c.reader.next(&f) == FrameStatus::kOk) handle(c, f);
+          else ++c.dropped_packets;
+        }
+        continue;
+      }
       for (size_t at = 0; at < got && !c.closing && !c.gone;) {
         at += c.reader.feed(buf + at, got - at);
         Frame f;

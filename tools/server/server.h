@@ -51,7 +51,9 @@ class Server {
   uint16_t port() const { return port_; }
   // Serves a client over `transport`; `fd` is polled for it (-1: the loop
   // visits it every step, as for a loopback pipe).
-  void add_client(std::unique_ptr<Transport> transport, int fd, const std::string& name);
+  // `serial`: frames are COBS framed (a serial line); damaged packets are
+  // dropped and a hello restarts the stream.
+  void add_client(std::unique_ptr<Transport> transport, int fd, const std::string& name, bool serial = false);
   // One pass of the loop: waits up to timeout_ms for a socket, accepts, reads,
   // answers, writes. Returns the number of clients connected.
   size_t step(int timeout_ms);
