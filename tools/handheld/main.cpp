@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <memory>
 #include <new>
 #include <cerrno>
 #include <cstdlib>
@@ -19,6 +20,7 @@
 #include "platform/file_io.h"
 #include "platform/null/null_display.h"
 #include "platform/progress.h"
+#include "platform/serial/serial_transport.h"
 #include "platform/tcp/tcp_transport.h"
 #include "tools/embedded/remote.h"
 #include "tools/embedded/embedded.h"
@@ -28,7 +30,7 @@ namespace {
 
 const char kUsage[] =
     "usage: stipple-handheld MODEL.spg [options]\n"
-    "       stipple-handheld --connect HOST:PORT [options]\n"
+    "       stipple-handheld --connect HOST:PORT | --serial DEV [options]\n"
     "\n"
     "The handheld client: fixed point, one arena, no heap after start-up. Draws\n"
     "the view-dependent cut of MODEL.spg for an orbit camera (the same options and\n"
@@ -38,6 +40,8 @@ const char kUsageOutput[] =
     "program:\n"
     "  --connect HOST:PORT    receive the nodes from `stipple serve` (no MODEL.spg):\n"
     "                         the server cuts for this view, the client draws\n"
+    "  --serial DEV           the same over a serial line (`stipple serve --serial`)\n"
+    "  --baud N               its rate (default 115200)\n"
     "  --frames N             draw N frames (timing; default 1)\n"
     "  -o FRAME.ppm           write the frame (headless)\n"
     "  --fbdev DEVICE         show the frame on a framebuffer (e.g. /dev/fb0)\n"
@@ -79,8 +83,12 @@ int run(int argc, char** argv) {
     return fail("--frames: expected 1..100000, got '" + v + "'");
   if (!args.value("-o", output)) args.value("--output", output);
   args.value("--fbdev", fbdev);
-  std::string connect;
-  const bool remote = args.value("--connect", connect);
+  std::string connect, serial_dev;
+  const bool over_serial = args.value("--serial", serial_dev);
+  unsigned long long baud = 115200;
+  if (args.value("--baud", v) && !cli::parse_uint(v, 4000000, baud)) return fail("--baud: expected a rate, got '" + v + "'");
+  const bool remote = args.value("--connect", connect) || over_serial;
+  if (over_serial) connect = serial_dev;
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return fail(args.error());
   if (!args.unknown_option().empty()) return fail("unknown option '" + args.unknown_option() + "' (see --help)");
@@ -104,16 +112,25 @@ int run(int argc, char** argv) {
   FixedRender frame;
   if (remote) {
     // The nodes come over the wire: the server cuts, this client draws.
-    std::string host;
-    uint16_t port = 0;
-    int fd = -1;
-    if (!parse_host_port(connect, "127.0.0.1", host, port, error) || !tcp_connect(host, port, 5000, &fd, error))
-      return fail("--connect " + error);
-    TcpTransport link(fd, connect);
+    std::unique_ptr<Transport> link;
     RemoteModel server;
     RemoteModel::Options ro;
-    ro.fd = fd;
-    if (!server.connect(link, config, ro, error)) return fail(model + ": " + error);
+    if (over_serial) {
+      auto line = std::make_unique<SerialTransport>();
+      if (!line->open(serial_dev, static_cast<uint32_t>(baud), error)) return fail("--serial " + error);
+      ro.fd = line->fd();
+      ro.serial = true;
+      link = std::move(line);
+    } else {
+      std::string host;
+      uint16_t port = 0;
+      int fd = -1;
+      if (!parse_host_port(connect, "127.0.0.1", host, port, error) || !tcp_connect(host, port, 5000, &fd, error))
+        return fail("--connect " + error);
+      link = std::make_unique<TcpTransport>(fd, connect);
+      ro.fd = fd;
+    }
+    if (!server.connect(*link, config, ro, error)) return fail(model + ": " + error);
     const int32_t* extent = server.client().decoder().extent_mu();
     Camera camera;
     if (!orbit_camera(orbit_view(extent, resolve_view(o.view, server.header(), extent)), config.raster.width,
