@@ -1,12 +1,12 @@
 // stipple core — the node cache. See node_cache.h.
 #include "core/node_cache.h"
 
+#include "core/arena.h"
+
 #include <initializer_list>
 
 namespace stipple {
 namespace {
-
-constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
 
 struct Layout {
   size_t decoder, records, ids, hash, total;
@@ -40,17 +40,13 @@ Layout layout_of(const NodeCacheLimits& c) {
   l.record_stride = c.decoded ? sizeof(FixedNode) : static_cast<size_t>(paper_layout(c.normals, c.color, 2).record_bytes());
   l.hash_entries = 1;
   while (l.hash_entries < c.node_capacity + c.node_capacity / 2) l.hash_entries <<= 1;
-  size_t at = 0;
-  auto take = [&](size_t bytes) {
-    const size_t here = at;
-    at += align8(bytes);
-    return here;
-  };
+  ArenaCarver arena;
+  const auto take = [&](size_t bytes) { return arena.take(bytes); };
   l.decoder = take(l.decoder_bytes);
   l.records = take(l.record_stride * c.node_capacity);
   l.ids = take(4 * size_t{c.node_capacity});
   l.hash = take(4 * size_t{l.hash_entries});
-  l.total = at;
+  l.total = arena.total();
   return l;
 }
 

@@ -1,12 +1,12 @@
 // stipple core — the two ends of a node stream. See stream.h and docs/protocol.md.
 #include "core/stream.h"
 
+#include "core/arena.h"
+
 #include "core/spg_writer.h"
 
 namespace stipple {
 namespace {
-
-constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
 
 bool is_normal_field(int f) { return f >= static_cast<int>(Field::kFnTheta) && f <= static_cast<int>(Field::kSigmaN); }
 bool is_color_field(int f) { return f >= static_cast<int>(Field::kColorR); }

@@ -2,6 +2,8 @@
 // are in docs/figures.md.
 #include "core/view_cut.h"
 
+#include "core/arena.h"
+
 #include <algorithm>
 
 #include "core/cut.h"
@@ -30,8 +32,6 @@ struct ViewCut::Eval {
 
 namespace {
 
-constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
-
 struct Layout {
   size_t sent_bits, fresh_bits, cut, sent, previous, sizes, entered, left, heap, total;
 };
@@ -39,12 +39,8 @@ struct Layout {
 // The per-client state (the bounds are separate).
 Layout layout_of(uint32_t n) {
   Layout l{};
-  size_t at = 0;
-  auto take = [&](size_t bytes) {
-    const size_t here = at;
-    at += align8(bytes);
-    return here;
-  };
+  ArenaCarver arena;
+  const auto take = [&](size_t bytes) { return arena.take(bytes); };
   l.sent_bits = take((size_t{n} + 7) / 8);
   l.fresh_bits = take((size_t{n} + 7) / 8);
   l.cut = take(4 * size_t{n});
@@ -54,7 +50,7 @@ Layout layout_of(uint32_t n) {
   l.entered = take(4 * size_t{n});
   l.left = take(4 * size_t{n});
   l.heap = take(8 * size_t{n});
-  l.total = at;
+  l.total = arena.total();
   return l;
 }
 

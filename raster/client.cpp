@@ -1,10 +1,10 @@
 // stipple raster — the handheld client: cache + renderer. See client.h.
 #include "raster/client.h"
 
+#include "core/arena.h"
+
 namespace stipple {
 namespace {
-
-constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
 
 ClientStatus status_of(CacheStatus s) {
   switch (s) {

@@ -1,10 +1,11 @@
 // stipple raster — tile-based z-buffer point rasterizer. See point_raster.h.
 #include "raster/point_raster.h"
 
+#include "core/arena.h"
+
 namespace stipple {
 namespace {
 
-constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
 constexpr uint32_t kChunk = 64;
 
 struct Layout {

@@ -2,10 +2,11 @@
 // formats and measured errors are in docs/fixed_point.md.
 #include "raster/point_renderer.h"
 
+#include "core/arena.h"
+
 namespace stipple {
 namespace {
 
-constexpr size_t align8(size_t n) { return (n + 7) & ~size_t{7}; }
 constexpr int32_t kMaxFocalQ4 = 1 << 20;
 constexpr int32_t kMaxDepthMu = 1 << 30;
 constexpr int32_t kMaxSigmaN = 4 << 12;       // theta table covers theta <= 4 rad
@@ -16,19 +17,15 @@ struct Layout {
 
 Layout layout_of(const RendererConfig& c) {
   Layout l{};
-  size_t at = 0;
-  auto take = [&](size_t bytes) {
-    const size_t here = at;
-    at += align8(bytes);
-    return here;
-  };
+  ArenaCarver arena;
+  const auto take = [&](size_t bytes) { return arena.take(bytes); };
   l.raster = take(point_raster_bytes(c.raster));
   l.g_position = take(sizeof(Gaussian3Q12) * c.samples);
   l.g_normal = take(c.normals ? sizeof(Gaussian2Q12) * c.samples : 0);
   l.g_color = take(c.color ? sizeof(Gaussian3Q12) * c.samples : 0);
   l.shading = take(sizeof(ShadingTables));
   l.reciprocal = take(sizeof(uint16_t) << kReciprocalBits);
-  l.total = at;
+  l.total = arena.total();
   return l;
 }
 

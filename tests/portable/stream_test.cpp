@@ -17,17 +17,10 @@
 namespace stipple {
 namespace {
 
-struct Model {
-  std::vector<uint8_t> file;
-  SpgView view;
-  std::vector<uint32_t> decoder_storage;
-  NodeDecoder decoder;
+struct Model : test::ParsedModel {
   std::vector<uint64_t> bounds_storage;
   CutBounds bounds;
-  Model() : file(test::fixture("tests/golden/bunny_v1.spg")) {
-    EXPECT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
-    decoder_storage.resize(node_decoder_bytes(view.header) / 4 + 1);
-    EXPECT_EQ(decoder.init(view, decoder_storage.data(), decoder_storage.size() * 4), DecodeStatus::kOk);
+  Model() : ParsedModel("tests/golden/bunny_v1.spg") {
     bounds_storage.resize(CutBounds::bytes(view.header) / 8 + 1);
     EXPECT_EQ(bounds.init(view, decoder, bounds_storage.data(), bounds_storage.size() * 8), CutStatus::kOk);
   }

@@ -13,6 +13,8 @@
 #include <cstdio>
 
 #include "core/camera.h"
+#include "core/node_decoder.h"
+#include "core/spg_format.h"
 
 namespace stipple::test {
 
@@ -31,6 +33,19 @@ inline std::vector<uint8_t> fixture(const std::string& rel) {
   std::fclose(f);
   return bytes;
 }
+
+// A committed .spg, parsed, with its fixed-point decoder.
+struct ParsedModel {
+  std::vector<uint8_t> file;
+  SpgView view;
+  std::vector<uint32_t> decoder_storage;
+  NodeDecoder decoder;
+  explicit ParsedModel(const char* rel) : file(fixture(rel)) {
+    EXPECT_TRUE(spg_parse(file.data(), file.size(), &view).ok()) << rel;
+    decoder_storage.resize(node_decoder_bytes(view.header) / 4 + 1);
+    EXPECT_EQ(decoder.init(view, decoder_storage.data(), decoder_storage.size() * 4), DecodeStatus::kOk) << rel;
+  }
+};
 
 // An orbit in degrees and model extents about the box's centre, as `stipple
 // render --camera yaw,pitch,distance,fov` builds it (+y up).

@@ -19,17 +19,7 @@
 namespace stipple {
 namespace {
 
-struct Model {
-  std::vector<uint8_t> file;
-  SpgView view;
-  std::vector<uint32_t> decoder_storage;
-  NodeDecoder decoder;
-  explicit Model(const char* name) : file(test::fixture(name)) {
-    EXPECT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
-    decoder_storage.resize(node_decoder_bytes(view.header) / 4 + 1);
-    EXPECT_EQ(decoder.init(view, decoder_storage.data(), decoder_storage.size() * 4), DecodeStatus::kOk);
-  }
-};
+using Model = test::ParsedModel;
 
 const Model& bunny() {
   static const Model m("tests/golden/bunny_v1.spg");
