@@ -254,7 +254,7 @@ struct TcpServer {
     std::lock_guard<std::mutex> lock(step_mutex);
     return server.report();
   }
-  explicit TcpServer(uint32_t max_clients = 64) {
+  explicit TcpServer(uint32_t max_clients = 64, uint16_t port = 0) {
     std::string error;
     ServerOptions o;
     o.max_clients = max_clients;
@@ -263,7 +263,7 @@ struct TcpServer {
       log.push_back(line);
     };
     EXPECT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
-    EXPECT_TRUE(server.listen_tcp("127.0.0.1", 0, error)) << error;
+    EXPECT_TRUE(server.listen_tcp("127.0.0.1", port, error)) << error;
     thread = std::thread([this] {
       while (!stop) {
         std::lock_guard<std::mutex> lock(step_mutex);
@@ -383,6 +383,45 @@ TEST(Server, ACorruptFrameIsAnsweredWithItsFaultAndClosed) {
   EXPECT_TRUE(got_error);
   EXPECT_TRUE(closed);
   EXPECT_TRUE(s.logged("frame 0: frame CRC-32 mismatch"));
+}
+
+// The server restarts mid-stream: the client reconnects, says hello again and
+// converges to the same image.
+TEST(Server, ClientReconnectsWhenTheServerRestarts) {
+  const Local local;
+  auto first = std::make_unique<TcpServer>();
+  const uint16_t port = first->server.port();
+  struct Links {
+    uint16_t port;
+    std::unique_ptr<TcpTransport> now;
+  } links{port, std::make_unique<TcpTransport>(connect_to(port), "first")};
+  RemoteModel remote;
+  RemoteModel::Options ro;
+  ro.fd = links.now->fd();
+  ro.reconnect = [](void* context, int* fd) -> Transport* {
+    auto* l = static_cast<Links*>(context);
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      std::string error;
+      if (tcp_connect("127.0.0.1", l->port, 500, fd, error)) {
+        l->now = std::make_unique<TcpTransport>(*fd, "again");
+        return l->now.get();
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return nullptr;
+  };
+  ro.reconnect_context = &links;
+  std::string error;
+  ASSERT_TRUE(remote.connect(*links.now, device(), ro, error)) << error;
+  std::vector<uint8_t> frame = remote_frame(remote, local, 30, error);
+  ASSERT_FALSE(frame.empty()) << error;
+  EXPECT_EQ(frame, local.render(30).frame);
+  first.reset();  // the server goes down, and comes back on the same port
+  TcpServer second(64, port);
+  frame = remote_frame(remote, local, 90, error);
+  ASSERT_FALSE(frame.empty()) << error;
+  EXPECT_EQ(frame, local.render(90).frame);
+  EXPECT_EQ(remote.reconnects(), 1u);
 }
 
 TEST(Server, AFullServerSaysSo) {

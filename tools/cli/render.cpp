@@ -1,7 +1,9 @@
 // stipple render — the fixed-point client in process (or the double reference) -> PNG.
 #include <algorithm>
 #include <cmath>
+#include <chrono>
 #include <cstdio>
+#include <thread>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -114,6 +116,11 @@ int render_stream(const std::string& source, bool remote, const RenderOptions& o
   Server local;
   LoopbackPipe pipe;
   std::unique_ptr<TcpTransport> tcp;
+  struct Redial {
+    std::string host;
+    uint16_t port = 0;
+    std::unique_ptr<TcpTransport>* link = nullptr;
+  } redial;
   Transport* link = nullptr;
   RemoteModel model;
   RemoteModel::Options ro;
@@ -127,14 +134,30 @@ int render_stream(const std::string& source, bool remote, const RenderOptions& o
     ro.fd = serial_line->fd();
     ro.serial = true;
   } else if (remote) {
-    std::string host;
     uint16_t port = 0;
     int fd = -1;
-    if (!parse_host_port(source, "127.0.0.1", host, port, error) || !tcp_connect(host, port, 5000, &fd, error))
+    if (!parse_host_port(source, "127.0.0.1", redial.host, port, error) || !tcp_connect(redial.host, port, 5000, &fd, error))
       return cli::fail("render: --connect " + error);
     tcp = std::make_unique<TcpTransport>(fd, source);
     link = tcp.get();
     ro.fd = fd;
+    // A server that goes away is redialled for ten seconds.
+    redial.port = port;
+    redial.link = &tcp;
+    ro.reconnect = [](void* context, int* new_fd) -> Transport* {
+      auto* r = static_cast<Redial*>(context);
+      for (int attempt = 0; attempt < 50; ++attempt) {
+        std::string ignored;
+        if (tcp_connect(r->host, r->port, 1000, new_fd, ignored)) {
+          std::fprintf(stderr, "stipple: render: reconnected to %s:%u\n", r->host.c_str(), r->port);
+          *r->link = std::make_unique<TcpTransport>(*new_fd, r->host);
+          return r->link->get();
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      }
+      return nullptr;
+    };
+    ro.reconnect_context = &redial;
   } else {
     std::vector<uint8_t> file;
     if (!read_file(source, file, error)) return cli::fail(error);

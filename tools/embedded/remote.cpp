@@ -17,6 +17,14 @@ bool RemoteModel::send(MessageType type, const uint8_t* payload, size_t size, st
   for (size_t at = 0; at < n;) {
     size_t moved = 0;
     const TransportStatus s = transport_->write(bytes + at, n - at, &moved);
+    if ((s == TransportStatus::kClosed || s == TransportStatus::kError) && options_.reconnect != nullptr && !in_reconnect_) {
+      // A new link carries the hello and the latest camera (this frame's
+      // purpose when it was a camera) again.
+      in_reconnect_ = true;
+      const bool ok = reconnect(error);
+      in_reconnect_ = false;
+      return ok;
+    }
     if (s == TransportStatus::kClosed || s == TransportStatus::kError)
       return error = std::string("the server went away: ") + transport_->last_error(), false;
     at += moved;
@@ -47,8 +55,12 @@ bool RemoteModel::wait(Awaited what, std::string& error) {
       if (!take(buf, got, error)) return false;
       continue;
     }
-    if (s == TransportStatus::kClosed || s == TransportStatus::kError)
-      return error = std::string("the server went away") + (s == TransportStatus::kError ? std::string(": ") + transport_->last_error() : ""), false;
+    if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
+      if (options_.reconnect == nullptr)
+        return error = std::string("the server went away") + (s == TransportStatus::kError ? std::string(": ") + transport_->last_error() : ""), false;
+      if (!reconnect(error)) return false;
+      continue;
+    }
     if (std::chrono::steady_clock::now() - start > std::chrono::milliseconds(options_.timeout_ms))
       return error = "no answer from the server within " + std::to_string(options_.timeout_ms) + " ms", false;
     if (options_.pump && !options_.pump(options_.pump_context)) return error = "stopped", false;
@@ -109,6 +121,29 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
       continue;
     }
     if (r != ReceiveStatus::kOk) return fail(r);
+  }
+  return true;
+}
+
+bool RemoteModel::reconnect(std::string& error) {
+  int fd = -1;
+  Transport* t = options_.reconnect(options_.reconnect_context, &fd);
+  if (t == nullptr) return error = "the server went away and did not come back", false;
+  transport_ = t;
+  options_.fd = fd;
+  ++reconnects_;
+  // A new stream: the frame reader from sequence 0, the cache from the new
+  // startup; the hello, then the view we were waiting for.
+  receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
+  deframer_.init(cobs_storage_.data(), cobs_storage_.size());
+  resyncing_ = false;
+  sequence_ = 0;
+  uint8_t payload[kCameraUpdateBytes];
+  write_hello(hello_, payload);
+  if (!send(MessageType::kHello, payload, kHelloBytes, error)) return false;
+  if (has_camera_) {
+    write_camera_update(last_camera_, payload);
+    if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
   }
   return true;
 }

@@ -31,6 +31,10 @@ class RemoteModel {
     int timeout_ms = 15000;         // the longest wait for the server
     bool serial = false;            // COBS-framed frames; a damaged or missing one makes the
                                     // client say hello again and ask for its view afresh
+    // When the server goes away: a new link to it (and its fd), or null to
+    // give up. The client then says hello again and asks for its view.
+    Transport* (*reconnect)(void* context, int* fd) = nullptr;
+    void* reconnect_context = nullptr;
   };
   // `config` sizes the client (screen, cache capacity, attributes asked for).
   bool connect(Transport& transport, const ClientConfig& config, const Options& options, std::string& error);
@@ -42,6 +46,7 @@ class RemoteModel {
   uint64_t bytes_received() const { return bytes_received_; }
   uint64_t bytes_sent() const { return bytes_sent_; }
   uint32_t resyncs() const { return resyncs_; }
+  uint32_t reconnects() const { return reconnects_; }
 
  private:
   bool send(MessageType type, const uint8_t* payload, size_t size, std::string& error);
@@ -50,6 +55,7 @@ class RemoteModel {
   bool wait(Awaited what, std::string& error);
   bool take(const uint8_t* data, size_t size, std::string& error);  // bytes from the link
   bool resync(std::string& error);
+  bool reconnect(std::string& error);  // a new link, a new stream
 
   Transport* transport_ = nullptr;
   Options options_;
@@ -62,8 +68,8 @@ class RemoteModel {
   uint64_t bytes_sent_ = 0, bytes_received_ = 0;
   std::vector<uint8_t> cobs_storage_, cobs_out_;
   CobsDeframer deframer_;
-  bool resyncing_ = false, has_camera_ = false;
-  uint32_t resyncs_ = 0;
+  bool resyncing_ = false, has_camera_ = false, in_reconnect_ = false;
+  uint32_t resyncs_ = 0, reconnects_ = 0;
   Hello hello_;
   CameraUpdate last_camera_;
 };
