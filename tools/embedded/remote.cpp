@@ -47,13 +47,21 @@ bool RemoteModel::done(Awaited what) const {
 
 bool RemoteModel::wait(Awaited what, std::string& error) {
   const auto start = std::chrono::steady_clock::now();
+  auto heard = start;  // the last bytes from the server
   uint8_t buf[16384];
   while (!done(what)) {
     size_t got = 0;
     const TransportStatus s = transport_->read(buf, sizeof buf, &got);
     if (s == TransportStatus::kOk && got > 0) {
+      heard = std::chrono::steady_clock::now();
       if (!take(buf, got, error)) return false;
       continue;
+    }
+    // A serial line silent for a second: our hello or camera may have been
+    // lost on the way up. Say hello again (the stream, and the view, start over).
+    if (options_.serial && std::chrono::steady_clock::now() - heard > std::chrono::seconds(1)) {
+      heard = std::chrono::steady_clock::now();
+      if (!resync(error)) return false;
     }
     if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
       if (options_.reconnect == nullptr)
