@@ -132,6 +132,8 @@ bool tcp_listen(const std::string& host, uint16_t port, int* out, uint16_t* boun
   return true;
 }
 
+void tcp_close(int fd) { ::close(fd); }
+
 int tcp_accept(int listen_fd, std::string* peer) {
   sockaddr_storage addr{};
   socklen_t len = sizeof addr;

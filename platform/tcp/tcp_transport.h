@@ -40,6 +40,8 @@ bool parse_host_port(const std::string& text, const std::string& default_host, s
 bool tcp_listen(const std::string& host, uint16_t port, int* fd, uint16_t* bound_port, std::string& error);
 // A pending connection, or -1 when there is none; *peer names it.
 int tcp_accept(int listen_fd, std::string* peer);
+// Closes a listening socket.
+void tcp_close(int fd);
 // Connects to host:port (a name or a numeric address) within timeout_ms.
 bool tcp_connect(const std::string& host, uint16_t port, int timeout_ms, int* fd, std::string& error);
 

@@ -45,9 +45,7 @@ struct Server::Client {
 
 Server::Server() = default;
 Server::~Server() {
-  if (listen_fd_ >= 0) {
-    TcpTransport closer(listen_fd_, "");  // closes the listening socket
-  }
+  if (listen_fd_ >= 0) tcp_close(listen_fd_);
 }
 
 void Server::log(const std::string& line) const {
