@@ -67,6 +67,29 @@ const char* spg_error_text(SpgError e) {
   return "unknown error";
 }
 
+const char* spg_axis_name(SpgAxis a) {
+  static const char* const names[] = {"none", "+x", "-x", "+y", "-y", "+z", "-z"};
+  return static_cast<uint8_t>(a) < kSpgAxisCount ? names[static_cast<uint8_t>(a)] : "?";
+}
+
+bool spg_parse_axis(const char* text, SpgAxis* out) {
+  char sign = '+', axis = 0;
+  if (text[0] != '\0' && text[1] == '\0') {
+    axis = text[0];  // "x" means "+x"
+  } else if ((text[0] == '+' || text[0] == '-') && text[1] != '\0' && text[2] == '\0') {
+    sign = text[0];
+    axis = text[1];
+  }
+  for (uint8_t i = 1; i < kSpgAxisCount; ++i) {
+    const char* name = spg_axis_name(static_cast<SpgAxis>(i));
+    if (name[0] == sign && name[1] == axis) {
+      *out = static_cast<SpgAxis>(i);
+      return true;
+    }
+  }
+  return false;
+}
+
 uint32_t crc32(const uint8_t* data, size_t size) {
   uint32_t c = 0xFFFFFFFFu;
   for (size_t i = 0; i < size; ++i) c = kCrcTable.v[(c ^ data[i]) & 0xFFu] ^ (c >> 8);

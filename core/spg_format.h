@@ -48,6 +48,11 @@ static_assert(kReserved + 2 == kSpgFixedHeaderBytes);
 enum class SpgAxis : uint8_t { kNone = 0, kPosX, kNegX, kPosY, kNegY, kPosZ, kNegZ };
 inline constexpr uint8_t kSpgAxisCount = 7;
 
+// "+x", "-z", ...; "none" for kNone. The parser takes "+x" .. "-z" and a
+// bare "x" for "+x"; false (out untouched) for anything else.
+const char* spg_axis_name(SpgAxis a);
+[[nodiscard]] bool spg_parse_axis(const char* text, SpgAxis* out);
+
 // How the scan wants to be seen (docs/format.md §1, offset 42): which way is
 // up, the side the sensor saw it from (the default view looks from there),
 // or that the sensor stood inside the scan at the origin (the default view

@@ -152,11 +152,14 @@ TEST(Orientation, GivenNormalsOverruleTheGeometry) {
 
 TEST(Orientation, AxisNames) {
   SpgAxis a;
-  ASSERT_TRUE(parse_axis("-y", a));
+  ASSERT_TRUE(spg_parse_axis("-y", &a));
   EXPECT_EQ(a, SpgAxis::kNegY);
-  ASSERT_TRUE(parse_axis("z", a));
+  ASSERT_TRUE(spg_parse_axis("z", &a));
   EXPECT_EQ(a, SpgAxis::kPosZ);
-  EXPECT_FALSE(parse_axis("up", a));
+  EXPECT_FALSE(spg_parse_axis("up", &a));
+  EXPECT_FALSE(spg_parse_axis("", &a));
+  EXPECT_FALSE(spg_parse_axis("+zz", &a));
+  EXPECT_STREQ(spg_axis_name(SpgAxis::kNegX), "-x");
   EXPECT_EQ(axis_vector(SpgAxis::kNegY), Vec3(0, -1, 0));
 }
 

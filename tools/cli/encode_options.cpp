@@ -70,7 +70,7 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
     o.orient.has_viewpoint = true;
     o.orient.viewpoint = Vec3(xyz[0], xyz[1], xyz[2]);
   }
-  if (args.value("--up", v) && !parse_axis(v, o.orient.up))
+  if (args.value("--up", v) && !spg_parse_axis(v.c_str(), &o.orient.up))
     return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
   if (args.flag("--no-shrink")) o.tree.stats.shrink_eta0 = 1.0;
   o.tree.octree = args.flag("--octree");
@@ -97,8 +97,8 @@ std::string summary_json(const std::string& scan, const EncodeReport& r, double 
       .str("normals", r.normals_source)
       .str("scan_kind", scan_kind_name(r.frame.kind))
       .str("orient", orient_mode_name(r.frame.orient))
-      .str("view_up", axis_name(r.frame.hint.up))
-      .str("view_sensor_side", axis_name(r.frame.hint.sensor_side))
+      .str("view_up", spg_axis_name(r.frame.hint.up))
+      .str("view_sensor_side", spg_axis_name(r.frame.hint.sensor_side))
       .boolean("colors", r.colors)
       .integer("classes_p", r.classes[0])
       .integer("classes_n", r.classes[1])
@@ -119,7 +119,7 @@ void print_summary(const std::string& scan, const EncodeReport& r, double second
               static_cast<unsigned long long>(r.record_bytes), r.bits_per_point, seconds, peak_mb);
   std::printf("  %s; normals %s%s; view: up %s, sensor side %s\n", r.frame.reason.c_str(), r.normals_source.c_str(),
               r.normals_source == "k-NN" ? (std::string(", facing ") + orient_mode_name(r.frame.orient)).c_str() : "",
-              axis_name(r.frame.hint.up), axis_name(r.frame.hint.sensor_side));
+              spg_axis_name(r.frame.hint.up), spg_axis_name(r.frame.hint.sensor_side));
 }
 
 void keep_every(PointCloud& cloud, unsigned long long k, const EncodeOptions& o) {

@@ -46,7 +46,7 @@ int cmd_info(int argc, char** argv) {
   if (facing_point && facing_up) return cli::fail("info: give one of --facing-point and --facing-up");
   if (facing_point && !cli::parse_vec3(point_text, target))
     return cli::fail("info: --facing-point: expected X,Y,Z (three finite numbers), got '" + point_text + "'");
-  if (facing_up && !parse_axis(up_text, up_axis))
+  if (facing_up && !spg_parse_axis(up_text.c_str(), &up_axis))
     return cli::fail("info: --facing-up: expected +x, -x, +y, -y, +z or -z, got '" + up_text + "'");
   // The file and 4 bytes a node: the Gaussians are not decoded (a valid
   // file of 1-byte records would need ~350 bytes a node as a DecodedModel).
@@ -115,8 +115,8 @@ int cmd_info(int argc, char** argv) {
         .num("apr", ratios.apr)
         .num("capr", ratios.capr)
         .integer("capr_excluded", static_cast<long long>(ratios.capr_excluded))
-        .str("view_up", axis_name(h.view_hint.up))
-        .str("view_sensor_side", axis_name(h.view_hint.sensor_side));
+        .str("view_up", spg_axis_name(h.view_hint.up))
+        .str("view_sensor_side", spg_axis_name(h.view_hint.sensor_side));
     if (facing >= 0) j.num("facing_share", facing);
     std::printf("%s\n", j.done().c_str());
     return 0;
@@ -138,7 +138,7 @@ int cmd_info(int argc, char** argv) {
               static_cast<unsigned long long>(ratios.families));
   std::printf("  bbox         (%g, %g, %g) - (%g, %g, %g)\n", f32_value(h.bbox_bits[0]), f32_value(h.bbox_bits[1]),
               f32_value(h.bbox_bits[2]), f32_value(h.bbox_bits[3]), f32_value(h.bbox_bits[4]), f32_value(h.bbox_bits[5]));
-  std::printf("  view         up %s, sensor side %s\n", axis_name(h.view_hint.up), axis_name(h.view_hint.sensor_side));
+  std::printf("  view         up %s, sensor side %s\n", spg_axis_name(h.view_hint.up), spg_axis_name(h.view_hint.sensor_side));
   if (facing >= 0)
     std::printf("  facing       %.1f %% of the leaves' mean normals face %s %s\n", 100.0 * facing,
                 facing_point ? "the point" : "the axis", facing_point ? point_text.c_str() : up_text.c_str());

@@ -72,14 +72,8 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
     else return error = "--format: expected rgb565 or rgb888, got '" + v + "'", false;
   }
   if (args.value("--camera", v) && !parse_view(v, o.view, error)) return false;
-  if (args.value("--up", v)) {
-    static const char* const names[] = {"+x", "-x", "+y", "-y", "+z", "-z"};
-    const std::string t = v.size() == 1 ? "+" + v : v;
-    o.view.up = SpgAxis::kNone;
-    for (uint8_t i = 0; i < 6; ++i)
-      if (t == names[i]) o.view.up = static_cast<SpgAxis>(i + 1);
-    if (o.view.up == SpgAxis::kNone) return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
-  }
+  if (args.value("--up", v) && !spg_parse_axis(v.c_str(), &o.view.up))
+    return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
   const bool has_level = args.value("--level", v);
   if (has_level) {
     unsigned long long level = 0;

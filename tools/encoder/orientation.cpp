@@ -44,21 +44,6 @@ const char* orient_mode_name(OrientMode m) {
   return "?";
 }
 
-const char* axis_name(SpgAxis a) {
-  static const char* const names[] = {"none", "+x", "-x", "+y", "-y", "+z", "-z"};
-  return static_cast<uint8_t>(a) < kSpgAxisCount ? names[static_cast<uint8_t>(a)] : "?";
-}
-
-bool parse_axis(const std::string& text, SpgAxis& out) {
-  std::string t = text;
-  if (t.size() == 1) t = "+" + t;
-  for (uint8_t i = 1; i < kSpgAxisCount; ++i)
-    if (t == axis_name(static_cast<SpgAxis>(i))) {
-      out = static_cast<SpgAxis>(i);
-      return true;
-    }
-  return false;
-}
 
 Vec3 axis_vector(SpgAxis a) {
   if (a == SpgAxis::kNone) return Vec3::Zero();

@@ -73,9 +73,6 @@ double visible_share(const std::vector<Vec3>& points, const Vec3& eye);
 
 const char* scan_kind_name(ScanKind k);
 const char* orient_mode_name(OrientMode m);
-// "+x", "-z", ...; "none" for kNone.
-const char* axis_name(SpgAxis a);
-bool parse_axis(const std::string& text, SpgAxis& out);
 Vec3 axis_vector(SpgAxis a);  // unit vector; zero for kNone
 
 }  // namespace stipple
