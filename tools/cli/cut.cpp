@@ -58,13 +58,7 @@ int cmd_cut(int argc, char** argv) {
   std::vector<uint64_t> storage(view_cut_bytes(view.header) / 8 + 1);
   ViewCut cut;
   if (cut.init(view, decoder, storage.data(), storage.size() * 8) != CutStatus::kOk) return cli::fail("cut: init failed");
-  CutParams p;
-  p.max_size_q4 = o.rule.max_size_q4;
-  p.max_nodes = o.config.node_capacity;
-  p.cull_frustum = p.cull_backfaces = o.rule.cull;
-  p.width = o.config.raster.width;
-  p.height = o.config.raster.height;
-  for (int k = 0; k < 4; ++k) p.window[k] = o.rule.window[k];
+  const CutParams p = cut_params(o.rule, o.config);
   const ViewSpec base = resolve_view(o.view, view.header, decoder.extent_mu());
   const auto camera_at = [&](double yaw, Camera& c) {
     ViewSpec s = base;

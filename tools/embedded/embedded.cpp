@@ -122,6 +122,17 @@ OrbitView orbit_view(const int32_t extent_mu[3], const ViewSpec& spec) {
   return o;
 }
 
+CutParams cut_params(const CutRule& rule, const ClientConfig& config) {
+  CutParams p;
+  p.max_size_q4 = rule.max_size_q4;
+  p.max_nodes = config.node_capacity;
+  p.cull_frustum = p.cull_backfaces = rule.cull;
+  p.width = config.raster.width;
+  p.height = config.raster.height;
+  for (int k = 0; k < 4; ++k) p.window[k] = rule.window[k];
+  return p;
+}
+
 bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
                   const ViewSpec& spec, FixedRender& out, std::string& error, int frames, size_t (*heap_probe)()) {
   // The cut: a decoder over the whole file, as the server side will hold.
@@ -142,13 +153,7 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     // The view-dependent cut, within what the client's cache holds.
     std::vector<uint64_t> cut_storage(view_cut_bytes(view.header) / 8 + 1);
     ViewCut view_cut;
-    CutParams params;
-    params.max_size_q4 = rule.max_size_q4;
-    params.max_nodes = config.node_capacity;
-    params.cull_frustum = params.cull_backfaces = rule.cull;
-    params.width = config.raster.width;
-    params.height = config.raster.height;
-    for (int k = 0; k < 4; ++k) params.window[k] = rule.window[k];
+    const CutParams params = cut_params(rule, config);
     if (view_cut.init(view, decoder, cut_storage.data(), cut_storage.size() * 8) != CutStatus::kOk ||
         view_cut.update(camera, params) != CutStatus::kOk) {
       error = "the view cut failed";

@@ -60,6 +60,10 @@ struct FixedRender {
   size_t heap_bytes = 0;  // heap_probe's answer after the frames (0 without a probe)
 };
 
+// The view cut's parameters for a projected-size rule and a client: its
+// threshold, culling and window, the client's screen, and its cache as the budget.
+CutParams cut_params(const CutRule& rule, const ClientConfig& config);
+
 // Cuts the validated `view` by `rule` for the camera, feeds the client the
 // startup message and the cut's records, renders the frame `frames` times
 // (for timing; every frame is the same). The projected-size rule goes

@@ -7,6 +7,17 @@
 
 namespace stipple {
 
+Hello hello_for(const ClientConfig& config) {
+  Hello h;
+  h.width = config.raster.width;
+  h.height = config.raster.height;
+  h.pixel_format = config.raster.format == PixelFormat::kRgb888 ? 1 : 0;
+  h.attributes = static_cast<uint8_t>((config.normals && config.shading != ShadingMode::kNone ? kWantNormals : 0) |
+                                      (config.color && !config.grey ? kWantColor : 0));
+  h.cache_capacity = config.node_capacity;
+  return h;
+}
+
 bool RemoteModel::send(MessageType type, const uint8_t* payload, size_t size, std::string& error) {
   size_t n = write_frame(type, sequence_, payload, size, frame_.data(), frame_.size());
   const uint8_t* bytes = frame_.data();
@@ -178,16 +189,9 @@ bool RemoteModel::connect(Transport& transport, const ClientConfig& config, cons
   cobs_storage_.assign(kMaxFrameBytes + 16, 0);
   cobs_out_.assign(cobs_bound(kMaxFrameBytes), 0);
   deframer_.init(cobs_storage_.data(), cobs_storage_.size());
-  Hello h;
-  h.width = config.raster.width;
-  h.height = config.raster.height;
-  h.pixel_format = config.raster.format == PixelFormat::kRgb888 ? 1 : 0;
-  h.attributes = static_cast<uint8_t>((config.normals && config.shading != ShadingMode::kNone ? kWantNormals : 0) |
-                                      (config.color && !config.grey ? kWantColor : 0));
-  h.cache_capacity = config.node_capacity;
-  hello_ = h;
+  hello_ = hello_for(config);
   uint8_t payload[kHelloBytes];
-  write_hello(h, payload);
+  write_hello(hello_, payload);
   if (!send(MessageType::kHello, payload, kHelloBytes, error)) return false;
   return wait(Awaited::kStartup, error);
 }

@@ -22,6 +22,11 @@
 
 namespace stipple {
 
+// The hello a client of this configuration sends: its screen and pixel
+// format, the attributes it will use (no normals without shading, no colour
+// when grey) and its cache capacity.
+Hello hello_for(const ClientConfig& config);
+
 class RemoteModel {
  public:
   struct Options {

@@ -3,6 +3,7 @@
 
 #include "core/protocol.h"
 #include "core/stream.h"
+#include "tools/embedded/remote.h"
 #include "tools/server/server.h"
 
 namespace stipple {
@@ -42,12 +43,8 @@ bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, c
     }
     return true;
   };
-  Hello h;
-  h.width = config.raster.width;
-  h.height = config.raster.height;
-  h.cache_capacity = config.node_capacity;
   uint8_t payload[kCameraUpdateBytes];
-  write_hello(h, payload);
+  write_hello(hello_for(config), payload);
   send(MessageType::kHello, payload, kHelloBytes);
   CameraUpdate u;
   u.camera = cameras[0];
