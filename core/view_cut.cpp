@@ -145,10 +145,16 @@ void ViewCut::reset() {
   cut_count_ = sent_count_ = previous_count_ = entered_count_ = left_count_ = visited_ = 0;
 }
 
-ViewCut::Eval ViewCut::evaluate(uint32_t id) const {
+struct ViewCut::Frame {
+  const Camera& camera;
+  const CutParams& params;
+  int64_t hyp_x, hyp_y;  // |(f, cx)| and |(f, cy)|: the side planes' normals' lengths, Q4, rounded up
+};
+
+ViewCut::Eval ViewCut::evaluate(const Frame& f, uint32_t id) const {
   const Bound& b = bounds_[id];
-  const Camera& cam = *camera_;
-  const CutParams& p = *params_;
+  const Camera& cam = f.camera;
+  const CutParams& p = f.params;
   Eval e{false, false, 0};
   int32_t c[3];
   camera_space(cam, b.center, c);
@@ -159,7 +165,7 @@ ViewCut::Eval ViewCut::evaluate(uint32_t id) const {
     // Planes through the eye and the screen's edges: f X = +-cx Z, f Y = +-cy Z.
     const int64_t fx = int64_t{cam.focal_q4} * c[0], fy = int64_t{cam.focal_q4} * c[1];
     const int64_t cxz = int64_t{cam.center_q4[0]} * z, cyz = int64_t{cam.center_q4[1]} * z;
-    if (fx - cxz > r * hyp_x_ || -fx - cxz > r * hyp_x_ || fy - cyz > r * hyp_y_ || -fy - cyz > r * hyp_y_) return e;
+    if (fx - cxz > r * f.hyp_x || -fx - cxz > r * f.hyp_x || fy - cyz > r * f.hyp_y || -fy - cyz > r * f.hyp_y) return e;
   }
   if (p.cull_backfaces && normals_) {
     // Facing away: the angle between the normal and d = eye - centre exceeds
@@ -232,12 +238,10 @@ uint64_t ViewCut::heap_pop() {
 
 CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
   if (!ready_) return CutStatus::kNotReady;
-  camera_ = &camera;
-  params_ = &params;
-  hyp_x_ = static_cast<int64_t>(isqrt64(static_cast<uint64_t>(int64_t{camera.focal_q4} * camera.focal_q4 +
-                                                               int64_t{camera.center_q4[0]} * camera.center_q4[0]))) + 1;
-  hyp_y_ = static_cast<int64_t>(isqrt64(static_cast<uint64_t>(int64_t{camera.focal_q4} * camera.focal_q4 +
-                                                               int64_t{camera.center_q4[1]} * camera.center_q4[1]))) + 1;
+  const auto hyp = [&](int32_t c) {
+    return static_cast<int64_t>(isqrt64(static_cast<uint64_t>(int64_t{camera.focal_q4} * camera.focal_q4 + int64_t{c} * c))) + 1;
+  };
+  const Frame frame{camera, params, hyp(camera.center_q4[0]), hyp(camera.center_q4[1])};
   // The previous sent set is kept for the delta.
   for (uint32_t i = 0; i < sent_count_; ++i) previous_[i] = sent_[i];
   previous_count_ = sent_count_;
@@ -264,7 +268,7 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
   while (head < tail && sent_count_ <= params.max_nodes && visited_ <= visit_limit) {
     const uint32_t id = queue[head++];
     ++visited_;
-    const Eval e = evaluate(id);
+    const Eval e = evaluate(frame, id);
     if (!e.split) {
       settle(id, e);
       continue;
@@ -279,7 +283,7 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
     cut_count_ = sent_count_ = 0;
     const auto place = [&](uint32_t id) {
       ++visited_;
-      const Eval e = evaluate(id);
+      const Eval e = evaluate(frame, id);
       if (e.split) heap_push(e.size, id);
       else settle(id, e);
     };
@@ -292,7 +296,7 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
       if (room && uint64_t{sent_count_} + heap_count_ + b.children > params.max_nodes) {
         // The split's cost: its visible children replace it.
         uint32_t visible = 0;
-        for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(b.first_child + k).visible;
+        for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(frame, b.first_child + k).visible;
         room = uint64_t{sent_count_} + heap_count_ + visible <= params.max_nodes;
       }
       if (!room) {  // the budget is spent: this node and all still waiting stay whole
@@ -328,8 +332,6 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
     set_bit(sent_bits_, id);
     clear_bit(fresh_bits_, id);
   }
-  camera_ = nullptr;
-  params_ = nullptr;
   return CutStatus::kOk;
 }
 

@@ -119,7 +119,8 @@ class ViewCut {
 
  private:
   struct Eval;
-  Eval evaluate(uint32_t node) const;
+  struct Frame;  // one update's camera, parameters and what follows from them
+  Eval evaluate(const Frame& f, uint32_t node) const;
   void heap_push(uint32_t size, uint32_t node);
   uint64_t heap_pop();
 
@@ -127,10 +128,6 @@ class ViewCut {
   const Bound* bounds_ = nullptr;
   uint32_t node_count_ = 0;
   bool normals_ = false;
-  // The camera of the running update.
-  const Camera* camera_ = nullptr;
-  const CutParams* params_ = nullptr;
-  int64_t hyp_x_ = 0, hyp_y_ = 0;
   uint8_t* sent_bits_ = nullptr;   // the sent set of the last update
   uint8_t* fresh_bits_ = nullptr;  // scratch: the sent set being made
   NodeId* cut_ = nullptr;
