@@ -1,7 +1,8 @@
 // Counts every heap call (operator new/delete and malloc/calloc/realloc/free)
 // and checks that core's per-frame paths make none after init: validating a
 // .spg, decoding every node, unpacking records, rasterizing, the whole
-// client, presenting to the null display. A positive control first
+// client, presenting to the null display, the view cut and both ends of the
+// node stream. A positive control first
 // proves the counter sees allocations. Built without sanitizers only (they
 // replace malloc themselves). Prints "N passed, M failed".
 #include <atomic>
@@ -16,6 +17,8 @@
 #include "platform/file_io.h"
 #include "platform/null/null_display.h"
 #include "core/cut.h"
+#include "core/stream.h"
+#include "core/view_cut.h"
 #include "raster/client.h"
 #include "raster/point_raster.h"
 
@@ -173,6 +176,52 @@ int main(int argc, char** argv) {
   }
   check(display_ok && display.frames() == 100 && g_heap_calls.load() - before == 0,
         "100 frames presented to the null display", g_heap_calls.load() - before);
+  // The node stream's two ends and the view cut under them: a server's
+  // sender and a client's receiver over storage sized at start-up, 30 camera
+  // updates along an orbit, the frames handed over through a fixed buffer.
+  std::vector<uint64_t> bounds_storage(stipple::CutBounds::bytes(view.header) / 8 + 1);
+  stipple::CutBounds bounds;
+  std::vector<uint64_t> sender_storage(stipple::StreamSender::storage_bytes(view.header) / 8 + 1);
+  stipple::StreamSender sender;
+  stipple::NodeCacheLimits limits;
+  limits.node_capacity = 8000;
+  std::vector<uint64_t> cache_storage(stipple::node_cache_bytes(limits) / 8 + 1);
+  stipple::NodeCache cache;
+  std::vector<uint8_t> reader_storage(stipple::kMaxFrameBytes);
+  stipple::StreamReceiver receiver;
+  struct Link {
+    std::vector<uint8_t> bytes = std::vector<uint8_t>(1 << 21);
+    size_t used = 0;
+    static bool sink(void* self, const uint8_t* frame, size_t size) {
+      auto* l = static_cast<Link*>(self);
+      if (l->used + size > l->bytes.size()) return false;
+      for (size_t i = 0; i < size; ++i) l->bytes[l->used + i] = frame[i];
+      l->used += size;
+      return true;
+    }
+  } link;
+  bool stream_ok = bounds.init(view, decoder, bounds_storage.data(), bounds_storage.size() * 8) == stipple::CutStatus::kOk &&
+                   sender.init(view, bounds, sender_storage.data(), sender_storage.size() * 8) &&
+                   cache.init(limits, cache_storage.data(), cache_storage.size() * 8) == stipple::CacheStatus::kOk;
+  receiver.init(&cache, reader_storage.data(), reader_storage.size());
+  before = g_heap_calls.load();
+  stipple::Hello hello;
+  hello.cache_capacity = limits.node_capacity;
+  stream_ok = stream_ok && sender.start(hello, Link::sink, &link);
+  for (uint32_t frame = 0; stream_ok && frame < 30; ++frame) {
+    stipple::CameraUpdate u;
+    u.sequence = frame;
+    stipple::OrbitView orbit;
+    for (int a = 0; a < 3; ++a) orbit.target_mu[a] = decoder.extent_mu()[a] / 2;
+    orbit.distance_mu = 3 << 24;
+    orbit.yaw = frame * 0x04000000u;
+    stream_ok = stipple::orbit_camera(orbit, 240, 320, &u.camera) && sender.update(u, true, Link::sink, &link) &&
+                receiver.receive(link.bytes.data(), link.used) == stipple::ReceiveStatus::kOk && receiver.converged(frame) &&
+                cache.count() == sender.cut().sent_count();
+    link.used = 0;
+  }
+  check(stream_ok && g_heap_calls.load() - before == 0,
+        "stream: startup and 30 camera updates cut, sent and received after init", g_heap_calls.load() - before);
   std::printf("checksum %ld\n%d passed, %d failed\n", checksum, passed, failed);
   return failed == 0 ? 0 : 1;
 }
