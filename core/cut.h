@@ -20,6 +20,7 @@
 #include "core/camera.h"
 #include "core/node_decoder.h"
 #include "core/spg_format.h"
+#include "core/view_cut.h"
 
 namespace stipple {
 
@@ -31,6 +32,7 @@ struct CutRule {
   // the programs use; simple_cut ignores these): cull by frustum and normal
   // cone, and refine only inside a window (px, empty: everywhere).
   bool cull = true;
+  uint16_t leaf_cone_q8 = ConeRule{}.leaf_gamma_q8;  // a leaf's normal cone in sigma_n1 (ConeRule)
   int32_t window[4] = {0, 0, 0, 0};
 };
 

@@ -17,10 +17,10 @@ struct ViewCut::Bound {
   int32_t radius;        // gamma * sigma_p1, MU
   uint32_t first_child;  // id of the first child (children are adjacent)
   int16_t normal[3];     // mean normal, Q14 (zero without normals)
-  uint16_t sigma_n1_q12;  // the normal spread (Q12 radians, saturated), 0 without normals
-  int16_t cone_sin_q14;   // sin of the default cone's half-angle (3.5 sigma_n1); > 16384: no cone
+  int16_t cone_sin_q14;  // sin of the normal cone's half-angle (CutBounds::init); 0x7FFF: none
+  uint16_t pad0;
   uint8_t children;
-  uint8_t pad;
+  uint8_t pad1;
 };
 static_assert(sizeof(ViewCut::Bound) == 32);
 
@@ -54,13 +54,37 @@ Layout layout_of(uint32_t n) {
   return l;
 }
 
-// sin of the normal cone's half-angle gamma * sigma_n1 (Q14); 0x7FFF (no
-// cone) from a quarter turn up. gamma * sigma_n1 (Q12 radians) as a binary
-// angle: 2^32 / (2 pi) = 683565275.6 per radian.
-int16_t cone_sin(uint16_t sigma_n1_q12, uint16_t gamma_q8) {
-  const int64_t binary = ((int64_t{sigma_n1_q12} * gamma_q8 >> 8) * 683565276) >> 12;
-  if (binary >= (int64_t{1} << 30)) return 0x7FFF;
-  return static_cast<int16_t>(sincos_q14(static_cast<uint32_t>(binary)).sin);
+constexpr int32_t kNoCone = 0x7FFF;
+
+// A normal cone's half-angle below a quarter turn as its sine and cosine
+// (Q14); sin == kNoCone: a quarter turn or more (no cone).
+struct Cone {
+  int32_t sin, cos;
+};
+
+// The cone of half-angle gamma * sigma_n1 (sigma_n1 in Q12 radians, gamma
+// Q8), as a binary angle: 2^32 / (2 pi) = 683565275.6 per radian.
+Cone statistical_cone(int32_t sigma_n1_q12, uint16_t gamma_q8) {
+  const int64_t sigma = sigma_n1_q12 < 0 ? 0 : sigma_n1_q12 > 0xFFFF ? 0xFFFF : sigma_n1_q12;
+  const int64_t binary = ((sigma * gamma_q8 >> 8) * 683565276) >> 12;
+  if (binary >= (int64_t{1} << 30)) return Cone{kNoCone, 0};
+  const SinCosQ14 sc = sincos_q14(static_cast<uint32_t>(binary));
+  return Cone{sc.sin, sc.cos};
+}
+
+// The cone about `axis` that holds the cone `c` about `n` (unit Q14
+// vectors): half-angle angle(axis, n) + c's, rounded outwards (sines up,
+// cosines down), so it only ever grows.
+Cone widened(const int16_t axis[3], const int16_t n[3], Cone c) {
+  if (c.sin == kNoCone) return c;
+  int64_t dot = (int64_t{axis[0]} * n[0] + int64_t{axis[1]} * n[1] + int64_t{axis[2]} * n[2]) >> 14;  // floor
+  if (dot > kQ14One) dot = kQ14One;
+  if (dot <= 0) return Cone{kNoCone, 0};
+  const int64_t sin_t = static_cast<int64_t>(isqrt64(static_cast<uint64_t>((int64_t{kQ14One} * kQ14One) - dot * dot))) + 1;
+  const int64_t cos_sum = (dot * c.cos - sin_t * c.sin) >> 14;  // floor
+  if (cos_sum <= 0) return Cone{kNoCone, 0};
+  const int64_t sin_sum = ((sin_t * c.cos + dot * c.sin) >> 14) + 1;
+  return sin_sum >= kQ14One ? Cone{kNoCone, 0} : Cone{static_cast<int32_t>(sin_sum), static_cast<int32_t>(cos_sum)};
 }
 
 inline bool bit(const uint8_t* bits, uint32_t i) { return (bits[i >> 3] >> (i & 7)) & 1u; }
@@ -73,7 +97,8 @@ size_t CutBounds::bytes(const SpgHeader& header) { return align8(sizeof(ViewCut:
 size_t view_cut_state_bytes(const SpgHeader& header) { return layout_of(header.node_count).total; }
 size_t view_cut_bytes(const SpgHeader& header) { return CutBounds::bytes(header) + view_cut_state_bytes(header); }
 
-CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes) {
+CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes,
+                          const ConeRule& cones) {
   bounds_ = nullptr;
   const uint32_t n = view.header.node_count;
   if (bytes < CutBounds::bytes(view.header)) return CutStatus::kStorageTooSmall;
@@ -94,20 +119,47 @@ CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void*
     b.children = static_cast<uint8_t>(spg_child_count(view, i));
     b.first_child = next_child;
     next_child += b.children;
-    b.pad = 0;
-    b.sigma_n1_q12 = static_cast<uint16_t>(!normals_ ? 0 : node.sigma_n[0] > 0xFFFF ? 0xFFFF : node.sigma_n[0] < 0 ? 0 : node.sigma_n[0]);
-    b.cone_sin_q14 = cone_sin(b.sigma_n1_q12, CutParams{}.cone_gamma_q8);
+    b.pad0 = 0;
+    b.pad1 = 0;
+    // The statistical cone for now (its sine, and its cosine in pad0's
+    // place until the pass below).
+    const Cone cone = normals_ ? statistical_cone(node.sigma_n[0], b.children ? cones.gamma_q8 : cones.leaf_gamma_q8)
+                               : Cone{kNoCone, 0};
+    b.cone_sin_q14 = static_cast<int16_t>(cone.sin);
+    b.pad0 = static_cast<uint16_t>(cone.cos);
+  }
+  if (normals_) {
+    // Bottom up (children come after their parents): an internal node's
+    // cone is the narrower of its statistical one and the cone about its
+    // normal that holds every child's.
+    for (uint32_t i = n; i-- > 0;) {
+      Bound& b = bounds[i];
+      if (b.children > 0) {
+        Cone hull{0, kQ14One};
+        for (uint32_t k = 0; k < b.children && hull.sin != kNoCone; ++k) {
+          const Bound& c = bounds[b.first_child + k];
+          const Cone w = widened(b.normal, c.normal, Cone{c.cone_sin_q14, c.pad0});
+          if (w.sin > hull.sin) hull = w;  // below a quarter turn the sine orders the angles
+        }
+        if (hull.sin < b.cone_sin_q14) {
+          b.cone_sin_q14 = static_cast<int16_t>(hull.sin);
+          b.pad0 = static_cast<uint16_t>(hull.cos);
+        }
+      }
+    }
+    for (uint32_t i = 0; i < n; ++i) bounds[i].pad0 = 0;
   }
   bounds_ = bounds;
   node_count_ = n;
   return CutStatus::kOk;
 }
 
-CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes) {
+CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes,
+                        const ConeRule& cones) {
   ready_ = false;
   const size_t bound_bytes = CutBounds::bytes(view.header);
   if (bytes < view_cut_bytes(view.header)) return CutStatus::kStorageTooSmall;
-  const CutStatus s = own_.init(view, decoder, storage, bound_bytes);
+  const CutStatus s = own_.init(view, decoder, storage, bound_bytes, cones);
   if (s != CutStatus::kOk) return s;
   return init(own_, static_cast<uint8_t*>(storage) + bound_bytes, bytes - bound_bytes);
 }
@@ -174,9 +226,8 @@ ViewCut::Eval ViewCut::evaluate(const Frame& f, uint32_t id) const {
     // <= sin alpha + sin beta and an upper bound L >= |d|:
     //   cos(n, d) < -(sin alpha + r / L)  <=  n . d < -(sin alpha L + r)
     // (Q14 x MU). No square root or trigonometry per update.
-    const uint16_t gamma = b.children ? p.cone_gamma_q8 : p.leaf_cone_gamma_q8;
-    const int64_t sin_a = gamma == CutParams{}.cone_gamma_q8 ? b.cone_sin_q14 : cone_sin(b.sigma_n1_q12, gamma);
-    if (sin_a < 16384) {
+    const int64_t sin_a = b.cone_sin_q14;
+    if (sin_a < kQ14One) {
       const int64_t d[3] = {int64_t{cam.eye[0]} - b.center[0], int64_t{cam.eye[1]} - b.center[1],
                             int64_t{cam.eye[2]} - b.center[2]};
       const int64_t dot = b.normal[0] * d[0] + b.normal[1] * d[1] + b.normal[2] * d[2];

@@ -12,8 +12,8 @@
 // antichain covering the tree; its *sent* nodes are the visible ones. A node
 // is culled (in the cut, not sent) when it lies wholly behind the near plane,
 // outside the view frustum (its sphere of radius gamma * sigma_p1) or, with
-// normals, faces away from the eye (its normal cone, half-angle
-// gamma * sigma_n1, widened by the angle its sphere subtends, points away).
+// normals, faces away from the eye (its normal cone, ConeRule, widened by
+// the angle its sphere subtends, points away).
 //
 // The cut is persistent: update() re-derives it from the root through a
 // table of per-node bounds built once at init (no node is decoded per
@@ -39,16 +39,22 @@ struct CutParams {
   int32_t max_size_q4 = 32;        // split above this projected radius (1/16 px)
   uint32_t max_nodes = 0xFFFFFFFFu;  // most sent nodes (the client's cache capacity)
   bool cull_frustum = true;
-  bool cull_backfaces = true;      // needs normals in the file
-  // The normal cone's half-angle in sigma_n1 (Q8), for internal nodes and for
-  // leaves: 3.5, the paper's gamma, which never culls a visible surface. A
-  // narrower cone culls more and may cut into silhouettes (docs/protocol.md).
-  uint16_t cone_gamma_q8 = 896;
-  uint16_t leaf_cone_gamma_q8 = 896;
+  bool cull_backfaces = true;      // needs normals in the file (the cones: ConeRule)
   uint16_t width = 240, height = 320;  // the screen the camera projects to (px)
   // On-demand refinement (TOG05 §8.1): only nodes whose projected circle
   // meets [x0, x1) x [y0, y1) (px) are split; empty (x0 >= x1): everywhere.
   int32_t window[4] = {0, 0, 0, 0};
+};
+
+// The normal cones back faces are culled by, fixed per model (CutBounds).
+// A leaf's cone has half-angle leaf_gamma * sigma_n1; an internal node's is
+// the narrower of gamma * sigma_n1 and the cone about its mean normal that
+// holds its children's cones — so it holds every leaf cone below it, and a
+// node is culled only when all of them face away. The trade between nodes
+// removed and silhouette pixels lost, per leaf gamma, is in docs/cut.md.
+struct ConeRule {
+  uint16_t gamma_q8 = 896;       // 3.5, the paper's gamma (Q8)
+  uint16_t leaf_gamma_q8 = 256;  // 1.0 (Q8)
 };
 
 enum class CutStatus : uint8_t {
@@ -65,7 +71,8 @@ class CutBounds {
   static size_t bytes(const SpgHeader& header);
   // `view` from spg_parse, `decoder` initialised on it; both are read during
   // init only.
-  [[nodiscard]] CutStatus init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes);
+  [[nodiscard]] CutStatus init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes,
+                               const ConeRule& cones = {});
   uint32_t node_count() const { return node_count_; }
 
  private:
@@ -85,7 +92,8 @@ class ViewCut {
  public:
   // `view` from spg_parse, `decoder` initialised on it; both are read during
   // init only. Builds its own bounds table; the cut starts empty.
-  [[nodiscard]] CutStatus init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes);
+  [[nodiscard]] CutStatus init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes,
+                               const ConeRule& cones = {});
   // Over shared bounds, which must outlive the cut.
   [[nodiscard]] CutStatus init(const CutBounds& bounds, void* storage, size_t bytes);
 

@@ -24,8 +24,8 @@ const char kCutHelp[] =
     "entering node costs its id and record, a leaving one its id: 4 + R and 4\n"
     "bytes) against resending the whole cut (4 + R a node), and the nodes the\n"
     "update visited. Protocol framing is not counted. The view and cut options\n"
-    "are render's: --size, --camera, --up, --max-size, --no-cull, --window,\n"
-    "--cache (the node budget).\n";
+    "are render's: --size, --camera, --up, --max-size, --no-cull, --leaf-cone,\n"
+    "--window, --cache (the node budget).\n";
 
 }  // namespace
 
@@ -57,7 +57,8 @@ int cmd_cut(int argc, char** argv) {
     return cli::fail(files[0] + ": the angle fields are wider than the decoder supports");
   std::vector<uint64_t> storage(view_cut_bytes(view.header) / 8 + 1);
   ViewCut cut;
-  if (cut.init(view, decoder, storage.data(), storage.size() * 8) != CutStatus::kOk) return cli::fail("cut: init failed");
+  if (cut.init(view, decoder, storage.data(), storage.size() * 8, cone_rule(o.rule)) != CutStatus::kOk)
+    return cli::fail("cut: init failed");
   const CutParams p = cut_params(o.rule, o.config);
   const ViewSpec base = resolve_view(o.view, view.header, decoder.extent_mu());
   const auto camera_at = [&](double yaw, Camera& c) {

@@ -10,6 +10,7 @@
 #include "platform/serial/serial_transport.h"
 #include "platform/tcp/tcp_transport.h"
 #include "tools/cli/cli.h"
+#include "tools/embedded/render_options.h"
 #include "tools/server/server.h"
 
 namespace stipple {
@@ -17,7 +18,7 @@ namespace {
 
 const char kServeHelp[] =
     "usage: stipple serve MODEL.spg [--tcp [ADDR:]PORT] [--serial DEV [--baud N]] [--max-clients N]\n"
-    "                     [--no-cull] [--once]\n"
+    "                     [--no-cull] [--leaf-cone G] [--once]\n"
     "\n"
     "Serves the model to clients (`stipple render --connect`, `stipple-handheld\n"
     "--connect`, the emulator): each gets the startup for the attributes it asks\n"
@@ -33,6 +34,7 @@ const char kServeHelp[] =
     "  --baud N            its rate (default 115200)\n"
     "  --max-clients N     refuse more clients than this at once (default 64)\n"
     "  --no-cull           send nodes outside the view and facing away too\n"
+    "  --leaf-cone G       a leaf's normal cone in sigma_n1 (default 1; docs/cut.md)\n"
     "  --once              exit once the last client has gone\n";
 
 volatile std::sig_atomic_t g_stop = 0;
@@ -55,6 +57,7 @@ int cmd_serve(int argc, char** argv) {
     o.max_clients = static_cast<uint32_t>(u);
   }
   o.cull = !args.flag("--no-cull");
+  if (args.value("--leaf-cone", v) && !parse_leaf_cone(v, o.cones.leaf_gamma_q8, error)) return cli::fail("serve: " + error);
   std::string serial;
   const bool has_serial = args.value("--serial", serial);
   unsigned long long baud = 115200;

@@ -133,6 +133,12 @@ CutParams cut_params(const CutRule& rule, const ClientConfig& config) {
   return p;
 }
 
+ConeRule cone_rule(const CutRule& rule) {
+  ConeRule c;
+  c.leaf_gamma_q8 = rule.leaf_cone_q8;
+  return c;
+}
+
 bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
                   const ViewSpec& spec, FixedRender& out, std::string& error, int frames, size_t (*heap_probe)()) {
   // The cut: a decoder over the whole file, as the server side will hold.
@@ -154,7 +160,7 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     std::vector<uint64_t> cut_storage(view_cut_bytes(view.header) / 8 + 1);
     ViewCut view_cut;
     const CutParams params = cut_params(rule, config);
-    if (view_cut.init(view, decoder, cut_storage.data(), cut_storage.size() * 8) != CutStatus::kOk ||
+    if (view_cut.init(view, decoder, cut_storage.data(), cut_storage.size() * 8, cone_rule(rule)) != CutStatus::kOk ||
         view_cut.update(camera, params) != CutStatus::kOk) {
       error = "the view cut failed";
       return false;

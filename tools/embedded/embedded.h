@@ -63,6 +63,8 @@ struct FixedRender {
 // The view cut's parameters for a projected-size rule and a client: its
 // threshold, culling and window, the client's screen, and its cache as the budget.
 CutParams cut_params(const CutRule& rule, const ClientConfig& config);
+// The normal cones of a rule (the leaf cone; the rest ConeRule's defaults).
+ConeRule cone_rule(const CutRule& rule);
 
 // Cuts the validated `view` by `rule` for the camera, feeds the client the
 // startup message and the cut's records, renders the frame `frames` times

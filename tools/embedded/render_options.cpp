@@ -36,6 +36,9 @@ const char kRenderOptionsHelp[] =
     "  --level L              instead: the nodes at tree level L and the leaves above\n"
     "  --no-cull              keep nodes outside the view and facing away (the cut\n"
     "                         culls them by their sphere and normal cone by default)\n"
+    "  --leaf-cone G          a leaf's normal cone in sigma_n1 (default 1; 3.5 culls\n"
+    "                         fewer nodes and loses no silhouette pixel, 0 the most:\n"
+    "                         docs/cut.md)\n"
     "  --window X0,Y0,X1,Y1   refine only nodes that project into this rectangle (px;\n"
     "                         TOG05's on-demand mode)\n"
     "client:\n"
@@ -54,6 +57,14 @@ const char kRenderOptionsHelp[] =
     "  --cache N              nodes the client's cache holds (default 30000): the\n"
     "                         cut is coarser rather than larger (--level: raised to\n"
     "                         the level's size)\n";
+
+bool parse_leaf_cone(const std::string& value, uint16_t& q8, std::string& error) {
+  double g = 0;
+  if (!cli::parse_double(value, g) || !(g >= 0 && g <= 8))
+    return error = "--leaf-cone: expected a multiple of sigma_n1 within [0, 8], got '" + value + "'", false;
+  q8 = static_cast<uint16_t>(std::lround(g * 256));
+  return true;
+}
 
 bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error) {
   std::string v;
@@ -127,6 +138,7 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
     c.raster.max_points = static_cast<uint32_t>(u);
   }
   if (args.flag("--no-cull")) o.rule.cull = false;
+  if (args.value("--leaf-cone", v) && !parse_leaf_cone(v, o.rule.leaf_cone_q8, error)) return false;
   if (args.value("--window", v)) {
     double w[4];
     const size_t last = v.rfind(',');

@@ -27,4 +27,7 @@ extern const char kRenderOptionsHelp[];
 // with a message naming the option on a bad value.
 bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error);
 
+// --leaf-cone's value: a multiple of sigma_n1 within [0, 8], as Q8.
+bool parse_leaf_cone(const std::string& value, uint16_t& q8, std::string& error);
+
 }  // namespace stipple

@@ -62,7 +62,7 @@ bool Server::init(std::vector<uint8_t> file, const std::string& name, const Serv
   if (decoder_.init(view_, decoder_storage_.data(), decoder_storage_.size() * 4) != DecodeStatus::kOk)
     return error = name + ": the angle fields are wider than the decoder supports", false;
   bounds_storage_.assign(CutBounds::bytes(view_.header) / 8 + 1, 0);
-  if (bounds_.init(view_, decoder_, bounds_storage_.data(), bounds_storage_.size() * 8) != CutStatus::kOk)
+  if (bounds_.init(view_, decoder_, bounds_storage_.data(), bounds_storage_.size() * 8, options_.cones) != CutStatus::kOk)
     return error = name + ": the cut's bounds could not be built", false;
   return true;
 }

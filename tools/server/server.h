@@ -30,6 +30,7 @@ namespace stipple {
 struct ServerOptions {
   uint32_t max_clients = 64;
   bool cull = true;  // frustum and back-face culling in every client's cut
+  ConeRule cones;    // the normal cones back faces are culled by
   std::function<void(const std::string&)> log;  // one line per event; none: quiet
 };
 
