@@ -15,6 +15,7 @@ namespace stipple {
 struct ViewCut::Bound {
   int32_t center[3];     // MU
   int32_t radius;        // gamma * sigma_p1, MU
+  int32_t subtree_radius;  // about the centre, holds this sphere and every descendant's (MU)
   uint32_t first_child;  // id of the first child (children are adjacent)
   int16_t normal[3];     // mean normal, Q14 (zero without normals)
   int16_t cone_sin_q14;  // sin of the normal cone's half-angle (CutBounds::init); 0x7FFF: none
@@ -22,11 +23,12 @@ struct ViewCut::Bound {
   uint8_t children;
   uint8_t pad1;
 };
-static_assert(sizeof(ViewCut::Bound) == 32);
+static_assert(sizeof(ViewCut::Bound) == 36);
 
 struct ViewCut::Eval {
   bool visible;   // to be sent if it stays in the cut
   bool split;     // to be replaced by its children
+  bool inside;    // its subtree sphere is wholly in the frustum and before the near plane
   uint32_t size;  // projected radius, 1/16 px (saturated)
 };
 
@@ -55,6 +57,7 @@ Layout layout_of(uint32_t n) {
 }
 
 constexpr int32_t kNoCone = 0x7FFF;
+constexpr uint32_t kInside = 0x80000000u;  // in the breadth-first queue: the node's subtree is wholly visible
 
 // A normal cone's half-angle below a quarter turn as its sine and cosine
 // (Q14); sin == kNoCone: a quarter turn or more (no cone).
@@ -101,6 +104,7 @@ CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void*
                           const ConeRule& cones) {
   bounds_ = nullptr;
   const uint32_t n = view.header.node_count;
+  if (n >= kInside) return CutStatus::kBadView;  // the queue's flag bit (a file holds far fewer)
   if (bytes < CutBounds::bytes(view.header)) return CutStatus::kStorageTooSmall;
   using Bound = ViewCut::Bound;
   Bound* bounds = static_cast<Bound*>(storage);
@@ -127,6 +131,26 @@ CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void*
                                : Cone{kNoCone, 0};
     b.cone_sin_q14 = static_cast<int16_t>(cone.sin);
     b.pad0 = static_cast<uint16_t>(cone.cos);
+  }
+  // Bottom up (children come after their parents): the sphere about each
+  // centre that holds its own and every descendant's, padded for the
+  // rounding of the camera transform (its rows' lengths are within 2^-12 of
+  // one), so a subtree found wholly visible holds only nodes that are.
+  for (uint32_t i = n; i-- > 0;) {
+    Bound& b = bounds[i];
+    int64_t big = b.radius;
+    for (uint32_t k = 0; k < b.children; ++k) {
+      const Bound& c = bounds[b.first_child + k];
+      uint64_t d2 = 0;
+      for (int a = 0; a < 3; ++a) {
+        const int64_t d = int64_t{c.center[a]} - b.center[a];
+        d2 += static_cast<uint64_t>(d * d);
+      }
+      const int64_t reach = static_cast<int64_t>(isqrt64(d2)) + 1 + c.subtree_radius;
+      if (reach > big) big = reach;
+    }
+    big += (big >> 10) + 4;
+    b.subtree_radius = big > (int64_t{1} << 30) ? (1 << 30) : static_cast<int32_t>(big);
   }
   if (normals_) {
     // Bottom up (children come after their parents): an internal node's
@@ -201,43 +225,59 @@ struct ViewCut::Frame {
   const Camera& camera;
   const CutParams& params;
   int64_t hyp_x, hyp_y;  // |(f, cx)| and |(f, cy)|: the side planes' normals' lengths, Q4, rounded up
+  bool split_sizes;      // a node that splits needs its size too (the budget's pass)
+  // camera_space as one affine map: c = (R p + t) >> 14 with t = 2^13 - R eye
+  // (the same integers: R (p - eye) is exact in 64 bits).
+  int64_t rotation[3][3];
+  int64_t offset[3];
+  int64_t eye[3], focal, cx, cy, near, max_size;  // the camera's and parameters' values, widened
+  bool cull_frustum, cull_backfaces, window;
 };
 
-ViewCut::Eval ViewCut::evaluate(const Frame& f, uint32_t id) const {
+// `inside`: an ancestor's subtree sphere was wholly in the frustum and
+// before the near plane, so this node's sphere is too (its tests would pass).
+[[gnu::always_inline]] inline ViewCut::Eval ViewCut::evaluate(const Frame& f, uint32_t id, bool inside) const {
   const Bound& b = bounds_[id];
-  const Camera& cam = f.camera;
-  const CutParams& p = f.params;
-  Eval e{false, false, 0};
-  int32_t c[3];
-  camera_space(cam, b.center, c);
-  const int64_t r = b.radius, z = c[2];
-  if (z + r < cam.near_mu) return e;  // wholly behind the near plane
-  const bool crosses_near = z - r < cam.near_mu;
-  if (!crosses_near && p.cull_frustum) {
-    // Planes through the eye and the screen's edges: f X = +-cx Z, f Y = +-cy Z.
-    const int64_t fx = int64_t{cam.focal_q4} * c[0], fy = int64_t{cam.focal_q4} * c[1];
-    const int64_t cxz = int64_t{cam.center_q4[0]} * z, cyz = int64_t{cam.center_q4[1]} * z;
-    if (fx - cxz > r * f.hyp_x || -fx - cxz > r * f.hyp_x || fy - cyz > r * f.hyp_y || -fy - cyz > r * f.hyp_y) return e;
+  Eval e{false, false, inside, 0};
+  const int64_t p0 = b.center[0], p1 = b.center[1], p2 = b.center[2];
+  const int64_t z = (f.rotation[2][0] * p0 + f.rotation[2][1] * p1 + f.rotation[2][2] * p2 + f.offset[2]) >> 14;
+  const int64_t r = b.radius;
+  bool crosses_near = false;
+  int64_t x = 0, y = 0;
+  if (!inside) {
+    if (z + r < f.near) return e;  // wholly behind the near plane
+    crosses_near = z - r < f.near;
+    const int64_t big = b.subtree_radius;
+    e.inside = z - big >= f.near;
+    if (!crosses_near && f.cull_frustum) {
+      // Planes through the eye and the screen's edges: f X = +-cx Z, f Y = +-cy Z.
+      x = (f.rotation[0][0] * p0 + f.rotation[0][1] * p1 + f.rotation[0][2] * p2 + f.offset[0]) >> 14;
+      const int64_t fx = f.focal * x, cxz = f.cx * z;
+      if (fx - cxz > r * f.hyp_x || -fx - cxz > r * f.hyp_x) return e;
+      y = (f.rotation[1][0] * p0 + f.rotation[1][1] * p1 + f.rotation[1][2] * p2 + f.offset[1]) >> 14;
+      const int64_t fy = f.focal * y, cyz = f.cy * z;
+      if (fy - cyz > r * f.hyp_y || -fy - cyz > r * f.hyp_y) return e;
+      // The same planes for the subtree's sphere, on the inside.
+      const int64_t bx = -big * f.hyp_x, by = -big * f.hyp_y;
+      e.inside = e.inside && fx - cxz <= bx && -fx - cxz <= bx && fy - cyz <= by && -fy - cyz <= by;
+    }
   }
-  if (p.cull_backfaces && normals_) {
+  const int64_t sin_a = b.cone_sin_q14;
+  if (f.cull_backfaces && sin_a < kQ14One) {
     // Facing away: the angle between the normal and d = eye - centre exceeds
     // 90 degrees + alpha (the cone's half-angle) + beta (the angle the sphere
     // subtends, sin beta = r / |d|). Conservatively, with sin(alpha + beta)
     // <= sin alpha + sin beta and an upper bound L >= |d|:
     //   cos(n, d) < -(sin alpha + r / L)  <=  n . d < -(sin alpha L + r)
     // (Q14 x MU). No square root or trigonometry per update.
-    const int64_t sin_a = b.cone_sin_q14;
-    if (sin_a < kQ14One) {
-      const int64_t d[3] = {int64_t{cam.eye[0]} - b.center[0], int64_t{cam.eye[1]} - b.center[1],
-                            int64_t{cam.eye[2]} - b.center[2]};
-      const int64_t dot = b.normal[0] * d[0] + b.normal[1] * d[1] + b.normal[2] * d[2];
-      if (dot < 0) {
-        // |d| <= m + (a + b) / 2 for the largest |component| m and the others a, b.
-        const int64_t a0 = d[0] < 0 ? -d[0] : d[0], a1 = d[1] < 0 ? -d[1] : d[1], a2 = d[2] < 0 ? -d[2] : d[2];
-        const int64_t m = a0 > a1 ? (a0 > a2 ? a0 : a2) : (a1 > a2 ? a1 : a2);
-        const int64_t len = m + (a0 + a1 + a2 - m + 1) / 2;
-        if (dot < -(sin_a * len + (r << 14))) return e;
-      }
+    const int64_t d0 = f.eye[0] - p0, d1 = f.eye[1] - p1, d2 = f.eye[2] - p2;
+    const int64_t dot = b.normal[0] * d0 + b.normal[1] * d1 + b.normal[2] * d2;
+    if (dot < 0) {
+      // |d| <= m + (a + b) / 2 for the largest |component| m and the others a, b.
+      const int64_t a0 = d0 < 0 ? -d0 : d0, a1 = d1 < 0 ? -d1 : d1, a2 = d2 < 0 ? -d2 : d2;
+      const int64_t m = a0 > a1 ? (a0 > a2 ? a0 : a2) : (a1 > a2 ? a1 : a2);
+      const int64_t len = m + (a0 + a1 + a2 - m + 1) / 2;
+      if (dot < -(sin_a * len + (r << 14))) return e;
     }
   }
   e.visible = true;
@@ -247,18 +287,28 @@ ViewCut::Eval ViewCut::evaluate(const Frame& f, uint32_t id) const {
     return e;
   }
   // Projected radius r f / Z (1/16 px), saturated; the split compares the
-  // products (below 2^52), as the simple cut does.
-  const int64_t size = r * cam.focal_q4 / z;
-  e.size = size > 0xFFFFFFFE ? 0xFFFFFFFEu : static_cast<uint32_t>(size);
-  if (b.children == 0) return e;
-  e.split = r * cam.focal_q4 > int64_t{p.max_size_q4} * z;
-  if (e.split && p.window[0] < p.window[2]) {
+  // products (below 2^52), as the simple cut does, and the division is made
+  // only where the size is needed: for a node that settles (its points-per-
+  // node index) or, under a binding budget, one that splits (its heap key).
+  const int64_t rf = r * f.focal;
+  const auto projected = [&] {
+    const int64_t size = rf / z;
+    return size > 0xFFFFFFFE ? 0xFFFFFFFEu : static_cast<uint32_t>(size);
+  };
+  e.split = b.children > 0 && rf > f.max_size * z;
+  if (e.split && f.window) {
     // Only inside the refinement window: the projected circle must meet it.
-    const int64_t x = cam.center_q4[0] + int64_t{cam.focal_q4} * c[0] / z;
-    const int64_t y = cam.center_q4[1] + int64_t{cam.focal_q4} * c[1] / z;
-    e.split = x + size >= int64_t{p.window[0]} * 16 && x - size < int64_t{p.window[2]} * 16 &&
-              y + size >= int64_t{p.window[1]} * 16 && y - size < int64_t{p.window[3]} * 16;
+    const CutParams& p = f.params;
+    if (!f.cull_frustum || inside) {
+      x = (f.rotation[0][0] * p0 + f.rotation[0][1] * p1 + f.rotation[0][2] * p2 + f.offset[0]) >> 14;
+      y = (f.rotation[1][0] * p0 + f.rotation[1][1] * p1 + f.rotation[1][2] * p2 + f.offset[1]) >> 14;
+    }
+    const int64_t size = projected();
+    const int64_t sx = f.cx + f.focal * x / z, sy = f.cy + f.focal * y / z;
+    e.split = sx + size >= int64_t{p.window[0]} * 16 && sx - size < int64_t{p.window[2]} * 16 &&
+              sy + size >= int64_t{p.window[1]} * 16 && sy - size < int64_t{p.window[3]} * 16;
   }
+  if (!e.split || f.split_sizes) e.size = projected();
   return e;
 }
 
@@ -292,7 +342,29 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
   const auto hyp = [&](int32_t c) {
     return static_cast<int64_t>(isqrt64(static_cast<uint64_t>(int64_t{camera.focal_q4} * camera.focal_q4 + int64_t{c} * c))) + 1;
   };
-  const Frame frame{camera, params, hyp(camera.center_q4[0]), hyp(camera.center_q4[1])};
+  Frame frame{camera,
+              params,
+              hyp(camera.center_q4[0]),
+              hyp(camera.center_q4[1]),
+              false,
+              {},
+              {},
+              {camera.eye[0], camera.eye[1], camera.eye[2]},
+              camera.focal_q4,
+              camera.center_q4[0],
+              camera.center_q4[1],
+              camera.near_mu,
+              params.max_size_q4,
+              params.cull_frustum,
+              params.cull_backfaces && normals_,
+              params.window[0] < params.window[2]};
+  for (int k = 0; k < 3; ++k) {
+    frame.offset[k] = 1 << 13;
+    for (int j = 0; j < 3; ++j) {
+      frame.rotation[k][j] = camera.rotation[k][j];
+      frame.offset[k] -= int64_t{camera.rotation[k][j]} * camera.eye[j];
+    }
+  }
   // The previous sent set is kept for the delta.
   for (uint32_t i = 0; i < sent_count_; ++i) previous_[i] = sent_[i];
   previous_count_ = sent_count_;
@@ -316,25 +388,37 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
   // A binding budget stops it early (too many sent, or too many visited for
   // the budget: the greedy pass then costs what the budget allows).
   const uint64_t visit_limit = 4 * uint64_t{params.max_nodes} + 8;
-  while (head < tail && sent_count_ <= params.max_nodes && visited_ <= visit_limit) {
-    const uint32_t id = queue[head++];
-    ++visited_;
-    const Eval e = evaluate(frame, id);
-    if (!e.split) {
-      settle(id, e);
-      continue;
+  {
+    uint32_t cut_count = 0, sent_count = 0, visited = 0;
+    while (head < tail && sent_count <= params.max_nodes && visited <= visit_limit) {
+      const uint32_t id = queue[head++];
+      ++visited;
+      const Eval e = evaluate(frame, id & ~kInside, id & kInside);
+      if (!e.split) {
+        cut_[cut_count++] = NodeId{id & ~kInside};
+        if (e.visible) {
+          sent_[sent_count] = NodeId{id & ~kInside};
+          sent_size_[sent_count++] = e.size;
+        }
+        continue;
+      }
+      const Bound& b = bounds_[id & ~kInside];
+      const uint32_t flag = e.inside ? kInside : 0;
+      for (uint32_t k = 0; k < b.children; ++k) queue[tail++] = (b.first_child + k) | flag;
     }
-    const Bound& b = bounds_[id];
-    for (uint32_t k = 0; k < b.children; ++k) queue[tail++] = b.first_child + k;
+    cut_count_ = cut_count;
+    sent_count_ = sent_count;
+    visited_ = visited;
   }
   if (head < tail || sent_count_ > params.max_nodes) {
     // The budget binds: refine largest projected size first. The sent nodes
     // so far are the settled visible ones plus every node waiting in the heap
     // (all visible).
     cut_count_ = sent_count_ = 0;
+    frame.split_sizes = true;
     const auto place = [&](uint32_t id) {
       ++visited_;
-      const Eval e = evaluate(frame, id);
+      const Eval e = evaluate(frame, id, false);
       if (e.split) heap_push(e.size, id);
       else settle(id, e);
     };
@@ -347,11 +431,11 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
       if (room && uint64_t{sent_count_} + heap_count_ + b.children > params.max_nodes) {
         // The split's cost: its visible children replace it.
         uint32_t visible = 0;
-        for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(frame, b.first_child + k).visible;
+        for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(frame, b.first_child + k, false).visible;
         room = uint64_t{sent_count_} + heap_count_ + visible <= params.max_nodes;
       }
       if (!room) {  // the budget is spent: this node and all still waiting stay whole
-        settle(id, Eval{true, false, static_cast<uint32_t>(top >> 32)});
+        settle(id, Eval{true, false, false, static_cast<uint32_t>(top >> 32)});
         continue;
       }
       for (uint32_t k = 0; k < b.children; ++k) place(b.first_child + k);

@@ -60,11 +60,11 @@ struct ConeRule {
 enum class CutStatus : uint8_t {
   kOk = 0,
   kStorageTooSmall,  // init: fewer bytes than view_cut_bytes
-  kBadView,          // init: a node fails to decode (never for a view spg_parse accepted)
+  kBadView,          // init: a node fails to decode, or 2^31 nodes or more (never for a view spg_parse accepted)
   kNotReady,         // update before a successful init
 };
 
-// The per-node bounds a cut is derived from (32 bytes a node), built once
+// The per-node bounds a cut is derived from (36 bytes a node), built once
 // per model and shared, read-only, by every client's cut.
 class CutBounds {
  public:
@@ -83,7 +83,7 @@ class CutBounds {
 };
 
 // Storage for one cut of a tree of `header.node_count` nodes: with its own
-// bounds, 64 1/4 bytes a node (view_cut_bytes); over shared bounds, 32 1/4
+// bounds, 68 1/4 bytes a node (view_cut_bytes); over shared bounds, 32 1/4
 // (view_cut_state_bytes).
 size_t view_cut_bytes(const SpgHeader& header);
 size_t view_cut_state_bytes(const SpgHeader& header);
@@ -128,7 +128,7 @@ class ViewCut {
  private:
   struct Eval;
   struct Frame;  // one update's camera, parameters and what follows from them
-  Eval evaluate(const Frame& f, uint32_t node) const;
+  Eval evaluate(const Frame& f, uint32_t node, bool inside) const;
   void heap_push(uint32_t size, uint32_t node);
   uint64_t heap_pop();
 

@@ -1,6 +1,9 @@
 // stipple platform — the loopback transport. See loopback_transport.h.
 #include "platform/loopback/loopback_transport.h"
 
+#include <algorithm>
+#include <cstring>
+
 namespace stipple {
 
 LoopbackPipe::LoopbackPipe(size_t capacity) : capacity_(capacity) {
@@ -17,7 +20,9 @@ TransportStatus LoopbackEnd::read(uint8_t* out, size_t capacity, size_t* moved) 
   if (pipe_->closed_[side_]) return TransportStatus::kClosed;
   if (r.size == 0) return pipe_->closed_[1 - side_] ? TransportStatus::kClosed : TransportStatus::kTimeout;
   const size_t n = capacity < r.size ? capacity : r.size;
-  for (size_t i = 0; i < n; ++i) out[i] = r.bytes[(r.head + i) % pipe_->capacity_];
+  const size_t first = std::min(n, pipe_->capacity_ - r.head);  // up to the ring's end, then from its start
+  std::memcpy(out, r.bytes.get() + r.head, first);
+  std::memcpy(out + first, r.bytes.get(), n - first);
   r.head = (r.head + n) % pipe_->capacity_;
   r.size -= n;
   *moved = n;
@@ -30,7 +35,9 @@ TransportStatus LoopbackEnd::write(const uint8_t* data, size_t size, size_t* mov
   LoopbackPipe::Ring& r = pipe_->rings_[side_];
   const size_t room = pipe_->capacity_ - r.size, n = size < room ? size : room;
   if (n == 0) return TransportStatus::kTimeout;
-  for (size_t i = 0; i < n; ++i) r.bytes[(r.head + r.size + i) % pipe_->capacity_] = data[i];
+  const size_t tail = (r.head + r.size) % pipe_->capacity_, first = std::min(n, pipe_->capacity_ - tail);
+  std::memcpy(r.bytes.get() + tail, data, first);
+  std::memcpy(r.bytes.get(), data + first, n - first);
   r.size += n;
   *moved = n;
   return TransportStatus::kOk;
