@@ -3,7 +3,8 @@
 # Debian's packages. Runs apt-get directly as root, through sudo otherwise.
 set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev clang
-  g++-arm-linux-gnueabi g++-arm-linux-gnueabihf g++-aarch64-linux-gnu qemu-user)  # cross builds, their emulator
+  g++-arm-linux-gnueabi g++-arm-linux-gnueabihf g++-aarch64-linux-gnu qemu-user  # cross builds, their emulator
+  socat)  # a linked pseudo-terminal pair: the serial line in the CLI tests
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -163,6 +163,7 @@ int render_stream(const std::string& source, bool remote, const RenderOptions& o
     if (!read_file(source, file, error)) return cli::fail(error);
     ServerOptions so;
     so.cull = o.rule.cull;
+    so.cones = cone_rule(o.rule);
     if (!local.init(std::move(file), source, so, error)) return cli::fail(error);
     local.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
     link = &pipe.client();
@@ -203,6 +204,7 @@ int render_stream(const std::string& source, bool remote, const RenderOptions& o
     received = model.bytes_received();
     log += line;
   }
+  model.close();
   if (folder && !write_file_atomic(output + "/frames.log", std::vector<uint8_t>(log.begin(), log.end()), error))
     return cli::fail(error);
   std::printf("%s: %u frame%s through the %s, %llu bytes received -> %s\n", source.c_str(), steps, steps == 1 ? "" : "s",

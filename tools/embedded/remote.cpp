@@ -18,6 +18,16 @@ Hello hello_for(const ClientConfig& config) {
   return h;
 }
 
+void RemoteModel::close() {
+  if (transport_ == nullptr) return;
+  uint8_t payload[kFaultBytes];
+  write_fault(Fault{}, payload);
+  std::string ignored;
+  options_.reconnect = nullptr;  // a server already gone is not redialled to say goodbye
+  (void)send(MessageType::kClose, payload, kFaultBytes, ignored);
+  transport_ = nullptr;
+}
+
 bool RemoteModel::send(MessageType type, const uint8_t* payload, size_t size, std::string& error) {
   size_t n = write_frame(type, sequence_, payload, size, frame_.data(), frame_.size());
   const uint8_t* bytes = frame_.data();

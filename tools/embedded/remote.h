@@ -46,6 +46,9 @@ class RemoteModel {
   // Sends the camera and waits for its update-end.
   bool view(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error);
   bool render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats, std::string& error);
+  // Says goodbye (a close frame, reason normal) so the server lets this
+  // client go at once — over a serial line nothing else tells it.
+  void close();
   Client& client() { return client_; }
   const SpgHeader& header() const { return client_.cache().header(); }
   uint64_t bytes_received() const { return bytes_received_; }

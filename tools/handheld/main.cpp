@@ -145,6 +145,7 @@ int run(int argc, char** argv) {
       frame.frame_seconds.push_back(monotonic_seconds() - start);
     }
     frame.heap_bytes = memory ? heap_in_use() : 0;
+    server.close();
     frame.arena_bytes = client_arena_bytes(config);
     frame.cut.resize(server.client().node_count());
     image_from_frame(frame.frame.data(), row, config.raster.width, config.raster.height, config.raster.format, frame.image);

@@ -256,7 +256,7 @@ size_t Server::step(int timeout_ms) {
   for (size_t i = 0; i < clients_.size();) {
     if (clients_[i]->gone) {
       Client& c = *clients_[i];
-      log(c.name + ": removed after " + std::to_string(c.report.updates) + " updates (last cut " +
+      log(c.name + ": removed after " + std::to_string(c.report.updates) + (c.report.updates == 1 ? " update" : " updates") + " (last cut " +
           std::to_string(c.report.cut_nodes) + " nodes), " + std::to_string(c.report.bytes_out) + " bytes sent");
       c.transport->close();
       clients_.erase(clients_.begin() + static_cast<long>(i));
