@@ -18,6 +18,8 @@ bool message_type_known(uint8_t t) {
     case MessageType::kCamera:
     case MessageType::kKeepAlive:
     case MessageType::kClose:
+    case MessageType::kAck:
+    case MessageType::kResend:
     case MessageType::kStartup:
     case MessageType::kNodes:
     case MessageType::kDrop:
@@ -33,6 +35,8 @@ const char* message_type_name(uint8_t t) {
     case MessageType::kCamera: return "camera";
     case MessageType::kKeepAlive: return "keep-alive";
     case MessageType::kClose: return "close";
+    case MessageType::kAck: return "ack";
+    case MessageType::kResend: return "resend";
     case MessageType::kStartup: return "startup";
     case MessageType::kNodes: return "nodes";
     case MessageType::kDrop: return "drop";
@@ -248,6 +252,18 @@ bool parse_fault(const uint8_t* p, size_t size, Fault* out) {
   out->reason = static_cast<CloseReason>(p[0]);
   out->status = static_cast<FrameStatus>(p[1]);
   out->sequence = load_u16le(p + 2);
+  return true;
+}
+
+size_t write_sequence(uint16_t sequence, uint8_t out[kSequenceBytes]) {
+  store_u16le(out, sequence);
+  out[2] = out[3] = 0;
+  return kSequenceBytes;
+}
+
+bool parse_sequence(const uint8_t* p, size_t size, uint16_t* out) {
+  if (size != kSequenceBytes || p[2] != 0 || p[3] != 0) return false;
+  *out = load_u16le(p);
   return true;
 }
 

@@ -39,6 +39,8 @@ enum class MessageType : uint8_t {
   kCamera = 0x02,     // a camera update (and the cut's threshold and refinement window)
   kKeepAlive = 0x03,  // either direction, empty
   kClose = 0x04,      // either direction: a reason code
+  kAck = 0x05,        // serial lines: every server frame before this sequence arrived whole
+  kResend = 0x06,     // serial lines: resend from this sequence on (it, or one after it, was lost)
   // Server -> client.
   kStartup = 0x81,    // the startup message (.spg header and class tables) for the attributes asked
   kNodes = 0x82,      // nodes entering the client's cut: count, then (id, record) each
@@ -157,6 +159,11 @@ struct Fault {
 inline constexpr size_t kFaultBytes = 4;
 size_t write_fault(const Fault& f, uint8_t out[kFaultBytes]);
 [[nodiscard]] bool parse_fault(const uint8_t* payload, size_t size, Fault* out);
+
+// kAck and kResend: a server frame sequence (u16) and two zero bytes.
+inline constexpr size_t kSequenceBytes = 4;
+size_t write_sequence(uint16_t sequence, uint8_t out[kSequenceBytes]);
+[[nodiscard]] bool parse_sequence(const uint8_t* payload, size_t size, uint16_t* out);
 
 // kNodes: u32 count, then count x (u32 id, record_bytes record). The payload
 // must be exactly that long and every id below node_count.

@@ -100,6 +100,8 @@ class StreamReceiver {
   const Fault& fault() const { return fault_; }
   uint64_t bytes_received() const { return bytes_; }
   uint32_t frames() const { return frames_; }
+  // The sequence the next frame must carry.
+  uint16_t expected_sequence() const { return reader_.expected_sequence(); }
 
  private:
   ReceiveStatus apply(const Frame& frame);

@@ -11,6 +11,7 @@
 #include <atomic>
 #include <chrono>
 #include <mutex>
+#include <random>
 #include <cstring>
 #include <thread>
 
@@ -176,8 +177,8 @@ TEST(Server, NoisySerialLinkRecoversToTheCleanImage) {
   o.log = [&](const std::string& line) { log.push_back(line); };
   ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
   LinkProfile down = kSerial115200, up = kSerial115200;
-  down.loss_per_million = 15;
-  down.flip_per_million = 15;
+  down.loss_per_million = 40;
+  down.flip_per_million = 40;
   down.seed = 7;
   up.loss_per_million = 2000;  // a lost hello or camera: the client says hello again after a silence
   up.flip_per_million = 2000;
@@ -199,6 +200,7 @@ TEST(Server, NoisySerialLinkRecoversToTheCleanImage) {
   };
   ro.pump_context = &loop;
   ro.timeout_ms = 20000;
+  ro.silence_ms = 250;
   ASSERT_TRUE(remote.connect(pipe.client(), device(), ro, error)) << error;
   for (double yaw : {30.0, 75.0, 120.0, 200.0}) {
     const std::vector<uint8_t> frame = remote_frame(remote, local, yaw, error);
@@ -248,6 +250,93 @@ TEST(Server, SerialTransportOverAPtyPair) {
   EXPECT_NE(refused.find("README.md: not a serial line"), std::string::npos) << refused;
   EXPECT_FALSE(not_a_tty.open(slave, 12345, refused));
   EXPECT_NE(refused.find("12345 baud is not a termios rate"), std::string::npos) << refused;
+}
+
+// A line that loses and flips bytes on their way out (seeded, rates per
+// million bytes), around a real transport.
+class NoisyLine final : public Transport {
+ public:
+  NoisyLine(Transport& to, uint32_t drop_ppm, uint32_t flip_ppm, uint32_t seed)
+      : to_(to), rng_(seed), drop_ppm_(drop_ppm), flip_ppm_(flip_ppm) {}
+  TransportStatus read(uint8_t* out, size_t capacity, size_t* moved) override { return to_.read(out, capacity, moved); }
+  TransportStatus write(const uint8_t* data, size_t size, size_t* moved) override {
+    *moved = 0;
+    for (size_t i = 0; i < size; ++i) {
+      if (!decided_) {  // once per byte, however many tries it takes to write it
+        drop_ = rng_() % 1000000 < drop_ppm_;
+        mask_ = rng_() % 1000000 < flip_ppm_ ? static_cast<uint8_t>(1u << (rng_() % 8)) : 0;
+        decided_ = true;
+      }
+      if (!drop_) {
+        const uint8_t b = data[i] ^ mask_;
+        size_t m = 0;
+        const TransportStatus st = to_.write(&b, 1, &m);
+        if (st != TransportStatus::kOk || m == 0) return *moved > 0 ? TransportStatus::kOk : st;
+        flipped += mask_ != 0;
+      } else {
+        ++dropped;
+      }
+      decided_ = false;
+      ++*moved;
+    }
+    return TransportStatus::kOk;
+  }
+  void close() override { to_.close(); }
+  const char* last_error() const override { return to_.last_error(); }
+  uint64_t dropped = 0, flipped = 0;
+
+ private:
+  Transport& to_;
+  std::mt19937 rng_;
+  uint32_t drop_ppm_, flip_ppm_;
+  bool decided_ = false, drop_ = false;
+  uint8_t mask_ = 0;
+};
+
+// A noisy tty: the pseudo-terminal pair with bytes lost and flipped both
+// ways; the client resynchronises and its converged frames still equal the
+// clean local render byte for byte.
+TEST(Server, NoisyPtyPairRecoversToTheCleanImage) {
+  const Local local;
+  Server server;
+  std::string error, slave;
+  std::vector<std::string> log;
+  ServerOptions o;
+  o.log = [&](const std::string& line) { log.push_back(line); };
+  ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
+  int master = -1;
+  ASSERT_TRUE(open_pty_pair(&master, &slave, error)) << error;
+  SerialTransport master_end;
+  ASSERT_TRUE(master_end.adopt(master, "pty master", error)) << error;
+  auto down = std::make_unique<NoisyLine>(master_end, 40, 40, 9);
+  NoisyLine* down_line = down.get();
+  server.add_client(std::move(down), master, "noisy pty", true);
+  SerialTransport client_end;
+  ASSERT_TRUE(client_end.open(slave, 115200, error)) << error;
+  NoisyLine up(client_end, 1500, 1500, 4);
+  RemoteModel remote;
+  RemoteModel::Options ro;
+  ro.serial = true;
+  ro.pump = [](void* s) {
+    static_cast<Server*>(s)->step(1);
+    return true;
+  };
+  ro.pump_context = &server;
+  ro.timeout_ms = 30000;
+  ro.silence_ms = 250;
+  ASSERT_TRUE(remote.connect(up, device(), ro, error)) << error;
+  for (double yaw : {30.0, 150.0, 260.0}) {
+    const std::vector<uint8_t> frame = remote_frame(remote, local, yaw, error);
+    std::string lines;
+    for (const std::string& l : log) lines += "\n  " + l;
+    ASSERT_FALSE(frame.empty()) << error << ", resyncs " << remote.resyncs() << ", server log:" << lines;
+    EXPECT_EQ(frame, local.render(yaw).frame) << "yaw " << yaw;
+  }
+  std::printf("noisy pty: %llu bytes lost and %llu flipped on the way down, %llu and %llu up, %u resyncs\n",
+              static_cast<unsigned long long>(down_line->dropped), static_cast<unsigned long long>(down_line->flipped),
+              static_cast<unsigned long long>(up.dropped), static_cast<unsigned long long>(up.flipped), remote.resyncs());
+  EXPECT_GT(down_line->dropped + down_line->flipped, 0u);
+  EXPECT_GT(remote.resyncs(), 0u);
 }
 
 // The server on 127.0.0.1 in its own thread; clients connect over TCP.

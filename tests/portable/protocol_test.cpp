@@ -184,6 +184,16 @@ TEST(Protocol, MessagesParseOnlyInRange) {
   EXPECT_EQ(fb.sequence, 77);
   fbuf[0] = 200;
   EXPECT_FALSE(parse_fault(fbuf, kFaultBytes, &fb));
+  // Acks and resends: a sequence, then two zero bytes.
+  uint8_t sbuf[kSequenceBytes];
+  uint16_t seq = 0;
+  ASSERT_EQ(write_sequence(0xBEEF, sbuf), kSequenceBytes);
+  ASSERT_TRUE(parse_sequence(sbuf, kSequenceBytes, &seq));
+  EXPECT_EQ(seq, 0xBEEF);
+  EXPECT_FALSE(parse_sequence(sbuf, kSequenceBytes - 1, &seq));
+  sbuf[3] = 1;
+  EXPECT_FALSE(parse_sequence(sbuf, kSequenceBytes, &seq));
+  EXPECT_STREQ(message_type_name(static_cast<uint8_t>(MessageType::kResend)), "resend");
 }
 
 TEST(Cobs, RoundTripsAtBlockBoundaries) {

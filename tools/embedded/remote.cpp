@@ -78,11 +78,12 @@ bool RemoteModel::wait(Awaited what, std::string& error) {
       if (!take(buf, got, error)) return false;
       continue;
     }
-    // A serial line silent for a second: our hello or camera may have been
-    // lost on the way up. Say hello again (the stream, and the view, start over).
-    if (options_.serial && std::chrono::steady_clock::now() - heard > std::chrono::seconds(1)) {
+    // A serial line silent for a second: our hello, camera or resend may
+    // have been lost on the way up, or the server's last frames on the way
+    // down. Ask again.
+    if (options_.serial && std::chrono::steady_clock::now() - heard > std::chrono::milliseconds(options_.silence_ms)) {
       heard = std::chrono::steady_clock::now();
-      if (!resync(error)) return false;
+      if (!ask_again(error)) return false;
     }
     if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
       if (options_.reconnect == nullptr)
@@ -118,23 +119,29 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
     const ReceiveStatus r = receiver_.receive(data, size);
     return r == ReceiveStatus::kOk || fail(r);
   }
-  // A serial line: packet by packet. Noise costs a resync: a hello, then the
-  // stream again from its startup, then the view again.
+  // A serial line: packet by packet, each a whole frame in sequence. Noise
+  // costs a resend (go-back-N): a damaged packet, or one whose sequence is
+  // not the next, makes the client ask for everything from the next it
+  // expects and skip packets until that one comes; what arrived whole before
+  // it stays applied.
   for (size_t i = 0; i < size; ++i) {
     const CobsStatus cs = deframer_.push(data[i]);
-    // A damaged packet: resynchronise (again, if the startup itself may have
-    // been the damaged one: the server starts over at each hello).
-    if (cs == CobsStatus::kDropped && !resync(error)) return false;
+    if (cs == CobsStatus::kDropped && !lost(error)) return false;
     if (cs != CobsStatus::kPacket) continue;
     const uint8_t* p = deframer_.packet();
     const size_t n = deframer_.packet_bytes();
-    if (resyncing_) {
-      // Only a whole, valid startup that opens a stream ends the resync.
-      const bool whole = n >= kFrameHeaderBytes + kFrameTrailerBytes && load_u32le(p + n - 4) == crc32(p, n - 4);
-      if (!whole && !resync(error)) return false;
-      if (!whole || p[0] != static_cast<uint8_t>(MessageType::kStartup) || load_u16le(p + 2) != 0) continue;
+    const bool whole = n >= kFrameHeaderBytes + kFrameTrailerBytes && load_u32le(p + n - 4) == crc32(p, n - 4);
+    if (!whole) {
+      if (!lost(error)) return false;
+      continue;
+    }
+    const uint16_t sequence = load_u16le(p + 2);
+    if (p[0] == static_cast<uint8_t>(MessageType::kStartup) && sequence == 0 && receiver_.expected_sequence() != 0) {
+      // The server started the stream over (it no longer had what we asked
+      // for, or it answers a hello): a new cache from this startup, and the
+      // view asked for again.
       receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
-      resyncing_ = false;
+      gap_ = false;
       const ReceiveStatus r = receiver_.receive(p, n);
       if (r != ReceiveStatus::kOk) return fail(r);
       if (has_camera_) {
@@ -144,14 +151,46 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
       }
       continue;
     }
-    const ReceiveStatus r = receiver_.receive(p, n);
-    if (r == ReceiveStatus::kBadFrame) {  // damaged, or one went missing before it
-      if (!resync(error)) return false;
+    if (sequence != receiver_.expected_sequence()) {  // one went missing before it
+      if (!lost(error)) return false;
       continue;
     }
+    gap_ = false;
+    const ReceiveStatus r = receiver_.receive(p, n);
     if (r != ReceiveStatus::kOk) return fail(r);
+    // Acknowledge every 8 frames and each update-end: the server forgets
+    // what it kept for a resend.
+    if (++unacknowledged_ >= 8 || p[0] == static_cast<uint8_t>(MessageType::kUpdateEnd)) {
+      unacknowledged_ = 0;
+      uint8_t payload[kSequenceBytes];
+      write_sequence(receiver_.expected_sequence(), payload);
+      if (!send(MessageType::kAck, payload, kSequenceBytes, error)) return false;
+    }
   }
   return true;
+}
+
+bool RemoteModel::lost(std::string& error) {
+  if (gap_) return true;  // asked already; the frames in flight before the resend are skipped
+  gap_ = true;
+  ++resyncs_;
+  uint8_t payload[kSequenceBytes];
+  write_sequence(receiver_.expected_sequence(), payload);
+  return send(MessageType::kResend, payload, kSequenceBytes, error);
+}
+
+bool RemoteModel::ask_again(std::string& error) {
+  ++resyncs_;
+  uint8_t payload[kCameraUpdateBytes];
+  if (receiver_.expected_sequence() == 0) {  // not even the startup came: the hello may be lost
+    write_hello(hello_, payload);
+    return send(MessageType::kHello, payload, kHelloBytes, error);
+  }
+  write_sequence(receiver_.expected_sequence(), payload);
+  if (!send(MessageType::kResend, payload, kSequenceBytes, error)) return false;
+  if (!has_camera_) return true;
+  write_camera_update(last_camera_, payload);  // cameras are idempotent
+  return send(MessageType::kCamera, payload, kCameraUpdateBytes, error);
 }
 
 bool RemoteModel::reconnect(std::string& error) {
@@ -165,7 +204,8 @@ bool RemoteModel::reconnect(std::string& error) {
   // startup; the hello, then the view we were waiting for.
   receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
   deframer_.init(cobs_storage_.data(), cobs_storage_.size());
-  resyncing_ = false;
+  gap_ = false;
+  unacknowledged_ = 0;
   sequence_ = 0;
   uint8_t payload[kCameraUpdateBytes];
   write_hello(hello_, payload);
@@ -175,14 +215,6 @@ bool RemoteModel::reconnect(std::string& error) {
     if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
   }
   return true;
-}
-
-bool RemoteModel::resync(std::string& error) {
-  resyncing_ = true;
-  ++resyncs_;
-  uint8_t payload[kHelloBytes];
-  write_hello(hello_, payload);
-  return send(MessageType::kHello, payload, kHelloBytes, error);
 }
 
 bool RemoteModel::connect(Transport& transport, const ClientConfig& config, const Options& options, std::string& error) {

@@ -34,8 +34,9 @@ class RemoteModel {
     bool (*pump)(void* context) = nullptr;  // false: stop waiting
     void* pump_context = nullptr;
     int timeout_ms = 15000;         // the longest wait for the server
+    int silence_ms = 1000;          // serial: a silence this long while waiting means something was lost
     bool serial = false;            // COBS-framed frames; a damaged or missing one makes the
-                                    // client say hello again and ask for its view afresh
+                                    // client ask for a resend from it (go-back-N)
     // When the server goes away: a new link to it (and its fd), or null to
     // give up. The client then says hello again and asks for its view.
     Transport* (*reconnect)(void* context, int* fd) = nullptr;
@@ -53,7 +54,7 @@ class RemoteModel {
   const SpgHeader& header() const { return client_.cache().header(); }
   uint64_t bytes_received() const { return bytes_received_; }
   uint64_t bytes_sent() const { return bytes_sent_; }
-  uint32_t resyncs() const { return resyncs_; }
+  uint32_t resyncs() const { return resyncs_; }  // serial: resends asked for, and hellos repeated
   uint32_t reconnects() const { return reconnects_; }
 
  private:
@@ -62,7 +63,8 @@ class RemoteModel {
   bool done(Awaited what) const;
   bool wait(Awaited what, std::string& error);
   bool take(const uint8_t* data, size_t size, std::string& error);  // bytes from the link
-  bool resync(std::string& error);
+  bool lost(std::string& error);       // serial: a frame did not arrive whole: ask for a resend
+  bool ask_again(std::string& error);  // serial: a silence: the hello, or a resend and the camera, again
   bool reconnect(std::string& error);  // a new link, a new stream
 
   Transport* transport_ = nullptr;
@@ -76,7 +78,8 @@ class RemoteModel {
   uint64_t bytes_sent_ = 0, bytes_received_ = 0;
   std::vector<uint8_t> cobs_storage_, cobs_out_;
   CobsDeframer deframer_;
-  bool resyncing_ = false, has_camera_ = false, in_reconnect_ = false;
+  bool gap_ = false, has_camera_ = false, in_reconnect_ = false;
+  uint32_t unacknowledged_ = 0;
   uint32_t resyncs_ = 0, reconnects_ = 0;
   Hello hello_;
   CameraUpdate last_camera_;

@@ -9,6 +9,9 @@
 #include "platform/tcp/tcp_transport.h"
 
 namespace stipple {
+namespace {
+constexpr size_t kRetainedBytes = size_t{4} << 20;  // most unacknowledged bytes kept for a serial client
+}  // namespace
 
 struct Server::Client {
   uint32_t id = 0;
@@ -19,8 +22,17 @@ struct Server::Client {
   StreamSender sender;
   uint8_t in_storage[4096];  // client -> server frames are small; larger ones are refused
   FrameReader reader;
-  std::vector<uint8_t> out;  // frames not yet written
+  std::vector<uint8_t> out;  // frames not yet written (serial: and those not yet acknowledged)
   size_t out_at = 0;
+  // Serial: each frame in `out` the client has not acknowledged, oldest
+  // first — its sequence and where it starts — for a resend (go-back-N).
+  struct Retained {
+    uint16_t sequence;
+    size_t at;
+  };
+  std::vector<Retained> retained;
+  Hello hello_message;
+  uint32_t resends = 0;
   bool hello = false, pending = false, closing = false, gone = false;
   bool serial = false;
   std::vector<uint8_t> cobs_storage;
@@ -36,11 +48,28 @@ struct Server::Client {
       return true;
     }
     const size_t at = c->out.size();
+    c->retained.push_back({load_u16le(frame + 2), at});
     c->out.resize(at + cobs_bound(size));
     c->out.resize(at + cobs_encode(frame, size, c->out.data() + at, c->out.size() - at));
     return true;
   }
   bool idle() const { return out_at == out.size(); }
+
+  // Forgets the retained frames before `sequence` that are written, and
+  // their bytes once they are many (or all of them).
+  void release(uint16_t sequence) {
+    size_t n = 0;
+    while (n < retained.size() && static_cast<int16_t>(sequence - retained[n].sequence) > 0 &&
+           (n + 1 < retained.size() ? retained[n + 1].at : out.size()) <= out_at)
+      ++n;
+    if (n == 0) return;
+    retained.erase(retained.begin(), retained.begin() + static_cast<long>(n));
+    const size_t cut = retained.empty() ? out_at : retained.front().at;
+    if (cut < (1u << 16) && !retained.empty()) return;  // compact in large steps
+    out.erase(out.begin(), out.begin() + static_cast<long>(cut));
+    out_at -= cut;
+    for (Retained& r : retained) r.at -= cut;
+  }
 };
 
 Server::Server() = default;
@@ -122,6 +151,7 @@ void Server::handle(Client& c, const Frame& f) {
       if (c.hello && c.serial) {  // a serial client resynchronising: the stream starts over
         c.out.clear();
         c.out_at = 0;
+        c.retained.clear();
         c.pending = false;
         log(c.name + ": hello again (resynchronising), " + std::to_string(c.dropped_packets) + " packets dropped so far");
       }
@@ -134,6 +164,7 @@ void Server::handle(Client& c, const Frame& f) {
       if (!c.sender.start(h, Client::sink, &c))
         return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "the hello could not be served");
       c.hello = c.report.hello = true;
+      c.hello_message = h;
       char line[160];
       std::snprintf(line, sizeof line, "%s: hello %ux%u %s, attributes%s%s, cache %u nodes", c.name.c_str(), h.width,
                     h.height, h.pixel_format ? "rgb888" : "rgb565", h.attributes & kWantNormals ? " normals" : "",
@@ -151,6 +182,32 @@ void Server::handle(Client& c, const Frame& f) {
       return;
     }
     case MessageType::kKeepAlive: (void)c.sender.send(MessageType::kKeepAlive, nullptr, 0, Client::sink, &c); return;
+    case MessageType::kAck:
+    case MessageType::kResend: {
+      uint16_t sequence = 0;
+      if (!parse_sequence(f.payload, f.payload_bytes, &sequence))
+        return close_client(c, CloseReason::kBadFrame, FrameStatus::kBadPayload, f.sequence,
+                            std::string("a malformed ") + message_type_name(static_cast<uint8_t>(f.type)));
+      if (!c.serial || !c.hello) return;  // a socket loses nothing; before the hello there is nothing to resend
+      if (f.type == MessageType::kAck) return c.release(sequence);
+      for (const Client::Retained& r : c.retained) {
+        if (r.sequence == sequence) {  // go back: everything from there is written again
+          c.out_at = r.at;
+          ++c.resends;
+          return;
+        }
+      }
+      if (sequence == c.sender.next_sequence()) return;  // nothing after it was sent yet
+      // Not retained any more: the stream starts over, and with it the view.
+      log(c.name + ": frame " + std::to_string(sequence) + " asked again is no longer kept: starting over");
+      c.out.clear();
+      c.out_at = 0;
+      c.retained.clear();
+      if (!c.sender.start(c.hello_message, Client::sink, &c))
+        return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "the stream could not restart");
+      c.pending = c.report.updates > 0;
+      return;
+    }
     case MessageType::kClose:
       log(c.name + ": closed by the client");
       c.gone = true;
@@ -224,13 +281,16 @@ size_t Server::step(int timeout_ms) {
     // An update only when everything before it is written: a stalled client
     // keeps just its latest camera.
     if (c.pending && c.idle() && !c.closing && !c.gone) {
-      c.out.clear();
-      c.out_at = 0;
+      if (!c.serial) {  // a serial client's queue keeps what is not acknowledged
+        c.out.clear();
+        c.out_at = 0;
+      }
+      const size_t before = c.out.size();
       c.pending = false;
       if (c.sender.update(c.camera, options_.cull, Client::sink, &c)) {
         if (c.report.updates++ == 0)
           log(c.name + ": first cut " + std::to_string(c.sender.cut().sent_count()) + " nodes, " +
-              std::to_string(c.out.size()) + " bytes");
+              std::to_string(c.out.size() - before) + " bytes");
         c.report.cut_nodes = c.sender.cut().sent_count();
       }
     }
@@ -247,9 +307,15 @@ size_t Server::step(int timeout_ms) {
       if (s != TransportStatus::kOk || moved == 0) break;
     }
     if (c.idle() && c.out.size() > (1u << 20)) {  // keep the queue's memory bounded
-      c.out.clear();
-      c.out.shrink_to_fit();
-      c.out_at = 0;
+      if (!c.serial) {
+        c.out.clear();
+        c.out.shrink_to_fit();
+        c.out_at = 0;
+      } else if (c.out.size() > kRetainedBytes) {
+        // A client that does not acknowledge: the oldest frames go (asked
+        // for again, the stream starts over).
+        c.release(c.sender.next_sequence());
+      }
     }
     if (c.closing && c.idle()) c.gone = true;
   }
@@ -257,7 +323,9 @@ size_t Server::step(int timeout_ms) {
     if (clients_[i]->gone) {
       Client& c = *clients_[i];
       log(c.name + ": removed after " + std::to_string(c.report.updates) + (c.report.updates == 1 ? " update" : " updates") + " (last cut " +
-          std::to_string(c.report.cut_nodes) + " nodes), " + std::to_string(c.report.bytes_out) + " bytes sent");
+          std::to_string(c.report.cut_nodes) + " nodes), " + std::to_string(c.report.bytes_out) + " bytes sent" +
+          (c.serial ? ", " + std::to_string(c.resends) + " resends, " + std::to_string(c.dropped_packets) + " packets dropped"
+                    : std::string()));
       c.transport->close();
       clients_.erase(clients_.begin() + static_cast<long>(i));
     } else {
