@@ -15,6 +15,7 @@
 #include <cstring>
 #include <thread>
 
+#include "core/cobs.h"
 #include "platform/file_io.h"
 #include "platform/loopback/loopback_transport.h"
 #include "platform/serial/serial_transport.h"
@@ -479,6 +480,84 @@ TEST(Server, ACorruptFrameIsAnsweredWithItsFaultAndClosed) {
   EXPECT_TRUE(got_error);
   EXPECT_TRUE(closed);
   EXPECT_TRUE(s.logged("frame 0: frame CRC-32 mismatch"));
+}
+
+// A serial client's resends, at the frame level: the server writes again
+// exactly the frames from the one asked for; once they are acknowledged they
+// are forgotten, and a resend for one of them starts the stream over.
+TEST(Server, SerialResendsWhatIsKeptAndStartsOverWhenItIsNot) {
+  Server server;
+  std::string error;
+  std::vector<std::string> log;
+  ServerOptions o;
+  o.log = [&](const std::string& line) { log.push_back(line); };
+  ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
+  LoopbackPipe pipe(1 << 22);
+  server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "serial", true);
+  uint16_t up = 0;
+  const auto send = [&](MessageType type, const uint8_t* payload, size_t size) {
+    uint8_t frame[256], packet[300];
+    const size_t n = write_frame(type, up++, payload, size, frame, sizeof frame);
+    const size_t m = cobs_encode(frame, n, packet, sizeof packet);
+    size_t moved = 0;
+    ASSERT_EQ(pipe.client().write(packet, m, &moved), TransportStatus::kOk);
+    server.step(0);
+  };
+  // Every packet the server wrote since the last call: (type, sequence).
+  std::vector<uint8_t> cobs_storage(kMaxFrameBytes + 16);
+  CobsDeframer deframer;
+  deframer.init(cobs_storage.data(), cobs_storage.size());
+  const auto received = [&] {
+    std::vector<std::pair<uint8_t, uint16_t>> out;
+    uint8_t buf[65536];
+    size_t got = 0;
+    while (pipe.client().read(buf, sizeof buf, &got) == TransportStatus::kOk && got > 0)
+      for (size_t i = 0; i < got; ++i)
+        if (deframer.push(buf[i]) == CobsStatus::kPacket)
+          out.push_back({deframer.packet()[0], load_u16le(deframer.packet() + 2)});
+    return out;
+  };
+  uint8_t payload[kCameraUpdateBytes];
+  write_hello(Hello{}, payload);
+  send(MessageType::kHello, payload, kHelloBytes);
+  CameraUpdate u;
+  Local local;
+  std::vector<uint32_t> storage(node_decoder_bytes(local.view.header) / 4 + 1);
+  NodeDecoder decoder;
+  ASSERT_EQ(decoder.init(local.view, storage.data(), storage.size() * 4), DecodeStatus::kOk);
+  ASSERT_TRUE(orbit_camera(orbit_view(decoder.extent_mu(), resolve_view(local.spec(30), local.view.header, decoder.extent_mu())),
+                           240, 320, &u.camera));
+  write_camera_update(u, payload);
+  send(MessageType::kCamera, payload, kCameraUpdateBytes);
+  const auto first = received();
+  ASSERT_GE(first.size(), 4u);  // startup, batches, update-end
+  EXPECT_EQ(first.front().first, static_cast<uint8_t>(MessageType::kStartup));
+  EXPECT_EQ(first.back().first, static_cast<uint8_t>(MessageType::kUpdateEnd));
+  // Resend from frame 2: frames 2 .. last again, the same ones.
+  write_sequence(2, payload);
+  send(MessageType::kResend, payload, kSequenceBytes);
+  server.step(0);
+  const auto again = received();
+  ASSERT_EQ(again.size(), first.size() - 2);
+  for (size_t i = 0; i < again.size(); ++i) EXPECT_EQ(again[i], first[i + 2]);
+  // Everything acknowledged: a resend from 2 now starts the stream over.
+  write_sequence(static_cast<uint16_t>(first.back().second + 1), payload);
+  send(MessageType::kAck, payload, kSequenceBytes);
+  write_sequence(2, payload);
+  send(MessageType::kResend, payload, kSequenceBytes);
+  server.step(0);
+  const auto over = received();
+  ASSERT_GE(over.size(), 2u);
+  EXPECT_EQ(over.front(), std::make_pair(static_cast<uint8_t>(MessageType::kStartup), uint16_t{0}));
+  EXPECT_EQ(over.back().first, static_cast<uint8_t>(MessageType::kUpdateEnd));  // and the view again
+  bool logged = false;
+  for (const std::string& l : log) logged = logged || l.find("frame 2 asked again is no longer kept: starting over") != std::string::npos;
+  EXPECT_TRUE(logged);
+  // A resend from the next frame to come asks for nothing.
+  write_sequence(static_cast<uint16_t>(over.back().second + 1), payload);
+  send(MessageType::kResend, payload, kSequenceBytes);
+  server.step(0);
+  EXPECT_TRUE(received().empty());
 }
 
 // The server restarts mid-stream: the client reconnects, says hello again and
