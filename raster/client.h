@@ -79,6 +79,12 @@ class Client {
   // configured pixel format).
   [[nodiscard]] ClientStatus render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats = nullptr);
 
+  // Shading, grey and quality while it runs (PointRenderer::set_view).
+  [[nodiscard]] bool set_view(ShadingMode shading, bool grey, uint16_t quality_q8) {
+    return renderer_.set_view(shading, grey, quality_q8);
+  }
+  const RendererConfig& view_config() const { return renderer_.config(); }
+
   const NodeDecoder& decoder() const { return cache_.decoder(); }
   const NodeCache& cache() const { return cache_; }
   // The cache itself, for whatever fills it from a stream (core/stream.h).

@@ -72,6 +72,17 @@ size_t point_renderer_bytes(const RendererConfig& config) {
   return renderer_config_valid(config) ? layout_of(config).total : 0;
 }
 
+bool PointRenderer::set_view(ShadingMode shading, bool grey, uint16_t quality_q8) {
+  if (g_position_ == nullptr) return false;
+  RendererConfig c = config_;
+  c.shading = shading;
+  c.grey = grey;
+  c.quality_q8 = quality_q8;
+  if (!renderer_config_valid(c) || (shading != ShadingMode::kNone && !c.normals)) return false;
+  config_ = c;
+  return true;
+}
+
 RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, size_t bytes) {
   if (!renderer_config_valid(config)) return RenderStatus::kBadConfig;
   const Layout l = layout_of(config);

@@ -83,6 +83,12 @@ class PointRenderer {
   [[nodiscard]] RenderStatus render(const NodeCache& cache, const Camera& camera, uint8_t* frame, size_t stride,
                                     FrameStats* stats = nullptr);
 
+  // What a user changes while it runs (the emulator's buttons): shading,
+  // grey and the points-per-node scale — none of them sized the storage.
+  // False, and nothing changed, for a value init would refuse.
+  [[nodiscard]] bool set_view(ShadingMode shading, bool grey, uint16_t quality_q8);
+  const RendererConfig& config() const { return config_; }
+
  private:
   struct FrameSetup;
   struct PointSetup;

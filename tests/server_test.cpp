@@ -265,7 +265,7 @@ class NoisyLine final : public Transport {
     for (size_t i = 0; i < size; ++i) {
       if (!decided_) {  // once per byte, however many tries it takes to write it
         drop_ = rng_() % 1000000 < drop_ppm_;
-        mask_ = rng_() % 1000000 < flip_ppm_ ? static_cast<uint8_t>(1u << (rng_() % 8)) : 0;
+        mask_ = static_cast<uint8_t>(rng_() % 1000000 < flip_ppm_ ? 1u << (rng_() % 8) : 0u);
         decided_ = true;
       }
       if (!drop_) {

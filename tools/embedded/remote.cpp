@@ -66,38 +66,42 @@ bool RemoteModel::done(Awaited what) const {
   return what == Awaited::kStartup ? client_.cache().ready() : receiver_.converged(awaited_camera_);
 }
 
+bool RemoteModel::service(int wait_ms, std::string& error) {
+  uint8_t buf[16384];
+  size_t got = 0;
+  const TransportStatus s = transport_->read(buf, sizeof buf, &got);
+  const auto now = std::chrono::steady_clock::now();
+  if (s == TransportStatus::kOk && got > 0) {
+    heard_ = now;
+    return take(buf, got, error);
+  }
+  // A serial line silent while we wait for something: our hello, camera or
+  // resend may have been lost on the way up, or the server's last frames on
+  // the way down. Ask again.
+  if (options_.serial && !done(awaiting_) && now - heard_ > std::chrono::milliseconds(options_.silence_ms)) {
+    heard_ = now;
+    if (!ask_again(error)) return false;
+  }
+  if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
+    if (options_.reconnect == nullptr)
+      return error = std::string("the server went away") + (s == TransportStatus::kError ? std::string(": ") + transport_->last_error() : ""), false;
+    return reconnect(error);
+  }
+  if (options_.pump && !options_.pump(options_.pump_context)) return error = "stopped", false;
+  if (options_.fd >= 0 && wait_ms > 0) {
+    pollfd p{options_.fd, POLLIN, 0};
+    poll(&p, 1, wait_ms);
+  }
+  return true;
+}
+
 bool RemoteModel::wait(Awaited what, std::string& error) {
   const auto start = std::chrono::steady_clock::now();
-  auto heard = start;  // the last bytes from the server
-  uint8_t buf[16384];
+  heard_ = start;
   while (!done(what)) {
-    size_t got = 0;
-    const TransportStatus s = transport_->read(buf, sizeof buf, &got);
-    if (s == TransportStatus::kOk && got > 0) {
-      heard = std::chrono::steady_clock::now();
-      if (!take(buf, got, error)) return false;
-      continue;
-    }
-    // A serial line silent for a second: our hello, camera or resend may
-    // have been lost on the way up, or the server's last frames on the way
-    // down. Ask again.
-    if (options_.serial && std::chrono::steady_clock::now() - heard > std::chrono::milliseconds(options_.silence_ms)) {
-      heard = std::chrono::steady_clock::now();
-      if (!ask_again(error)) return false;
-    }
-    if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
-      if (options_.reconnect == nullptr)
-        return error = std::string("the server went away") + (s == TransportStatus::kError ? std::string(": ") + transport_->last_error() : ""), false;
-      if (!reconnect(error)) return false;
-      continue;
-    }
     if (std::chrono::steady_clock::now() - start > std::chrono::milliseconds(options_.timeout_ms))
       return error = "no answer from the server within " + std::to_string(options_.timeout_ms) + " ms", false;
-    if (options_.pump && !options_.pump(options_.pump_context)) return error = "stopped", false;
-    if (options_.fd >= 0) {
-      pollfd p{options_.fd, POLLIN, 0};
-      poll(&p, 1, 100);
-    }
+    if (!service(100, error)) return false;
   }
   return true;
 }
@@ -239,6 +243,10 @@ bool RemoteModel::connect(Transport& transport, const ClientConfig& config, cons
 }
 
 bool RemoteModel::view(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error) {
+  return request(camera, max_size_q4, window, error) && wait(Awaited::kUpdateEnd, error);
+}
+
+bool RemoteModel::request(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error) {
   CameraUpdate u;
   u.sequence = camera_sequence_;
   u.camera = camera;
@@ -250,8 +258,12 @@ bool RemoteModel::view(const Camera& camera, int32_t max_size_q4, const int32_t 
   write_camera_update(u, payload);
   if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
   awaited_camera_ = camera_sequence_++;
-  return wait(Awaited::kUpdateEnd, error);
+  awaiting_ = Awaited::kUpdateEnd;
+  heard_ = std::chrono::steady_clock::now();
+  return true;
 }
+
+bool RemoteModel::converged() const { return done(Awaited::kUpdateEnd); }
 
 bool RemoteModel::render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats, std::string& error) {
   const ClientStatus s = client_.render(camera, frame, stride, stats);

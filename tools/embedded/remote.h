@@ -10,6 +10,7 @@
 // else the socket `fd` is polled. Allocates at start-up only.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -46,6 +47,14 @@ class RemoteModel {
   bool connect(Transport& transport, const ClientConfig& config, const Options& options, std::string& error);
   // Sends the camera and waits for its update-end.
   bool view(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error);
+  // The same without waiting, for an interactive loop: request() sends the
+  // camera (the server answers only the latest), service() takes what the
+  // link has now — waiting at most `wait_ms` for it — and applies it, so the
+  // cache fills while frames are drawn; converged() says when the latest
+  // camera's update-end has come.
+  bool request(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error);
+  bool service(int wait_ms, std::string& error);
+  bool converged() const;
   bool render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats, std::string& error);
   // Says goodbye (a close frame, reason normal) so the server lets this
   // client go at once — over a serial line nothing else tells it.
@@ -83,6 +92,8 @@ class RemoteModel {
   uint32_t resyncs_ = 0, reconnects_ = 0;
   Hello hello_;
   CameraUpdate last_camera_;
+  Awaited awaiting_ = Awaited::kStartup;
+  std::chrono::steady_clock::time_point heard_;  // the last bytes from the server, or our last request
 };
 
 }  // namespace stipple

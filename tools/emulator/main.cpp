@@ -1,0 +1,225 @@
+// stipple-emulator — the handheld on a desktop: the very client the device
+// runs (core's node cache and stream, raster's fixed-point renderer, one
+// arena) in an SDL2 window that looks and reacts like the device
+// (platform/sdl2). Its nodes come over the same node stream as the
+// device's: from a local .spg through an in-process server, from `stipple
+// serve` over TCP, or over a serial line.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "platform/png_io.h"
+#include "platform/sdl2/sdl_display.h"
+#include "tools/embedded/options.h"
+#include "tools/embedded/render_options.h"
+#include "tools/viewer/viewer.h"
+
+namespace stipple {
+namespace {
+
+const char kUsage[] =
+    "usage: stipple-emulator MODEL.spg [options]\n"
+    "       stipple-emulator --connect HOST:PORT | --serial DEV [--baud N] [options]\n"
+    "\n"
+    "The handheld client in a window that emulates the device: its screen (240x320\n"
+    "RGB565 unless --size says 320x240, 480x640, ...) scaled with nearest filtering\n"
+    "in a device frame, a status line (frames a second, nodes, points, kilobytes\n"
+    "received, the link's rate) and the device's controls:\n"
+    "  arrow keys or WASD   the D-pad: left/right orbit, up/down tilt; with\n"
+    "                       Enter or Space (select) held, up/down dolly\n"
+    "  C, L, Q              colour, lighting, quality (1, 1/2, 1/4, 2)\n"
+    "  mouse drag           the stylus: draws the refinement window (only nodes\n"
+    "                       there are refined); a tap clears it\n"
+    "  Escape               quit\n"
+    "\n"
+    "program:\n"
+    "  --connect HOST:PORT  nodes from `stipple serve` (no MODEL.spg)\n"
+    "  --serial DEV         the same over a serial line; --baud N its rate (115200)\n"
+    "  --scale N            window pixels per device pixel, 1..4 (default 2)\n"
+    "  --headless -o F.png  no window (SDL's offscreen driver): draw the view once it\n"
+    "                       has converged and write the device's screen, the same\n"
+    "                       bytes as `stipple render` of that view\n"
+    "  --frames N           with --headless: draw N frames, print the median time\n"
+    "  --script FILE        scripted input (tools/viewer/viewer.h: FRAME down|up|press\n"
+    "                       BUTTON, stylus-down|move|up X Y, screenshot PATH, quit)\n"
+    "\n";
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "stipple-emulator: %s\n", message.c_str());
+  return 1;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// The stylus's rectangle while it is drawn, as an outline on the screen.
+void outline(uint8_t* frame, size_t stride, const RasterConfig& r, const int32_t rect[4]) {
+  const auto put = [&](int x, int y) {
+    if (x < 0 || y < 0 || x >= r.width || y >= r.height) return;
+    uint8_t* p = frame + static_cast<size_t>(y) * stride + static_cast<size_t>(x) * bytes_per_pixel(r.format);
+    if (r.format == PixelFormat::kRgb565) p[0] = 0xE0, p[1] = 0xFF;  // yellow, little-endian 5-6-5
+    else p[0] = 0xFF, p[1] = 0xFF, p[2] = 0x00;
+  };
+  for (int x = rect[0]; x < rect[2]; ++x) put(x, rect[1]), put(x, rect[3] - 1);
+  for (int y = rect[1]; y < rect[3]; ++y) put(rect[0], y), put(rect[2] - 1, y);
+}
+
+int run(int argc, char** argv) {
+  cli::Args args(argc, argv, 1);
+  if (args.flag("--help") || args.flag("-h")) {
+    std::fputs(kUsage, stdout);
+    std::fputs(kRenderOptionsHelp, stdout);
+    return 0;
+  }
+  RenderOptions o;
+  std::string error, connect, serial, output, script_path, v;
+  args.value("--connect", connect);
+  args.value("--serial", serial);
+  unsigned long long baud = 115200, scale = 2, frames = 0;
+  if (args.value("--baud", v) && !cli::parse_uint(v, 4000000, baud)) return fail("--baud: expected a rate, got '" + v + "'");
+  if (args.value("--scale", v) && (!cli::parse_uint(v, 4, scale) || scale < 1))
+    return fail("--scale: expected 1..4, got '" + v + "'");
+  if (args.value("--frames", v) && (!cli::parse_uint(v, 100000, frames) || frames < 1))
+    return fail("--frames: expected 1..100000, got '" + v + "'");
+  const bool headless = args.flag("--headless");
+  if (!args.value("-o", output)) args.value("--output", output);
+  args.value("--script", script_path);
+  if (!parse_render_options(args, o, error)) return fail(error);
+  const std::vector<std::string> files = args.positionals();
+  if (args.bad()) return fail(args.error());
+  if (!args.unknown_option().empty()) return fail("unknown option '" + args.unknown_option() + "'");
+  if (files.size() > 1) return fail("expected one .spg file");
+  const std::string model = files.empty() ? "" : files[0];
+  if (model.empty() && connect.empty() && serial.empty())
+    return fail("expected a .spg file, --connect HOST:PORT or --serial DEV (stipple encode data/bunny.ply -o bunny.spg makes one)");
+  if (headless && output.empty() && script_path.empty()) return fail("--headless needs -o FRAME.png (or a --script)");
+  std::vector<ScriptStep> script;
+  if (!script_path.empty() && !read_script(script_path, script, error)) return fail(error);
+
+  SdlDisplay display;
+  SdlDisplayOptions d;
+  d.width = o.config.raster.width;
+  d.height = o.config.raster.height;
+  d.scale = static_cast<int>(scale);
+  d.headless = headless;
+  d.title = "stipple-emulator";
+  ViewerSource source;
+  if (!source.open(model, connect, serial, static_cast<uint32_t>(baud), o, error)) return fail(error);
+  if (!display.open(d, error)) return fail(error);
+  RemoteModel& m = source.model();
+  Client& client = m.client();
+  const int32_t* extent = client.decoder().extent_mu();
+  ViewerControls controls(o, m.header(), extent);
+  const RasterConfig& r = o.config.raster;
+  const size_t stride = size_t{r.width} * bytes_per_pixel(r.format);
+  std::vector<uint8_t> frame(stride * r.height);
+  Camera camera;
+  if (!controls.camera(r.width, r.height, &camera)) return fail("--camera: the view is out of the camera's range");
+
+  if (headless && script.empty()) {
+    // Once the view has converged: the device's screen, as `stipple render` draws it.
+    if (!m.view(camera, o.rule.max_size_q4, controls.window(), error)) return fail(source.name() + ": " + error);
+    std::vector<double> times;
+    FrameStats stats;
+    for (unsigned long long f = 0; f < std::max<unsigned long long>(frames, 1); ++f) {
+      const auto t = std::chrono::steady_clock::now();
+      if (!m.render(camera, frame.data(), stride, &stats, error)) return fail(error);
+      times.push_back(seconds_since(t));
+      if (!display.present(frame.data(), stride, r.width, r.height, r.format, error)) return fail(error);
+    }
+    Image image;
+    image_from_frame(frame.data(), stride, r.width, r.height, r.format, image);
+    if (!write_png(output, image, error)) return fail(error);
+    std::sort(times.begin(), times.end());
+    std::printf("%s: %u nodes, %u points, %llu bytes received -> %s", source.name().c_str(), stats.nodes, stats.points,
+                static_cast<unsigned long long>(m.bytes_received()), output.c_str());
+    if (frames > 0) std::printf("; frame: median %.3f ms of %llu", 1e3 * times[times.size() / 2], frames);
+    std::printf("\n");
+    return 0;
+  }
+
+  // The interactive loop: input, the latest camera to the server, whatever
+  // the link brought, a frame, the status line; about 30 frames a second.
+  if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(error);
+  size_t next_step = 0;
+  uint32_t frame_number = 0;
+  FrameStats stats;
+  double fps = 0, rate = 0;
+  uint64_t rate_bytes = m.bytes_received();
+  auto rate_start = std::chrono::steady_clock::now();
+  int rate_frames = 0;
+  Image shot;
+  while (!controls.quit()) {
+    const auto frame_start = std::chrono::steady_clock::now();
+    for (; next_step < script.size() && script[next_step].frame <= frame_number; ++next_step) {
+      const ScriptStep& s = script[next_step];
+      if (s.kind == ScriptStep::kInput) display.inject(s.event);
+      else if (s.kind == ScriptStep::kQuit) display.inject(InputEvent{InputKind::kQuit, Button::kNone, 0, 0});
+      else if (!display.screenshot(shot, error) || !write_png(s.path, shot, error)) return fail(error);
+      else {
+        // What a script checks: the window's size, and the device screen's
+        // pixels (the last frame drawn) as a CRC-32.
+        Image screen;
+        image_from_frame(frame.data(), stride, r.width, r.height, r.format, screen);
+        std::printf("frame %u: screenshot %s %dx%d, screen crc32 %08x\n", frame_number, s.path.c_str(), shot.width,
+                    shot.height, crc32(screen.rgb.data(), screen.rgb.size()));
+      }
+    }
+    bool changed = false;
+    InputEvent e;
+    while (display.poll(&e)) changed = controls.apply(e) || changed;
+    changed = controls.tick() || changed;
+    if (changed) {
+      if (!client.set_view(controls.lighting() ? o.config.shading == ShadingMode::kNone ? ShadingMode::kPerPoint
+                                                                                       : o.config.shading
+                                               : ShadingMode::kNone,
+                           controls.grey(), controls.quality_q8()))
+        return fail("the view's options were refused");
+      if (!controls.camera(r.width, r.height, &camera)) return fail("the camera left its range");
+      if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(source.name() + ": " + error);
+    }
+    // What the link has, for at most 10 ms of this frame.
+    for (int k = 0; k < 64 && seconds_since(frame_start) < 0.010; ++k) {
+      const uint64_t before = m.bytes_received();
+      if (!m.service(0, error)) return fail(source.name() + ": " + error);
+      if (m.bytes_received() == before && k > 0) break;
+    }
+    if (!m.render(camera, frame.data(), stride, &stats, error)) return fail(error);
+    int32_t rect[4];
+    if (controls.dragging(rect)) outline(frame.data(), stride, r, rect);
+    else if (controls.window()[0] < controls.window()[2]) outline(frame.data(), stride, r, controls.window());
+    ++rate_frames;
+    const double elapsed = seconds_since(rate_start);
+    if (elapsed >= 0.5) {
+      fps = rate_frames / elapsed;
+      rate = static_cast<double>(m.bytes_received() - rate_bytes) / elapsed;
+      rate_bytes = m.bytes_received();
+      rate_start = std::chrono::steady_clock::now();
+      rate_frames = 0;
+    }
+    std::string line1, line2;
+    status_lines(fps, stats, m.bytes_received(), rate, controls, m.converged(), line1, line2);
+    display.set_status(line1, line2);
+    if (!display.present(frame.data(), stride, r.width, r.height, r.format, error)) return fail(error);
+    ++frame_number;
+    const double spare = 1.0 / 30 - seconds_since(frame_start);
+    if (spare > 0) std::this_thread::sleep_for(std::chrono::duration<double>(spare));
+  }
+  if (!output.empty()) {
+    Image image;
+    image_from_frame(frame.data(), stride, r.width, r.height, r.format, image);
+    if (!write_png(output, image, error)) return fail(error);
+  }
+  std::printf("%s: %u frames, last %u nodes, %u points, %llu bytes received\n", source.name().c_str(), frame_number,
+              stats.nodes, stats.points, static_cast<unsigned long long>(m.bytes_received()));
+  return 0;
+}
+
+}  // namespace
+}  // namespace stipple
+
+int main(int argc, char** argv) { return stipple::run(argc, argv); }

@@ -1,0 +1,251 @@
+// stipple tools — the desktop viewers' shared parts. See viewer.h.
+#include "tools/viewer/viewer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "platform/file_io.h"
+#include "platform/loopback/loopback_transport.h"
+#include "platform/serial/serial_transport.h"
+#include "platform/tcp/tcp_transport.h"
+
+namespace stipple {
+
+struct ViewerSource::Links {
+  Server local;
+  LoopbackPipe pipe;
+  std::unique_ptr<TcpTransport> tcp;
+  std::unique_ptr<SerialTransport> serial;
+  std::string host;
+  uint16_t port = 0;
+};
+
+ViewerSource::ViewerSource() : links_(std::make_unique<Links>()) {}
+ViewerSource::~ViewerSource() { model_.close(); }
+
+bool ViewerSource::open(const std::string& model, const std::string& connect, const std::string& serial, uint32_t baud,
+                        const RenderOptions& o, std::string& error) {
+  Links& l = *links_;
+  RemoteModel::Options ro;
+  Transport* link = nullptr;
+  if ((!model.empty()) + (!connect.empty()) + (!serial.empty()) != 1)
+    return error = "expected one source: a .spg file, --connect HOST:PORT or --serial DEV", false;
+  if (!serial.empty()) {
+    l.serial = std::make_unique<SerialTransport>();
+    if (!l.serial->open(serial, baud, error)) return error = "--serial " + error, false;
+    link = l.serial.get();
+    ro.fd = l.serial->fd();
+    ro.serial = true;
+    name_ = "serial " + serial;
+  } else if (!connect.empty()) {
+    int fd = -1;
+    if (!parse_host_port(connect, "127.0.0.1", l.host, l.port, error) || !tcp_connect(l.host, l.port, 5000, &fd, error))
+      return error = "--connect " + error, false;
+    l.tcp = std::make_unique<TcpTransport>(fd, connect);
+    link = l.tcp.get();
+    ro.fd = fd;
+    // A server that goes away is redialled for ten seconds.
+    ro.reconnect = [](void* context, int* new_fd) -> Transport* {
+      auto* r = static_cast<Links*>(context);
+      for (int attempt = 0; attempt < 50; ++attempt) {
+        std::string ignored;
+        if (tcp_connect(r->host, r->port, 1000, new_fd, ignored)) {
+          std::fprintf(stderr, "stipple: reconnected to %s:%u\n", r->host.c_str(), r->port);
+          r->tcp = std::make_unique<TcpTransport>(*new_fd, r->host);
+          return r->tcp.get();
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      }
+      return nullptr;
+    };
+    ro.reconnect_context = &l;
+    name_ = "tcp " + connect;
+  } else {
+    std::vector<uint8_t> file;
+    if (!read_file(model, file, error)) return false;
+    ServerOptions so;
+    so.cull = o.rule.cull;
+    so.cones = cone_rule(o.rule);
+    if (!l.local.init(std::move(file), model, so, error)) return false;
+    l.local.add_client(std::make_unique<TransportRef>(l.pipe.server()), -1, "loopback");
+    link = &l.pipe.client();
+    ro.pump = [](void* s) {
+      static_cast<Server*>(s)->step(0);
+      return true;
+    };
+    ro.pump_context = &l.local;
+    const size_t slash = model.find_last_of('/');
+    name_ = slash == std::string::npos ? model : model.substr(slash + 1);
+  }
+  if (!model_.connect(*link, o.config, ro, error)) return error = (model.empty() ? name_ : model) + ": " + error, false;
+  return true;
+}
+
+ViewerControls::ViewerControls(const RenderOptions& o, const SpgHeader& header, const int32_t extent_mu[3])
+    : spec_(resolve_view(o.view, header, extent_mu)), quality_q8_(o.config.quality_q8) {
+  for (int k = 0; k < 3; ++k) extent_[k] = extent_mu[k];
+  for (int k = 0; k < 4; ++k) window_[k] = o.rule.window[k];
+  grey_ = o.config.grey;
+  lighting_ = o.config.shading != ShadingMode::kNone;
+}
+
+bool ViewerControls::apply(const InputEvent& e) {
+  switch (e.kind) {
+    case InputKind::kQuit: quit_ = true; return false;
+    case InputKind::kButtonDown:
+    case InputKind::kButtonUp: {
+      const bool down = e.kind == InputKind::kButtonDown;
+      held_[static_cast<int>(e.button)] = down;
+      if (!down) return false;
+      switch (e.button) {
+        case Button::kColor: grey_ = !grey_; return true;
+        case Button::kLighting: lighting_ = !lighting_; return true;
+        case Button::kQuality: {  // 1 -> 1/2 -> 1/4 -> 2 -> 1
+          quality_q8_ = quality_q8_ >= 512 ? 256 : quality_q8_ > 64 ? static_cast<uint16_t>(quality_q8_ / 2) : 512;
+          return true;
+        }
+        default: return tick();  // a press turns at once
+      }
+    }
+    case InputKind::kStylusDown:
+      drag_ = true;
+      drag_start_[0] = drag_now_[0] = e.x;
+      drag_start_[1] = drag_now_[1] = e.y;
+      return false;
+    case InputKind::kStylusMove:
+      drag_now_[0] = e.x;
+      drag_now_[1] = e.y;
+      return false;
+    case InputKind::kStylusUp: {
+      drag_ = false;
+      const int32_t x0 = std::min(drag_start_[0], e.x), x1 = std::max(drag_start_[0], e.x) + 1;
+      const int32_t y0 = std::min(drag_start_[1], e.y), y1 = std::max(drag_start_[1], e.y) + 1;
+      if (x1 - x0 < 4 || y1 - y0 < 4) {  // a tap: refine everywhere again
+        const bool had = window_[0] < window_[2];
+        window_[0] = window_[1] = window_[2] = window_[3] = 0;
+        return had;
+      }
+      window_[0] = x0;
+      window_[1] = y0;
+      window_[2] = x1;
+      window_[3] = y1;
+      return true;
+    }
+    case InputKind::kNone: return false;
+  }
+  return false;
+}
+
+bool ViewerControls::tick() {
+  const auto held = [&](Button b) { return held_[static_cast<int>(b)]; };
+  bool changed = false;
+  if (held(Button::kLeft) != held(Button::kRight)) {
+    spec_.yaw += held(Button::kLeft) ? -3 : 3;
+    changed = true;
+  }
+  if (held(Button::kUp) != held(Button::kDown)) {
+    const bool up = held(Button::kUp);
+    if (held(Button::kSelect)) spec_.distance = std::clamp(spec_.distance * (up ? 0.95 : 1.0 / 0.95), 0.3, 20.0);
+    else spec_.pitch = std::clamp(spec_.pitch + (up ? 3 : -3), -85.0, 85.0);
+    changed = true;
+  }
+  return changed;
+}
+
+bool ViewerControls::camera(uint16_t width, uint16_t height, Camera* out) const {
+  return orbit_camera(orbit_view(extent_, spec_), width, height, out);
+}
+
+bool ViewerControls::dragging(int32_t rect[4]) const {
+  if (!drag_) return false;
+  rect[0] = std::min(drag_start_[0], drag_now_[0]);
+  rect[1] = std::min(drag_start_[1], drag_now_[1]);
+  rect[2] = std::max(drag_start_[0], drag_now_[0]) + 1;
+  rect[3] = std::max(drag_start_[1], drag_now_[1]) + 1;
+  return true;
+}
+
+namespace {
+
+bool button_named(const std::string& s, Button* out) {
+  static const struct {
+    const char* name;
+    Button button;
+  } names[] = {{"up", Button::kUp},         {"down", Button::kDown},     {"left", Button::kLeft},
+               {"right", Button::kRight},   {"select", Button::kSelect}, {"colour", Button::kColor},
+               {"color", Button::kColor},   {"lighting", Button::kLighting}, {"quality", Button::kQuality}};
+  for (const auto& n : names)
+    if (s == n.name) return *out = n.button, true;
+  return false;
+}
+
+}  // namespace
+
+bool read_script(const std::string& path, std::vector<ScriptStep>& out, std::string& error) {
+  std::vector<uint8_t> bytes;
+  if (!read_file(path, bytes, error)) return false;
+  std::istringstream in(std::string(bytes.begin(), bytes.end()));
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const size_t hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream words(line);
+    std::string frame_text, action;
+    if (!(words >> frame_text)) continue;
+    const auto bad = [&](const std::string& why) { return error = path + ":" + std::to_string(number) + ": " + why, false; };
+    char* end = nullptr;
+    const unsigned long frame = std::strtoul(frame_text.c_str(), &end, 10);
+    if (*end != '\0' || frame > 1000000) return bad("expected a frame number, got '" + frame_text + "'");
+    if (!(words >> action)) return bad("expected an action after the frame number");
+    ScriptStep s;
+    s.frame = static_cast<uint32_t>(frame);
+    std::string arg;
+    if (action == "down" || action == "up" || action == "press") {
+      if (!(words >> arg) || !button_named(arg, &s.event.button))
+        return bad("expected a button (up down left right select colour lighting quality), got '" + arg + "'");
+      s.event.kind = action == "up" ? InputKind::kButtonUp : InputKind::kButtonDown;
+      out.push_back(s);
+      if (action == "press") {
+        s.frame += 5;
+        s.event.kind = InputKind::kButtonUp;
+        out.push_back(s);
+      }
+    } else if (action == "stylus-down" || action == "stylus-move" || action == "stylus-up") {
+      if (!(words >> s.event.x >> s.event.y) || s.event.x < 0 || s.event.y < 0 || s.event.x > 4095 || s.event.y > 4095)
+        return bad("expected X Y in screen pixels after " + action);
+      s.event.kind = action == "stylus-down" ? InputKind::kStylusDown
+                     : action == "stylus-move" ? InputKind::kStylusMove
+                                               : InputKind::kStylusUp;
+      out.push_back(s);
+    } else if (action == "screenshot") {
+      if (!(words >> s.path)) return bad("expected a path after screenshot");
+      s.kind = ScriptStep::kScreenshot;
+      out.push_back(s);
+    } else if (action == "quit") {
+      s.kind = ScriptStep::kQuit;
+      out.push_back(s);
+    } else {
+      return bad("unknown action '" + action + "' (down up press stylus-down stylus-move stylus-up screenshot quit)");
+    }
+    if (words >> arg) return bad("unexpected '" + arg + "'");
+  }
+  std::stable_sort(out.begin(), out.end(), [](const ScriptStep& a, const ScriptStep& b) { return a.frame < b.frame; });
+  return true;
+}
+
+void status_lines(double fps, const FrameStats& stats, uint64_t bytes, double bytes_per_s, const ViewerControls& c,
+                  bool converged, std::string& line1, std::string& line2) {
+  char a[128], b[128];
+  std::snprintf(a, sizeof a, "%4.1f fps  %u nodes  %u pts", fps, stats.nodes, stats.points);
+  std::snprintf(b, sizeof b, "%llu KB  %.1f KB/s  %s%s q%.2g%s", static_cast<unsigned long long>(bytes / 1024),
+                bytes_per_s / 1024, c.grey() ? "grey" : "colour", c.lighting() ? " lit" : "", c.quality_q8() / 256.0,
+                converged ? "" : "  ...");
+  line1 = a;
+  line2 = b;
+}
+
+}  // namespace stipple

@@ -1,0 +1,98 @@
+// stipple tools — what the two desktop viewers share (stipple-emulator,
+// stipple-gl): where the node stream comes from, the device's controls, and
+// scripted input.
+//
+// Source: a local .spg served in this process over loopback (the embedded
+// default), `--connect HOST:PORT` (a `stipple serve`), or `--serial DEV`;
+// each is a RemoteModel (tools/embedded/remote.h) over the same protocol,
+// so both viewers see exactly the node stream the handheld gets.
+//
+// Controls (the D-pad and buttons of platform/display.h): left/right orbit
+// about the up axis, up/down tilt; with select held, up/down dolly; colour,
+// lighting and quality toggle; a stylus drag draws the refinement window
+// (TOG05 §8.1: only nodes there are refined), a tap clears it.
+//
+// Script (`--script FILE`, for tests and demos): one event per line,
+// `FRAME ACTION [ARGS]`, FRAME counting presented frames from 0:
+//   FRAME down|up BUTTON        up down left right select colour lighting quality
+//   FRAME press BUTTON          down at FRAME, up 5 frames later
+//   FRAME stylus-down|stylus-move|stylus-up X Y   (screen pixels)
+//   FRAME screenshot PATH       the window as shown (PNG)
+//   FRAME quit
+// Blank lines and # comments are ignored.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "platform/display.h"
+#include "tools/embedded/remote.h"
+#include "tools/embedded/render_options.h"
+#include "tools/server/server.h"
+
+namespace stipple {
+
+// The stream's source and the link under it; owns what it opened.
+class ViewerSource {
+ public:
+  ViewerSource();
+  ~ViewerSource();
+  // `model` (a .spg path) or `connect` (HOST:PORT) or `serial` (a device);
+  // exactly one non-empty. Says hello and waits for the startup.
+  bool open(const std::string& model, const std::string& connect, const std::string& serial, uint32_t baud,
+            const RenderOptions& options, std::string& error);
+  RemoteModel& model() { return model_; }
+  // What it is, for the status line and logs: "bunny.spg", "tcp 127.0.0.1:7878", "serial /dev/ttyACM0".
+  const std::string& name() const { return name_; }
+
+ private:
+  struct Links;
+  std::unique_ptr<Links> links_;
+  RemoteModel model_;
+  std::string name_;
+};
+
+// The view a user steers, and the toggles.
+class ViewerControls {
+ public:
+  ViewerControls(const RenderOptions& options, const SpgHeader& header, const int32_t extent_mu[3]);
+  // Applies one input event; true when the camera or the cut changed.
+  bool apply(const InputEvent& e);
+  // Per presented frame: a held D-pad keeps turning. True when the camera changed.
+  bool tick();
+  bool camera(uint16_t width, uint16_t height, Camera* out) const;
+  const int32_t* window() const { return window_; }  // px, x0 >= x1: none
+  bool quit() const { return quit_; }
+  bool grey() const { return grey_; }
+  bool lighting() const { return lighting_; }
+  uint16_t quality_q8() const { return quality_q8_; }
+  // The rectangle being drawn with the stylus (for an overlay), if any.
+  bool dragging(int32_t rect[4]) const;
+
+ private:
+  ViewSpec spec_;
+  int32_t extent_[3];
+  bool held_[9] = {};
+  bool quit_ = false, grey_ = false, lighting_ = true, drag_ = false;
+  uint16_t quality_q8_;
+  int32_t window_[4] = {0, 0, 0, 0};
+  int32_t drag_start_[2] = {0, 0}, drag_now_[2] = {0, 0};
+};
+
+struct ScriptStep {
+  uint32_t frame = 0;
+  enum Kind : uint8_t { kInput, kScreenshot, kQuit } kind = kInput;
+  InputEvent event;
+  std::string path;
+};
+
+// Parses a script file; false with "FILE:LINE: why".
+bool read_script(const std::string& path, std::vector<ScriptStep>& out, std::string& error);
+
+// The status line's two lines.
+void status_lines(double fps, const FrameStats& stats, uint64_t bytes, double bytes_per_s, const ViewerControls& c,
+                  bool converged, std::string& line1, std::string& line2);
+
+}  // namespace stipple
