@@ -14,11 +14,7 @@
 #include "platform/progress.h"
 #include "tools/cli/cli.h"
 #include "tools/cli/render_output.h"
-#include "platform/loopback/loopback_transport.h"
-#include "platform/serial/serial_transport.h"
-#include "platform/tcp/tcp_transport.h"
-#include "tools/embedded/remote.h"
-#include "tools/server/server.h"
+#include "tools/viewer/viewer.h"
 
 namespace stipple {
 namespace {
@@ -113,67 +109,16 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
 int render_stream(const std::string& source, bool remote, const RenderOptions& o, uint32_t steps, bool folder,
                   const std::string& output) {
   std::string error;
-  Server local;
-  LoopbackPipe pipe;
-  std::unique_ptr<TcpTransport> tcp;
-  struct Redial {
-    std::string host;
-    uint16_t port = 0;
-    std::unique_ptr<TcpTransport>* link = nullptr;
-  } redial;
-  Transport* link = nullptr;
-  RemoteModel model;
-  RemoteModel::Options ro;
-  std::unique_ptr<SerialTransport> serial_line;
+  ViewerSource src;
+  std::string serial_dev;
+  uint32_t baud = 115200;
   if (remote && source.rfind("serial:", 0) == 0) {
-    const std::string dev = source.substr(7, source.rfind('@') - 7);
-    const uint32_t baud = static_cast<uint32_t>(std::stoul(source.substr(source.rfind('@') + 1)));
-    serial_line = std::make_unique<SerialTransport>();
-    if (!serial_line->open(dev, baud, error)) return cli::fail("render: --serial " + error);
-    link = serial_line.get();
-    ro.fd = serial_line->fd();
-    ro.serial = true;
-  } else if (remote) {
-    uint16_t port = 0;
-    int fd = -1;
-    if (!parse_host_port(source, "127.0.0.1", redial.host, port, error) || !tcp_connect(redial.host, port, 5000, &fd, error))
-      return cli::fail("render: --connect " + error);
-    tcp = std::make_unique<TcpTransport>(fd, source);
-    link = tcp.get();
-    ro.fd = fd;
-    // A server that goes away is redialled for ten seconds.
-    redial.port = port;
-    redial.link = &tcp;
-    ro.reconnect = [](void* context, int* new_fd) -> Transport* {
-      auto* r = static_cast<Redial*>(context);
-      for (int attempt = 0; attempt < 50; ++attempt) {
-        std::string ignored;
-        if (tcp_connect(r->host, r->port, 1000, new_fd, ignored)) {
-          std::fprintf(stderr, "stipple: render: reconnected to %s:%u\n", r->host.c_str(), r->port);
-          *r->link = std::make_unique<TcpTransport>(*new_fd, r->host);
-          return r->link->get();
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(200));
-      }
-      return nullptr;
-    };
-    ro.reconnect_context = &redial;
-  } else {
-    std::vector<uint8_t> file;
-    if (!read_file(source, file, error)) return cli::fail(error);
-    ServerOptions so;
-    so.cull = o.rule.cull;
-    so.cones = cone_rule(o.rule);
-    if (!local.init(std::move(file), source, so, error)) return cli::fail(error);
-    local.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
-    link = &pipe.client();
-    ro.pump = [](void* s) {
-      static_cast<Server*>(s)->step(0);
-      return true;
-    };
-    ro.pump_context = &local;
+    serial_dev = source.substr(7, source.rfind('@') - 7);
+    baud = static_cast<uint32_t>(std::stoul(source.substr(source.rfind('@') + 1)));
   }
-  if (!model.connect(*link, o.config, ro, error)) return cli::fail(source + ": " + error);
+  if (!src.open(remote ? "" : source, remote && serial_dev.empty() ? source : "", serial_dev, baud, o, error))
+    return cli::fail("render: " + error);
+  RemoteModel& model = src.model();
   if (folder) std::filesystem::create_directories(output);
   // The view as render resolves it, from the header the server sent.
   const SpgHeader& h = model.header();
@@ -204,7 +149,6 @@ int render_stream(const std::string& source, bool remote, const RenderOptions& o
     received = model.bytes_received();
     log += line;
   }
-  model.close();
   if (folder && !write_file_atomic(output + "/frames.log", std::vector<uint8_t>(log.begin(), log.end()), error))
     return cli::fail(error);
   std::printf("%s: %u frame%s through the %s, %llu bytes received -> %s\n", source.c_str(), steps, steps == 1 ? "" : "s",
