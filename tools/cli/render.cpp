@@ -1,9 +1,7 @@
 // stipple render — the fixed-point client in process (or the double reference) -> PNG.
 #include <algorithm>
 #include <cmath>
-#include <chrono>
 #include <cstdio>
-#include <thread>
 #include <filesystem>
 #include <memory>
 #include <string>

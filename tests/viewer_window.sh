@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
-# stipple-emulator as a user sees it: a real window (SDL's X11 driver under
-# Xvfb) driven by a scripted input sequence — a D-pad press, a stylus drag —
-# with screenshots checked to be the window's size and to have changed as the
-# input says: nothing while nothing is pressed, the picture after the orbit,
-# again after the refinement window is drawn. Then the emulator fed by
-# `stipple serve` over TCP draws, headless, the golden image of its view.
-# usage: emulator_window.sh STIPPLE-EMULATOR STIPPLE MODEL.spg GOLDEN.png WORKDIR
+# A desktop viewer as a user sees it: a real window (SDL's X11 driver under
+# Xvfb; for stipple-gl an OpenGL context on Mesa's llvmpipe) driven by a
+# scripted input sequence — a D-pad press, a stylus drag — with screenshots
+# checked to be the window's size and to have changed as the input says:
+# nothing while nothing is pressed, the picture after the orbit, again after
+# the refinement window is drawn. Then the viewer fed by `stipple serve` over
+# TCP draws, headless, what it draws from the file: for the emulator the
+# golden image of the view itself.
+# usage: viewer_window.sh PROGRAM STIPPLE MODEL.spg WxH X0,Y0,X1,Y1 REFERENCE.png|- WORKDIR
 set -euo pipefail
-E=$1 S=$2 MODEL=$3 GOLDEN=$4 W=$5
+E=$1 S=$2 MODEL=$3 SIZE=$4 DRAG=$5 GOLDEN=$6 W=$7
+IFS=, read -r x0 y0 x1 y1 <<<"$DRAG"
 rm -rf "$W" && mkdir -p "$W"
 cat >"$W/script" <<SCRIPT
 30 screenshot $W/idle1.png
@@ -15,20 +18,19 @@ cat >"$W/script" <<SCRIPT
 41 down right
 50 up right
 80 screenshot $W/orbit.png
-81 stylus-down 60 100
-83 stylus-move 180 220
-85 stylus-up 180 220
+81 stylus-down $x0 $y0
+83 stylus-move $x1 $y1
+85 stylus-up $x1 $y1
 110 screenshot $W/window.png
 111 quit
 SCRIPT
 xvfb-run -a -s "-screen 0 1024x1024x24" env SDL_VIDEODRIVER=x11 "$E" "$MODEL" --script "$W/script" >"$W/out" 2>"$W/err" ||
   { echo "the emulator failed under Xvfb"; cat "$W/out" "$W/err"; exit 1; }
 cat "$W/out"
-crc() { sed -n "s|.*screenshot $W/$1.png \([0-9]*x[0-9]*\), screen crc32 \([0-9a-f]*\)$|\2|p" "$W/out"; }
+crc() { sed -n "s|.*screenshot $W/$1.png .*crc32 \([0-9a-f]*\)$|\1|p" "$W/out"; }
 size() { sed -n "s|.*screenshot $W/$1.png \([0-9]*x[0-9]*\),.*|\1|p" "$W/out"; }
 for s in idle1 idle2 orbit window; do
-  # The device image at x2: (240 + 2 x 12) x (320 + 2 x 12 + 4 + 18 + 2 + 30 + 6).
-  [ "$(size $s)" = "528x784" ] || { echo "screenshot $s is $(size $s), not 528x784"; exit 1; }
+  [ "$(size $s)" = "$SIZE" ] || { echo "screenshot $s is $(size $s), not $SIZE"; exit 1; }
   [ -s "$W/$s.png" ] || { echo "no $s.png"; exit 1; }
 done
 [ "$(crc idle1)" = "$(crc idle2)" ] || { echo "the screen changed while nothing was pressed"; exit 1; }
@@ -43,5 +45,9 @@ port=$(sed -n 's/.*serving on port \([0-9]*\)$/\1/p' "$W/serve.out")
 [ -n "$port" ] || { echo "the server did not start"; cat "$W/serve.err"; exit 1; }
 "$E" --connect "127.0.0.1:$port" --camera 90,20,3,35 --headless -o "$W/connect.png"
 wait $server
+if [ "$GOLDEN" = "-" ]; then
+  GOLDEN=$W/local.png
+  "$E" "$MODEL" --camera 90,20,3,35 --headless -o "$GOLDEN"
+fi
 "$S" image-diff "$GOLDEN" "$W/connect.png"
-echo "window $(size idle1): idle, orbit and stylus as scripted; --connect draws the golden image"
+echo "window $(size idle1): idle, orbit and stylus as scripted; --connect draws $GOLDEN"

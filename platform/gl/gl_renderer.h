@@ -1,0 +1,124 @@
+// stipple platform — the GL client's renderer: draws core's node cache on
+// the GPU (OpenGL 3.3 core, through libepoxy), never through raster/.
+//
+// GPU decode (the default): each cached node goes to the GPU as the raw
+// packed integers of the stream (its record, up to 32 bytes, as two uvec4
+// instance attributes); the vertex shader unpacks the bit fields with the
+// layout of the startup (offsets and widths as uniforms), decodes the
+// position cell, the frames (θ, φ, ψ and Rodrigues, docs/format.md §5) and
+// the σ classes (a texture buffer of the decoder's class sigmas, in model
+// units), and generates the node's points from a quasi-random Gaussian
+// buffer (the client's Sobol table, texture buffer): vertex k of instance i
+// is sample k of node i. CPU decode (for comparison): core's fixed-point
+// decoder on the CPU, the same shader fed decoded floats.
+//
+// Points per node: the CPU computes each node's count from its projected
+// size (the 2σ ellipse's area in point-sized squares, three times over —
+// 1 − e⁻³ ≈ 95 % coverage for scattered points — times the quality, 1 to
+// the Gaussian buffer's size), buckets the nodes by the count rounded up to
+// a power of two and issues one instanced draw per bucket; a vertex beyond
+// its node's own count is dropped. Points are z-buffered squares of the
+// point size; colour is the node's mean (or grey) times Lambert with
+// ambient per node; MSAA is the framebuffer's (GlOffscreen, or the window's).
+//
+// The GL context must be current for every call.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/node_cache.h"
+
+namespace stipple {
+
+struct GlRenderOptions {
+  bool gpu_decode = true;
+  uint8_t point_size = 2;      // px
+  uint16_t quality_q8 = 256;   // points-per-node scale
+  uint16_t samples = 1024;     // the Gaussian buffer: most points per node
+  bool grey = false;           // ignore the model's colour
+  bool lighting = true;        // Lambert per node (else the colour as it is)
+  float light[3] = {-4096 / 16384.f, -6144 / 16384.f, -14336 / 16384.f};  // towards the light, camera space
+  float ambient = 0.25f;
+  uint32_t grey_rgb = 0xD8D8D8, clear_rgb = 0x000000;
+};
+
+struct GlFrameStats {
+  uint32_t nodes = 0;   // nodes drawn (in front of the near plane)
+  uint64_t points = 0;  // points generated
+  uint32_t draws = 0;   // instanced draw calls
+};
+
+class GlRenderer {
+ public:
+  GlRenderer() = default;
+  GlRenderer(const GlRenderer&) = delete;
+  GlRenderer& operator=(const GlRenderer&) = delete;
+  ~GlRenderer();
+
+  // Compiles the programs and builds the buffers for the cache's startup
+  // (layout, class tables). False with the GL's message.
+  bool init(const NodeCache& cache, const GlRenderOptions& options, std::string& error);
+  // Draws every cached node for `camera` into the bound framebuffer of
+  // width x height pixels (cleared first).
+  bool draw(const NodeCache& cache, const Camera& camera, int width, int height, const GlRenderOptions& options,
+            GlFrameStats* stats, std::string& error);
+  // GL_RENDERER and GL_VERSION, for logs.
+  static std::string describe();
+
+ private:
+  bool build_program(bool gpu, std::string& error);
+
+  unsigned programs_[2] = {0, 0};  // CPU decode, GPU decode
+  unsigned vao_ = 0, instances_ = 0;
+  unsigned sigma_buffer_ = 0, sigma_texture_ = 0, gauss_buffer_ = 0, gauss_texture_ = 0;
+  int field_offset_[18] = {}, field_bits_[18] = {};
+  uint16_t samples_ = 0;
+  std::vector<uint8_t> staging_;  // instance data, bucket by bucket
+  std::vector<uint32_t> order_;   // cache slots by bucket
+  std::vector<uint16_t> counts_;  // per slot
+};
+
+// An offscreen framebuffer (optionally multisampled) to draw into and read
+// back: the headless GL client, the tests.
+class GlOffscreen {
+ public:
+  GlOffscreen() = default;
+  GlOffscreen(const GlOffscreen&) = delete;
+  GlOffscreen& operator=(const GlOffscreen&) = delete;
+  ~GlOffscreen();
+  bool init(int width, int height, int msaa, std::string& error);
+  void bind() const;
+  // The picture, rows top to bottom, RGB888 (resolving MSAA).
+  bool read(std::vector<uint8_t>& rgb, std::string& error);
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+ private:
+  unsigned fbo_ = 0, color_ = 0, depth_ = 0, resolve_fbo_ = 0, resolve_color_ = 0;
+  int width_ = 0, height_ = 0, msaa_ = 0;
+};
+
+// Reads the bound framebuffer (a window's back buffer), rows top to bottom.
+bool gl_read_pixels(int width, int height, std::vector<uint8_t>& rgb, std::string& error);
+
+// A headless OpenGL 3.3 core context through EGL (Mesa's surfaceless
+// platform, else the default display with a pbuffer): no window, no X.
+class EglContext {
+ public:
+  EglContext() = default;
+  EglContext(const EglContext&) = delete;
+  EglContext& operator=(const EglContext&) = delete;
+  ~EglContext();
+  bool open(std::string& error);
+
+ private:
+  void* display_ = nullptr;
+  void* context_ = nullptr;
+  void* surface_ = nullptr;
+};
+
+}  // namespace stipple

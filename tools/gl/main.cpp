@@ -1,0 +1,247 @@
+// stipple-gl — the desktop client on the GPU: the node stream the handheld
+// gets (a local .spg through an in-process server, `stipple serve` over
+// TCP, or a serial line) into core's node cache, drawn by platform/gl's
+// renderer: records decoded and points generated in the vertex shader.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <epoxy/gl.h>
+
+#include "platform/gl/gl_renderer.h"
+#include "platform/png_io.h"
+#include "platform/sdl2/sdl_gl_window.h"
+#include "tools/embedded/options.h"
+#include "tools/embedded/render_options.h"
+#include "tools/viewer/viewer.h"
+
+namespace stipple {
+namespace {
+
+const char kUsage[] =
+    "usage: stipple-gl MODEL.spg [options]\n"
+    "       stipple-gl --connect HOST:PORT | --serial DEV [--baud N] [options]\n"
+    "\n"
+    "The GL desktop client: the same node stream as the handheld, decoded and\n"
+    "sampled on the GPU (OpenGL 3.3 core; platform/gl/gl_renderer.h). The window\n"
+    "takes the emulator's controls: arrow keys or WASD orbit and tilt (with Enter\n"
+    "or Space held, dolly), C L Q colour, lighting and quality, a mouse drag the\n"
+    "refinement window, Escape quits. The title shows the frame rate, nodes,\n"
+    "points and kilobytes received.\n"
+    "\n"
+    "program:\n"
+    "  --connect HOST:PORT  nodes from `stipple serve` (no MODEL.spg)\n"
+    "  --serial DEV         the same over a serial line; --baud N its rate (115200)\n"
+    "  --decode gpu|cpu     records unpacked in the vertex shader (default) or by\n"
+    "                       core's decoder on the CPU, for comparison\n"
+    "  --msaa N             multisampling, 0 (default), 2, 4 or 8 (the paper: 8)\n"
+    "  --headless -o F.png  no window (EGL, surfaceless or a pbuffer): draw the\n"
+    "                       view once it has converged and write it\n"
+    "  --frames N           with --headless: draw N frames and print the median\n"
+    "                       time, nodes/s and points/s\n"
+    "  --script FILE        scripted input, as stipple-emulator's\n"
+    "(--size defaults to 640x480 and --cache to 200000 nodes here.)\n"
+    "\n";
+
+int fail(const std::string& message) {
+  std::fprintf(stderr, "stipple-gl: %s\n", message.c_str());
+  return 1;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+GlRenderOptions gl_options(const RenderOptions& o, bool gpu, const ViewerControls* c) {
+  GlRenderOptions g;
+  g.gpu_decode = gpu;
+  g.point_size = o.config.point_size;
+  g.samples = o.config.samples;
+  g.quality_q8 = c ? c->quality_q8() : o.config.quality_q8;
+  g.grey = c ? c->grey() : o.config.grey;
+  g.lighting = c ? c->lighting() : o.config.shading != ShadingMode::kNone;
+  for (int k = 0; k < 3; ++k) g.light[k] = static_cast<float>(o.config.lighting.light_q14[k]) / 16384.f;
+  g.ambient = static_cast<float>(o.config.lighting.ambient_q8) / 256.f;
+  g.grey_rgb = o.config.grey_rgb;
+  g.clear_rgb = o.config.clear_rgb;
+  return g;
+}
+
+// The refinement window's outline, in the bound framebuffer (rows from the top).
+void outline(int height, const int32_t r[4]) {
+  glEnable(GL_SCISSOR_TEST);
+  glClearColor(1.f, 1.f, 0.f, 1.f);
+  const auto bar = [&](int x0, int y0, int x1, int y1) {
+    glScissor(x0, height - y1, std::max(x1 - x0, 1), std::max(y1 - y0, 1));
+    glClear(GL_COLOR_BUFFER_BIT);
+  };
+  bar(r[0], r[1], r[2], r[1] + 1);
+  bar(r[0], r[3] - 1, r[2], r[3]);
+  bar(r[0], r[1], r[0] + 1, r[3]);
+  bar(r[2] - 1, r[1], r[2], r[3]);
+  glDisable(GL_SCISSOR_TEST);
+}
+
+int run(int argc, char** argv) {
+  cli::Args args(argc, argv, 1);
+  if (args.flag("--help") || args.flag("-h")) {
+    std::fputs(kUsage, stdout);
+    std::fputs(kRenderOptionsHelp, stdout);
+    return 0;
+  }
+  bool cache_given = false;
+  for (int i = 1; i < argc; ++i) cache_given = cache_given || std::strcmp(argv[i], "--cache") == 0;
+  RenderOptions o;
+  std::string error, connect, serial, output, script_path, decode = "gpu", v;
+  args.value("--connect", connect);
+  args.value("--serial", serial);
+  args.value("--decode", decode);
+  unsigned long long baud = 115200, frames = 0, msaa = 0;
+  if (args.value("--baud", v) && !cli::parse_uint(v, 4000000, baud)) return fail("--baud: expected a rate, got '" + v + "'");
+  if (args.value("--msaa", v) && (!cli::parse_uint(v, 8, msaa) || (msaa != 0 && msaa != 2 && msaa != 4 && msaa != 8)))
+    return fail("--msaa: expected 0, 2, 4 or 8, got '" + v + "'");
+  if (args.value("--frames", v) && (!cli::parse_uint(v, 100000, frames) || frames < 1))
+    return fail("--frames: expected 1..100000, got '" + v + "'");
+  const bool headless = args.flag("--headless");
+  if (!args.value("-o", output)) args.value("--output", output);
+  args.value("--script", script_path);
+  if (!parse_render_options(args, o, error)) return fail(error);
+  const std::vector<std::string> files = args.positionals();
+  if (args.bad()) return fail(args.error());
+  if (!args.unknown_option().empty()) return fail("unknown option '" + args.unknown_option() + "'");
+  if (decode != "gpu" && decode != "cpu") return fail("--decode: expected gpu or cpu, got '" + decode + "'");
+  if (files.size() > 1) return fail("expected one .spg file");
+  const std::string model = files.empty() ? "" : files[0];
+  if (model.empty() && connect.empty() && serial.empty())
+    return fail("expected a .spg file, --connect HOST:PORT or --serial DEV (stipple encode data/bunny.ply -o bunny.spg makes one)");
+  if (headless && output.empty()) return fail("--headless needs -o FRAME.png");
+  if (!o.sized) o.config.raster.width = 640, o.config.raster.height = 480;
+  if (!cache_given) o.config.node_capacity = 200000;
+  o.config.raster.max_points = 1u << 16;  // the software renderer's budget (unused here): keep its arena small
+  std::vector<ScriptStep> script;
+  if (!script_path.empty() && !read_script(script_path, script, error)) return fail(error);
+  const int w = o.config.raster.width, h = o.config.raster.height;
+  const bool gpu = decode == "gpu";
+
+  EglContext egl;
+  SdlGlWindow window;
+  if (headless ? !egl.open(error) : !window.open(w, h, static_cast<int>(msaa), "stipple-gl", error)) return fail(error);
+  ViewerSource source;
+  if (!source.open(model, connect, serial, static_cast<uint32_t>(baud), o, error)) return fail(error);
+  RemoteModel& m = source.model();
+  const NodeCache& cache = m.client().cache();
+  GlRenderer renderer;
+  if (!renderer.init(cache, gl_options(o, gpu, nullptr), error)) return fail(error);
+  ViewerControls controls(o, m.header(), cache.decoder().extent_mu());
+  Camera camera;
+  if (!controls.camera(static_cast<uint16_t>(w), static_cast<uint16_t>(h), &camera))
+    return fail("--camera: the view is out of the camera's range");
+  std::vector<uint8_t> rgb;
+  Image image;
+  GlFrameStats stats;
+
+  if (headless) {
+    GlOffscreen target;
+    if (!target.init(w, h, static_cast<int>(msaa), error)) return fail(error);
+    if (!m.view(camera, o.rule.max_size_q4, controls.window(), error)) return fail(source.name() + ": " + error);
+    std::vector<double> times;
+    for (unsigned long long f = 0; f < std::max<unsigned long long>(frames, 1); ++f) {
+      target.bind();
+      const auto t = std::chrono::steady_clock::now();
+      if (!renderer.draw(cache, camera, w, h, gl_options(o, gpu, nullptr), &stats, error)) return fail(error);
+      glFinish();
+      times.push_back(seconds_since(t));
+    }
+    if (!target.read(rgb, error)) return fail(error);
+    image.width = w;
+    image.height = h;
+    image.rgb = rgb;
+    if (!write_png(output, image, error)) return fail(error);
+    std::sort(times.begin(), times.end());
+    std::printf("%s: %s; %u nodes, %llu points, %llu bytes received -> %s", source.name().c_str(),
+                GlRenderer::describe().c_str(), stats.nodes, static_cast<unsigned long long>(stats.points),
+                static_cast<unsigned long long>(m.bytes_received()), output.c_str());
+    if (frames > 0) {
+      const double t = times[times.size() / 2];
+      std::printf("; frame: median %.3f ms of %llu, %.2f M nodes/s, %.1f M points/s", 1e3 * t, frames, stats.nodes / t / 1e6,
+                  static_cast<double>(stats.points) / t / 1e6);
+    }
+    std::printf("\n");
+    return 0;
+  }
+
+  if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(error);
+  size_t next_step = 0;
+  uint32_t frame_number = 0;
+  double fps = 0;
+  auto rate_start = std::chrono::steady_clock::now();
+  int rate_frames = 0;
+  while (!controls.quit()) {
+    const auto frame_start = std::chrono::steady_clock::now();
+    for (; next_step < script.size() && script[next_step].frame <= frame_number; ++next_step) {
+      const ScriptStep& s = script[next_step];
+      if (s.kind == ScriptStep::kInput) window.inject(s.event);
+      else if (s.kind == ScriptStep::kQuit) window.inject(InputEvent{InputKind::kQuit, Button::kNone, 0, 0});
+    }
+    bool changed = false;
+    InputEvent e;
+    while (window.poll(&e)) changed = controls.apply(e) || changed;
+    changed = controls.tick() || changed;
+    if (changed) {
+      if (!controls.camera(static_cast<uint16_t>(w), static_cast<uint16_t>(h), &camera)) return fail("the camera left its range");
+      if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(source.name() + ": " + error);
+    }
+    for (int k = 0; k < 64 && seconds_since(frame_start) < 0.010; ++k) {
+      const uint64_t before = m.bytes_received();
+      if (!m.service(0, error)) return fail(source.name() + ": " + error);
+      if (m.bytes_received() == before && k > 0) break;
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (!renderer.draw(cache, camera, window.width(), window.height(), gl_options(o, gpu, &controls), &stats, error))
+      return fail(error);
+    int32_t rect[4];
+    if (controls.dragging(rect)) outline(window.height(), rect);
+    else if (controls.window()[0] < controls.window()[2]) outline(window.height(), controls.window());
+    // Screenshots see this frame, as it will be shown.
+    for (size_t k = 0; k < next_step; ++k) {
+      ScriptStep& s = script[k];
+      if (s.kind != ScriptStep::kScreenshot || s.path.empty()) continue;
+      if (!gl_read_pixels(window.width(), window.height(), rgb, error)) return fail(error);
+      image.width = window.width();
+      image.height = window.height();
+      image.rgb = rgb;
+      if (!write_png(s.path, image, error)) return fail(error);
+      std::printf("frame %u: screenshot %s %dx%d, crc32 %08x\n", frame_number, s.path.c_str(), image.width, image.height,
+                  crc32(image.rgb.data(), image.rgb.size()));
+      s.path.clear();
+    }
+    window.swap();
+    ++frame_number;
+    ++rate_frames;
+    const double elapsed = seconds_since(rate_start);
+    if (elapsed >= 0.5) {
+      fps = rate_frames / elapsed;
+      rate_start = std::chrono::steady_clock::now();
+      rate_frames = 0;
+      char title[160];
+      std::snprintf(title, sizeof title, "stipple-gl  %.1f fps  %u nodes  %llu points  %llu KB%s", fps, stats.nodes,
+                    static_cast<unsigned long long>(stats.points), static_cast<unsigned long long>(m.bytes_received() / 1024),
+                    m.converged() ? "" : "  ...");
+      window.set_title(title);
+    }
+    const double spare = 1.0 / 60 - seconds_since(frame_start);
+    if (spare > 0) std::this_thread::sleep_for(std::chrono::duration<double>(spare));
+  }
+  std::printf("%s: %u frames, last %u nodes, %llu points, %llu bytes received\n", source.name().c_str(), frame_number,
+              stats.nodes, static_cast<unsigned long long>(stats.points), static_cast<unsigned long long>(m.bytes_received()));
+  return 0;
+}
+
+}  // namespace
+}  // namespace stipple
+
+int main(int argc, char** argv) { return stipple::run(argc, argv); }
