@@ -14,7 +14,10 @@
 namespace stipple {
 namespace {
 
-constexpr int kBuckets = 11;  // counts up to 1, 2, 4, ... 1024 (and above, the buffer's size)
+constexpr int kBuckets = 11;
+// Points per node: the 2σ ellipse's area in point-sized squares, five times
+// over (gl_renderer.h).
+constexpr float kCoverage = 5.f;  // counts up to 1, 2, 4, ... 1024 (and above, the buffer's size)
 
 // Instance data. GPU decode: the record's 8 words, then the count. CPU
 // decode: mean, the three scaled axes and the normal (floats, MU and unit),
@@ -254,7 +257,7 @@ bool GlRenderer::draw(const NodeCache& cache, const Camera& camera, int width, i
     };
     const float scale = focal / static_cast<float>(c[2]);
     const float s1 = length(node.axis[0]) * scale, s2 = length(node.axis[1]) * scale;
-    const float want = 3.f * 3.14159265f * (2 * s1) * (2 * s2) / point_area * static_cast<float>(o.quality_q8) / 256.f;
+    const float want = kCoverage * 3.14159265f * (2 * s1) * (2 * s2) / point_area * static_cast<float>(o.quality_q8) / 256.f;
     const uint32_t count = static_cast<uint32_t>(std::clamp(std::ceil(want), 1.f, static_cast<float>(samples_)));
     counts_[slot] = static_cast<uint16_t>(count);
     ++in_bucket[bucket_of(count)];

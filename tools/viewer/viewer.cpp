@@ -105,7 +105,7 @@ bool ViewerControls::apply(const InputEvent& e) {
         case Button::kColor: grey_ = !grey_; return true;
         case Button::kLighting: lighting_ = !lighting_; return true;
         case Button::kQuality: {  // 1 -> 1/2 -> 1/4 -> 2 -> 1
-          quality_q8_ = quality_q8_ >= 512 ? 256 : quality_q8_ > 64 ? static_cast<uint16_t>(quality_q8_ / 2) : 512;
+          quality_q8_ = static_cast<uint16_t>(quality_q8_ >= 512 ? 256 : quality_q8_ > 64 ? quality_q8_ / 2 : 512);
           return true;
         }
         default: return tick();  // a press turns at once
