@@ -429,6 +429,8 @@ bool GlOffscreen::read(std::vector<uint8_t>& rgb, std::string& error) {
   return ok;
 }
 
+void gl_finish() { glFinish(); }
+
 bool gl_read_pixels(int width, int height, std::vector<uint8_t>& rgb, std::string& error) {
   std::vector<uint8_t> rows(static_cast<size_t>(width) * height * 4);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);

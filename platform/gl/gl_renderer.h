@@ -106,6 +106,9 @@ class GlOffscreen {
   int width_ = 0, height_ = 0, msaa_ = 0;
 };
 
+// Waits until the GL has finished every command (timing).
+void gl_finish();
+
 // Reads the bound framebuffer (a window's back buffer), rows top to bottom.
 bool gl_read_pixels(int width, int height, std::vector<uint8_t>& rgb, std::string& error);
 

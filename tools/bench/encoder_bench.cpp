@@ -18,6 +18,9 @@
 #include "core/spg_format.h"
 #include "platform/file_io.h"
 #include "core/cut.h"
+#ifdef STIPPLE_BENCH_GL
+#include "platform/gl/gl_renderer.h"
+#endif
 #include "core/view_cut.h"
 #include "raster/client.h"
 #include "tools/server/link_timing.h"
@@ -243,6 +246,21 @@ BENCHMARK(BM_RasterFrame)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 // arg 2: shading (0 per point, 2 none). Counters: points per frame and
 // points per second; the decode + sample + transform + z-test + write of
 // every point is inside the timed render().
+// The cut of the simple projected-size rule whose threshold (1/16 px) gives
+// nearest 30,000 nodes for `camera`: the frame benchmarks' load.
+std::vector<uint32_t> cut_near_30000(const SpgView& view, const NodeDecoder& decoder, const Camera& camera) {
+  std::vector<uint8_t> scratch(cut_scratch_bytes(view.header));
+  std::vector<uint32_t> cut(view.header.node_count);
+  uint32_t n = 0;
+  for (int32_t q4 = 8; q4 <= 4096; q4 += q4 / 8) {
+    n = simple_cut(view, CutRule{CutRule::kProjectedSize, 0, q4}, &decoder, &camera, scratch.data(), cut.data(),
+                   static_cast<uint32_t>(cut.size()));
+    if (n <= 30000) break;
+  }
+  cut.resize(n);
+  return cut;
+}
+
 void BM_ClientFrame(benchmark::State& state) {
   const std::vector<uint8_t>& spg = encoded_scan();
   const SpgView view = parsed_scan();
@@ -257,15 +275,8 @@ void BM_ClientFrame(benchmark::State& state) {
   if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk) std::abort();
   Camera camera;
   if (!orbit_camera(orbit_view(decoder.extent_mu(), ViewSpec{}), 640, 480, &camera)) std::abort();
-  std::vector<uint8_t> scratch(cut_scratch_bytes(view.header));
-  std::vector<uint32_t> cut(view.header.node_count);
-  // The threshold (1/16 px) whose cut is nearest 30,000 nodes.
-  uint32_t n = 0;
-  for (int32_t q4 = 8; q4 <= 4096; q4 += q4 / 8) {
-    n = simple_cut(view, CutRule{CutRule::kProjectedSize, 0, q4}, &decoder, &camera, scratch.data(), cut.data(),
-                   static_cast<uint32_t>(cut.size()));
-    if (n <= 30000) break;
-  }
+  const std::vector<uint32_t> cut = cut_near_30000(view, decoder, camera);
+  const uint32_t n = static_cast<uint32_t>(cut.size());
   std::vector<uint64_t> arena(client_arena_bytes(c) / 8 + 1);
   Client client;
   if (client.init(c, arena.data(), arena.size() * 8) != ClientStatus::kOk ||
@@ -295,6 +306,55 @@ BENCHMARK(BM_ClientFrame)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
+
+#ifdef STIPPLE_BENCH_GL
+// The GL client's frame (platform/gl) on whatever EGL offers (Mesa's
+// llvmpipe without a GPU) for BM_ClientFrame's cut and camera at 640x480:
+// arg 0 = 1 decodes in the vertex shader, 0 on the CPU. The per-node counts,
+// the upload, the draws and glFinish are inside the timed loop.
+void BM_GlFrame(benchmark::State& state) {
+  const std::vector<uint8_t>& spg = encoded_scan();
+  const SpgView view = parsed_scan();
+  std::vector<uint8_t> storage(node_decoder_bytes(view.header));
+  NodeDecoder decoder;
+  if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk) std::abort();
+  Camera camera;
+  if (!orbit_camera(orbit_view(decoder.extent_mu(), ViewSpec{}), 640, 480, &camera)) std::abort();
+  const std::vector<uint32_t> cut = cut_near_30000(view, decoder, camera);
+  NodeCacheLimits limits;
+  limits.node_capacity = view.header.node_count;
+  std::vector<uint64_t> cache_storage(node_cache_bytes(limits) / 8 + 1);
+  NodeCache cache;
+  if (cache.init(limits, cache_storage.data(), cache_storage.size() * 8) != CacheStatus::kOk ||
+      cache.load_startup(spg.data(), spg_startup_bytes(view.header.class_count)) != CacheStatus::kOk)
+    std::abort();
+  for (uint32_t id : cut)
+    if (cache.put(NodeId{id}, view.records + size_t{id} * view.record_bytes, view.record_bytes) != CacheStatus::kOk) std::abort();
+  EglContext egl;
+  std::string error;
+  if (!egl.open(error)) {
+    state.SkipWithError(error.c_str());
+    return;
+  }
+  GlRenderOptions o;
+  o.gpu_decode = state.range(0) != 0;
+  GlRenderer renderer;
+  GlOffscreen target;
+  if (!renderer.init(cache, o, error) || !target.init(640, 480, 0, error)) std::abort();
+  target.bind();
+  GlFrameStats stats;
+  for (auto _ : state) {
+    if (!renderer.draw(cache, camera, 640, 480, o, &stats, error)) std::abort();
+    gl_finish();
+  }
+  state.SetLabel(GlRenderer::describe());
+  state.counters["nodes"] = stats.nodes;
+  state.counters["points"] = static_cast<double>(stats.points);
+  state.counters["nodes_per_s"] = benchmark::Counter(stats.nodes, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["points_per_s"] = benchmark::Counter(static_cast<double>(stats.points), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_GlFrame)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
+#endif
 
 // The view-dependent cut's update along a 120-step orbit of the scan at
 // 240x320 (arg 0: culling off/on): the server's cost per camera update.
