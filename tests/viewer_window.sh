@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A desktop viewer as a user sees it: a real window (SDL's X11 driver under
 # Xvfb; for stipple-gl an OpenGL context on Mesa's llvmpipe) driven by a
-# scripted input sequence — a D-pad press, a stylus drag — with screenshots
+# scripted input sequence — a few D-pad presses, a stylus drag — with screenshots
 # checked to be the window's size and to have changed as the input says:
 # nothing while nothing is pressed, the picture after the orbit, again after
 # the refinement window is drawn. Then the viewer fed by `stipple serve` over
@@ -17,6 +17,8 @@ cat >"$W/script" <<SCRIPT
 40 screenshot $W/idle2.png
 41 down right
 50 up right
+52 press up
+60 press left
 80 screenshot $W/orbit.png
 81 stylus-down $x0 $y0
 83 stylus-move $x1 $y1
