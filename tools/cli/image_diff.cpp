@@ -8,17 +8,24 @@
 
 #include "platform/png_io.h"
 #include "tools/cli/cli.h"
+#include "tools/reference/image_metrics.h"
 
 namespace stipple {
 namespace {
 
 const char kDiffHelp[] =
-    "usage: stipple image-diff EXPECTED.png ACTUAL.png [-o DIFF.png]\n"
+    "usage: stipple image-diff EXPECTED.png ACTUAL.png [-o DIFF.png] [--json]\n"
     "\n"
     "Compares two RGB images of the same size byte for byte. Prints the number of\n"
     "differing pixels, the largest channel difference and the PSNR; -o writes a\n"
     "diff image (the expected image darkened, differing pixels in red, brighter\n"
-    "for larger differences). Exit status 0 when identical, 1 when not.\n";
+    "for larger differences). When they differ it also measures ACTUAL against\n"
+    "EXPECTED as a reference picture (`stipple truth`; black is background):\n"
+    "PSNR over the object (the pixels either covers), SSIM of the luma, the share\n"
+    "of lit reference pixels shown at under half their luma (dark where lit), the\n"
+    "share of ACTUAL's pixels outside the reference's silhouette and of the\n"
+    "reference's pixels ACTUAL leaves empty (tools/reference/image_metrics.h).\n"
+    "--json prints all of it as one object. Exit status 0 when identical, 1 when not.\n";
 
 }  // namespace
 
@@ -30,6 +37,7 @@ int cmd_image_diff(int argc, char** argv) {
   }
   std::string output, error;
   if (!args.value("-o", output)) args.value("--output", output);
+  const bool json = args.flag("--json");
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("image-diff: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("image-diff: unknown option '" + args.unknown_option() + "'");
@@ -56,6 +64,26 @@ int cmd_image_diff(int argc, char** argv) {
     }
   }
   if (!output.empty() && !write_png(output, Image{a.width, a.height, diff}, error)) return cli::fail(error);
+  const ImageComparison m = compare_images(a, b);
+  if (json) {
+    std::printf("%s\n", cli::Json()
+                           .str("expected", files[0])
+                           .str("actual", files[1])
+                           .integer("width", a.width)
+                           .integer("height", a.height)
+                           .integer("differing_pixels", differing)
+                           .integer("largest_difference", largest)
+                           .num("psnr_db", differing ? image_psnr(a, b) : 999)
+                           .integer("object_pixels", m.object_pixels)
+                           .num("object_psnr_db", differing ? m.object_psnr : 999)
+                           .num("ssim", m.ssim)
+                           .num("dark_where_lit", m.dark_where_lit)
+                           .num("outside_silhouette", m.outside)
+                           .num("missing", m.missing)
+                           .done()
+                           .c_str());
+    return differing ? 1 : 0;
+  }
   if (differing == 0) {
     std::printf("%s and %s are identical (%dx%d)\n", files[0].c_str(), files[1].c_str(), a.width, a.height);
     return 0;
@@ -63,6 +91,9 @@ int cmd_image_diff(int argc, char** argv) {
   std::printf("%s and %s differ: %ld of %ld pixels, largest channel difference %d, PSNR %.2f dB%s\n", files[0].c_str(),
               files[1].c_str(), differing, static_cast<long>(a.width) * a.height, largest, image_psnr(a, b),
               output.empty() ? "" : (" -> " + output).c_str());
+  std::printf("against it as the reference: object PSNR %.2f dB over %ld pixels, SSIM %.4f, dark where lit %.2f %%, "
+              "outside its silhouette %.2f %%, missing %.2f %%\n",
+              m.object_psnr, m.object_pixels, m.ssim, 100 * m.dark_where_lit, 100 * m.outside, 100 * m.missing);
   return 1;
 }
 

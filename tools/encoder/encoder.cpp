@@ -33,6 +33,14 @@ void stored_bounding_box(const std::vector<Vec3>& points, float min[3], float ma
   }
 }
 
+ScanFrame prepare_scan(PointCloud& cloud, const EncodeOptions& o, const std::function<void(double, const char*)>& progress) {
+  const bool estimate = o.normals && !cloud.has_normals();
+  if (estimate && !cloud.triangles.empty()) estimate_normals(cloud, o.normal_neighbours, ScanFrame{}, progress);
+  const ScanFrame frame = analyse_scan(cloud.positions, o.orient, cloud.has_normals() ? &cloud.normals : nullptr);
+  if (estimate && !cloud.has_normals()) estimate_normals(cloud, o.normal_neighbours, frame, progress);
+  return frame;
+}
+
 bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t>& spg, EncodeReport& report,
                   std::string& error, ProgressBar* progress) {
   if (o.classes_p < 0 || o.classes_p > 4096) return error = "--classes: sigma_p classes must be 1..4096", false;
@@ -58,9 +66,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   const auto normals_progress = [&](double f, const char* phase) {
     if (progress) progress->update(0.3 * f, phase);
   };
-  if (estimate && !cloud.triangles.empty()) estimate_normals(cloud, o.normal_neighbours, ScanFrame{}, normals_progress);
-  report.frame = analyse_scan(cloud.positions, o.orient, cloud.has_normals() ? &cloud.normals : nullptr);
-  if (estimate && !cloud.has_normals()) estimate_normals(cloud, o.normal_neighbours, report.frame, normals_progress);
+  report.frame = prepare_scan(cloud, o, normals_progress);
   if (!normals) cloud.normals.clear();
   if (!colors) cloud.colors.clear();
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,13 @@ struct EncodeReport {
 // naming the option at fault for invalid options.
 bool encode_cloud(PointCloud& cloud, const EncodeOptions& options, std::vector<uint8_t>& spg, EncodeReport& report,
                   std::string& error, ProgressBar* progress = nullptr);
+
+// What the encoder does to a scan before its tree: normals where it has none
+// (its faces' first, else k nearest neighbours, oriented by analyse_scan's
+// rules, which also give the view hint), returned as the scan's frame.
+// `progress` (may be empty) sees the estimation's fraction done.
+ScanFrame prepare_scan(PointCloud& cloud, const EncodeOptions& options,
+                       const std::function<void(double, const char*)>& progress = {});
 
 // The bounding box as stored: float32, rounded outwards so it contains every point.
 void stored_bounding_box(const std::vector<Vec3>& points, float min[3], float max[3]);

@@ -19,16 +19,18 @@ double radians(uint32_t angle) { return angle / kTurn * 2 * std::numbers::pi; }
 
 }  // namespace
 
-Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& cut, const ClientConfig& config,
-                       const ViewSpec& spec) {
+ReferenceCamera reference_camera(const Vec3& bbox_min, const Vec3& bbox_max, const SpgHeader& header,
+                                 const ClientConfig& config, const ViewSpec& spec) {
+  ReferenceCamera cam;
   const int w = config.raster.width, h = config.raster.height;
   // Model units as the fixed decoder defines them.
-  const Vec3 extent = model.bbox_max - model.bbox_min;
+  const Vec3 extent = bbox_max - bbox_min;
   const double largest = std::max({extent.x(), extent.y(), extent.z(), 0.0}) > 0 ? extent.maxCoeff() : 1.0;
-  const double to_mu = kMu / largest;
+  cam.to_mu = kMu / largest;
+  cam.bbox_min = bbox_min;
   int32_t extent_mu[3];
-  for (int a = 0; a < 3; ++a) extent_mu[a] = static_cast<int32_t>(std::llround(extent[a] * to_mu));
-  const OrbitView o = orbit_view(extent_mu, resolve_view(spec, model.header, extent_mu));
+  for (int a = 0; a < 3; ++a) extent_mu[a] = static_cast<int32_t>(std::llround(extent[a] * cam.to_mu));
+  const OrbitView o = orbit_view(extent_mu, resolve_view(spec, header, extent_mu));
   // The camera of orbit_camera, in doubles, turned by the same axis permutation.
   const double yaw = radians(o.yaw), pitch = radians(o.pitch), fov = radians(o.fov);
   int32_t permutation[3][3];
@@ -39,22 +41,52 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
   const Vec3 back = basis * Vec3(std::sin(yaw) * std::cos(pitch), std::sin(pitch), std::cos(yaw) * std::cos(pitch));
   const Vec3 right = basis * Vec3(std::cos(yaw), 0, -std::sin(yaw));
   const Vec3 up = back.cross(right);
-  Mat3 R;
-  R.row(0) = right.transpose();
-  R.row(1) = -up.transpose();
-  R.row(2) = -back.transpose();
+  cam.R.row(0) = right.transpose();
+  cam.R.row(1) = -up.transpose();
+  cam.R.row(2) = -back.transpose();
   const Vec3 target(o.target_mu[0], o.target_mu[1], o.target_mu[2]);
-  const Vec3 eye = target + o.distance_mu * back;
-  const double focal = (h / 2.0) / std::tan(fov / 2), cx = w / 2.0, cy = h / 2.0;
-  const double near = std::max(o.distance_mu / 64, kCameraMinDistance);
-
+  cam.eye = target + o.distance_mu * back;
+  cam.focal = (h / 2.0) / std::tan(fov / 2);
+  cam.cx = w / 2.0;
+  cam.cy = h / 2.0;
+  cam.near = std::max(o.distance_mu / 64, kCameraMinDistance);
   // Lighting in camera space, then in the model.
   const Lighting& L = config.lighting;
   const Vec3 light_cam = Vec3(L.light_q14[0], L.light_q14[1], L.light_q14[2]).normalized();
   Vec3 half_cam = (light_cam + Vec3(0, 0, -1));
   half_cam = half_cam.norm() > 0 ? half_cam.normalized() : Vec3(0, 0, -1);
-  const Vec3 light = R.transpose() * light_cam, half = R.transpose() * half_cam;
-  const double ambient = std::min<int>(L.ambient_q8, 256) / 256.0, strength = L.specular_q8 / 256.0;
+  cam.light = cam.R.transpose() * light_cam;
+  cam.half = cam.R.transpose() * half_cam;
+  cam.ambient = std::min<int>(L.ambient_q8, 256) / 256.0;
+  cam.strength = L.specular_q8 / 256.0;
+  return cam;
+}
+
+Image image_of(const std::vector<uint32_t>& color_buf, const ClientConfig& config) {
+  Image img;
+  img.width = config.raster.width;
+  img.height = config.raster.height;
+  img.rgb.resize(color_buf.size() * 3);
+  for (size_t i = 0; i < color_buf.size(); ++i) {
+    uint32_t v = color_buf[i];
+    if (config.raster.format == PixelFormat::kRgb565) v = rgb888_from_565(rgb565(v));
+    img.rgb[3 * i] = static_cast<uint8_t>(v >> 16);
+    img.rgb[3 * i + 1] = static_cast<uint8_t>(v >> 8);
+    img.rgb[3 * i + 2] = static_cast<uint8_t>(v);
+  }
+  return img;
+}
+
+Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& cut, const ClientConfig& config,
+                       const ViewSpec& spec) {
+  const int w = config.raster.width, h = config.raster.height;
+  const ReferenceCamera cam = reference_camera(model.bbox_min, model.bbox_max, model.header, config, spec);
+  const Mat3& R = cam.R;
+  const Vec3& eye = cam.eye;
+  const double to_mu = cam.to_mu, focal = cam.focal, cx = cam.cx, cy = cam.cy, near = cam.near;
+  const Lighting& L = config.lighting;
+  const Vec3 light = cam.light, half = cam.half;
+  const double ambient = cam.ambient, strength = cam.strength;
 
   const bool normals = model.header.has_normals() && config.shading != ShadingMode::kNone;
   const bool per_point_normals = normals && config.shading == ShadingMode::kPerPoint;
@@ -138,18 +170,7 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
         }
     }
   }
-  Image img;
-  img.width = w;
-  img.height = h;
-  img.rgb.resize(static_cast<size_t>(w) * h * 3);
-  for (size_t i = 0; i < color_buf.size(); ++i) {
-    uint32_t v = color_buf[i];
-    if (config.raster.format == PixelFormat::kRgb565) v = rgb888_from_565(rgb565(v));
-    img.rgb[3 * i] = static_cast<uint8_t>(v >> 16);
-    img.rgb[3 * i + 1] = static_cast<uint8_t>(v >> 8);
-    img.rgb[3 * i + 2] = static_cast<uint8_t>(v);
-  }
-  return img;
+  return image_of(color_buf, config);
 }
 
 }  // namespace stipple

@@ -1,0 +1,103 @@
+// The reference picture from the scan (tools/reference/truth.h) and the
+// picture-against-reference measures (tools/reference/image_metrics.h): a
+// square facing the camera covers the pixels its corners project to and is
+// shaded as the client shades its normal; points are squares of the point
+// size; the measures count exactly the pixels they say.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tools/reference/image_metrics.h"
+#include "tools/reference/truth.h"
+
+namespace stipple {
+namespace {
+
+Image blank(int w, int h) { return Image{w, h, std::vector<uint8_t>(static_cast<size_t>(w) * h * 3, 0)}; }
+void put(Image& im, int x, int y, uint8_t v) {
+  uint8_t* p = &im.rgb[(static_cast<size_t>(y) * im.width + x) * 3];
+  p[0] = p[1] = p[2] = v;
+}
+
+TEST(ImageMetrics, CountWhatTheySay) {
+  Image ref = blank(64, 64), pic = blank(64, 64);
+  for (int y = 16; y < 48; ++y)
+    for (int x = 16; x < 48; ++x) put(ref, x, y, 200), put(pic, x, y, 200);  // 1024 object pixels
+  ImageComparison same = compare_images(ref, pic);
+  EXPECT_EQ(same.object_pixels, 1024);
+  EXPECT_TRUE(std::isinf(same.object_psnr));
+  EXPECT_DOUBLE_EQ(same.ssim, 1.0);
+  EXPECT_EQ(same.dark_where_lit, 0);
+  // 64 pixels drawn dark (under half the lit reference), 32 outside, 16 missing.
+  for (int x = 16; x < 48; ++x) put(pic, x, 20, 50), put(pic, x, 21, 50);
+  for (int x = 16; x < 48; ++x) put(pic, x, 50, 200);
+  for (int x = 16; x < 32; ++x) put(pic, x, 47, 0);
+  const ImageComparison m = compare_images(ref, pic);
+  EXPECT_EQ(m.object_pixels, 1024 + 32);
+  EXPECT_DOUBLE_EQ(m.dark_where_lit, 64.0 / (1024 - 16));
+  EXPECT_DOUBLE_EQ(m.outside, 32.0 / (1024 - 16 + 32));
+  EXPECT_DOUBLE_EQ(m.missing, 16.0 / 1024);
+  EXPECT_LT(m.ssim, 1.0);
+  EXPECT_GT(m.object_psnr, 0);
+  EXPECT_EQ(compare_images(ref, blank(32, 32)).object_pixels, 0);  // sizes differ: nothing measured
+}
+
+// A square of side 0.5 at the centre of a unit box, facing +z (the default
+// view's camera looks at it from yaw 0, pitch 0).
+PointCloud square(bool faces) {
+  PointCloud c;
+  c.positions = {Vec3(0.25, 0.25, 0.5), Vec3(0.75, 0.25, 0.5), Vec3(0.75, 0.75, 0.5), Vec3(0.25, 0.75, 0.5),
+                 Vec3(0, 0, 0), Vec3(1, 1, 1)};  // the last two only span the box
+  c.normals.assign(6, Vec3(0, 0, 1));
+  if (faces) c.triangles = {{0, 1, 2}, {0, 2, 3}};
+  return c;
+}
+
+TEST(Truth, AMeshCoversWhatItProjectsToAndIsShadedAsTheClientShades) {
+  ClientConfig config;
+  config.raster = RasterConfig{200, 200, 5, PixelFormat::kRgb888, 1u << 20};
+  config.lighting.specular_q8 = 0;
+  ViewSpec spec;
+  spec.yaw = 0;
+  spec.pitch = 0;
+  spec.orbit_given = true;
+  SpgHeader header;
+  TruthStats stats;
+  const PointCloud cloud = square(true);
+  const Image im = render_truth(cloud, Vec3(0, 0, 0), Vec3(1, 1, 1), header, config, spec, &stats);
+  EXPECT_TRUE(stats.mesh);
+  EXPECT_EQ(stats.drawn, 2u);
+  // The square's projected side, from the camera the client uses.
+  const ReferenceCamera cam = reference_camera(Vec3(0, 0, 0), Vec3(1, 1, 1), header, config, spec);
+  const Vec3 a = cam.camera_space(cloud.positions[0]), b = cam.camera_space(cloud.positions[2]);
+  const double side_x = std::abs(cam.focal * (b.x() / b.z() - a.x() / a.z()));
+  const double side_y = std::abs(cam.focal * (b.y() / b.z() - a.y() / a.z()));
+  long covered = 0;
+  for (size_t i = 0; i < im.rgb.size(); i += 3) covered += im.rgb[i] != 0;
+  EXPECT_NEAR(static_cast<double>(covered), side_x * side_y, 2 * (side_x + side_y));
+  // Every covered pixel: the grey base times ambient + (1 - ambient) max(0, L.n).
+  const double intensity = cam.ambient + (1 - cam.ambient) * std::max(0.0, cam.light.dot(Vec3(0, 0, 1)));
+  const long expected = std::lround(0xD8 * intensity);
+  const int centre = (100 * 200 + 100) * 3;
+  EXPECT_EQ(im.rgb[centre], expected);
+}
+
+TEST(Truth, BarePointsAreSquaresOfThePointSize) {
+  ClientConfig config;
+  config.raster = RasterConfig{200, 200, 5, PixelFormat::kRgb888, 1u << 20};
+  config.point_size = 2;
+  ViewSpec spec;
+  spec.yaw = 0;
+  spec.pitch = 0;
+  spec.orbit_given = true;
+  TruthStats stats;
+  const Image im = render_truth(square(false), Vec3(0, 0, 0), Vec3(1, 1, 1), SpgHeader{}, config, spec, &stats);
+  EXPECT_FALSE(stats.mesh);
+  long covered = 0;
+  for (size_t i = 0; i < im.rgb.size(); i += 3) covered += im.rgb[i] != 0;
+  EXPECT_EQ(stats.drawn, 6u);
+  EXPECT_EQ(covered, 6 * 4);  // six separate 2x2 squares
+}
+
+}  // namespace
+}  // namespace stipple
