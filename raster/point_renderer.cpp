@@ -12,14 +12,28 @@ constexpr int32_t kMaxDepthMu = 1 << 30;
 constexpr int32_t kMaxSigmaN = 4 << 12;       // theta table covers theta <= 4 rad
 
 struct Layout {
-  size_t raster, g_position, g_normal, g_color, shading, reciprocal, total;
+  size_t raster, internal_frame, g_position, g_normal, g_color, shading, reciprocal, total;
 };
+
+// The raster's configuration: the screen, times the supersampling, in
+// RGB888 when it is resolved afterwards.
+RasterConfig internal_raster(const RendererConfig& c) {
+  RasterConfig r = c.raster;
+  if (c.supersample > 1) {
+    r.width = static_cast<uint16_t>(r.width * c.supersample);
+    r.height = static_cast<uint16_t>(r.height * c.supersample);
+    r.format = PixelFormat::kRgb888;
+  }
+  return r;
+}
 
 Layout layout_of(const RendererConfig& c) {
   Layout l{};
   ArenaCarver arena;
   const auto take = [&](size_t bytes) { return arena.take(bytes); };
-  l.raster = take(point_raster_bytes(c.raster));
+  const RasterConfig r = internal_raster(c);
+  l.raster = take(point_raster_bytes(r));
+  l.internal_frame = take(c.supersample > 1 ? size_t{r.width} * r.height * 3 : 0);
   l.g_position = take(sizeof(Gaussian3Q12) * c.samples);
   l.g_normal = take(c.normals ? sizeof(Gaussian2Q12) * c.samples : 0);
   l.g_color = take(c.color ? sizeof(Gaussian3Q12) * c.samples : 0);
@@ -63,7 +77,9 @@ const char* render_status_text(RenderStatus s) {
 }
 
 bool renderer_config_valid(const RendererConfig& c) {
-  return point_raster_bytes(c.raster) > 0 && c.samples >= 1 && c.samples <= 8192 && c.point_size >= 1 &&
+  if (c.supersample != 1 && c.supersample != 2 && c.supersample != 4) return false;
+  if (uint32_t{c.raster.width} * c.supersample > 8192 || uint32_t{c.raster.height} * c.supersample > 8192) return false;
+  return point_raster_bytes(internal_raster(c)) > 0 && point_raster_bytes(c.raster) > 0 && c.samples >= 1 && c.samples <= 8192 && c.point_size >= 1 &&
          c.point_size <= 3 && c.quality_q8 >= 1 && c.lighting.shininess >= 1 && c.lighting.shininess <= 64 &&
          (c.lighting.light_q14[0] | c.lighting.light_q14[1] | c.lighting.light_q14[2]) != 0;
 }
@@ -88,8 +104,10 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   const Layout l = layout_of(config);
   if (bytes < l.total) return RenderStatus::kStorageTooSmall;
   uint8_t* base = static_cast<uint8_t*>(storage);
-  if (raster_.init(config.raster, base + l.raster, l.g_position - l.raster) != RasterStatus::kOk)
+  internal_ = internal_raster(config);
+  if (raster_.init(internal_, base + l.raster, l.internal_frame - l.raster) != RasterStatus::kOk)
     return RenderStatus::kBadConfig;
+  internal_frame_ = config.supersample > 1 ? base + l.internal_frame : nullptr;
   config_ = config;
   g_position_ = reinterpret_cast<Gaussian3Q12*>(base + l.g_position);
   g_normal_ = config.normals ? reinterpret_cast<Gaussian2Q12*>(base + l.g_normal) : nullptr;
@@ -254,8 +272,15 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
     if (camera.eye[k] < -(1 << 29) || camera.eye[k] > (1 << 29)) return RenderStatus::kBadCamera;
   FrameSetup f;
   f.camera = camera;
-  f.width_q4 = 16 * config_.raster.width;
-  f.height_q4 = 16 * config_.raster.height;
+  const int32_t n = config_.supersample;
+  if (n > 1) {  // the camera for the internal frame: focal length and principal point scaled
+    if (int64_t{camera.focal_q4} * n > kMaxFocalQ4) return RenderStatus::kBadCamera;
+    f.camera.focal_q4 = camera.focal_q4 * n;
+    f.camera.center_q4[0] = camera.center_q4[0] * n;
+    f.camera.center_q4[1] = camera.center_q4[1] * n;
+  }
+  f.width_q4 = 16 * internal_.width;
+  f.height_q4 = 16 * internal_.height;
   // Depth word: (z - near) << shift spans [near, far] in 32 bits.
   const uint32_t range = static_cast<uint32_t>(camera.far_mu - camera.near_mu);
   f.depth_shift = __builtin_clz(range);
@@ -299,7 +324,38 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
       (this->*draw)(f, header, node, stats);
     }
   }
-  raster_.draw(config_.clear_rgb, frame, stride);
+  if (n == 1) {
+    raster_.draw(config_.clear_rgb, frame, stride);
+  } else {
+    // Each screen pixel is the rounded mean of its n x n block.
+    const size_t in_stride = size_t{internal_.width} * 3;
+    raster_.draw(config_.clear_rgb, internal_frame_, in_stride);
+    const uint32_t half = static_cast<uint32_t>(n * n) / 2, shift = n == 2 ? 2 : 4;
+    for (uint32_t y = 0; y < config_.raster.height; ++y) {
+      uint8_t* out = frame + y * stride;
+      for (uint32_t x = 0; x < config_.raster.width; ++x) {
+        uint32_t sum[3] = {half, half, half};
+        for (int32_t dy = 0; dy < n; ++dy) {
+          const uint8_t* p = internal_frame_ + (y * n + static_cast<uint32_t>(dy)) * in_stride + size_t{x} * n * 3;
+          for (int32_t dx = 0; dx < n; ++dx, p += 3) {
+            sum[0] += p[0];
+            sum[1] += p[1];
+            sum[2] += p[2];
+          }
+        }
+        const uint32_t r = sum[0] >> shift, g = sum[1] >> shift, b = sum[2] >> shift;
+        if (config_.raster.format == PixelFormat::kRgb888) {
+          out[3 * x] = static_cast<uint8_t>(r);
+          out[3 * x + 1] = static_cast<uint8_t>(g);
+          out[3 * x + 2] = static_cast<uint8_t>(b);
+        } else {
+          const uint16_t v = rgb565((r << 16) | (g << 8) | b);
+          out[2 * x] = static_cast<uint8_t>(v);
+          out[2 * x + 1] = static_cast<uint8_t>(v >> 8);
+        }
+      }
+    }
+  }
   if (stats_out) *stats_out = stats;
   return RenderStatus::kOk;
 }

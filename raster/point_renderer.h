@@ -49,6 +49,13 @@ struct RendererConfig {
   Lighting lighting;
   uint32_t grey_rgb = 0xD8D8D8;            // base colour without colour attributes
   uint32_t clear_rgb = 0x000000;
+  // Supersampling (1, 2 or 4): points are drawn into an internal frame of
+  // supersample x the screen in each direction (RGB888, from the arena) with
+  // the camera scaled to it — so nodes are that much larger there and get
+  // their points-per-node count for that size, and a point is point_size
+  // internal pixels — and each screen pixel is the mean of its block
+  // (integer, rounded). The cut is the screen's: the same nodes, more points.
+  uint8_t supersample = 1;
 };
 
 enum class RenderStatus : uint8_t {
@@ -99,6 +106,8 @@ class PointRenderer {
 
   RendererConfig config_{};
   PointRaster raster_;
+  RasterConfig internal_{};          // the raster's: the screen times the supersampling
+  uint8_t* internal_frame_ = nullptr;  // supersampling: the internal RGB888 frame
   Gaussian3Q12* g_position_ = nullptr;
   Gaussian2Q12* g_normal_ = nullptr;
   Gaussian3Q12* g_color_ = nullptr;

@@ -237,6 +237,50 @@ TEST(Client, FrameBudgetDropsPointsAndSaysSo) {
 // client) uses it: every held node decodes to what the decoder makes of its
 // record, packed or decoded; ids come back through dense iteration; the
 // client's arena is the cache's plus the renderer's.
+// Supersampling is exactly the frame drawn at N x N the size with the
+// camera scaled, each block averaged (rounded); the arena grows by the
+// internal frame and raster, and nothing else changes.
+TEST(Client, SupersamplingIsTheLargerFrameAveragedBlockByBlock) {
+  for (int n : {2, 4}) {
+    ClientConfig ss = small_config();
+    ss.raster.format = PixelFormat::kRgb888;
+    ss.supersample = static_cast<uint8_t>(n);
+    ClientConfig big = small_config();
+    big.raster = RasterConfig{static_cast<uint16_t>(240 * n), static_cast<uint16_t>(320 * n), 5, PixelFormat::kRgb888, 200000};
+    EXPECT_GT(client_arena_bytes(ss), client_arena_bytes(small_config()) + size_t{240} * 320 * 3 * n * n);
+    Harness a(ss), b(big);
+    ASSERT_EQ(a.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+    ASSERT_EQ(b.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+    for (uint32_t id = 1000; id < 2400; ++id) {
+      ASSERT_EQ(a.client.put_node(NodeId{id}, record(id), bunny().view.record_bytes), ClientStatus::kOk);
+      ASSERT_EQ(b.client.put_node(NodeId{id}, record(id), bunny().view.record_bytes), ClientStatus::kOk);
+    }
+    const Camera cam = camera_for(a.client, 30, 20);
+    Camera scaled = cam;
+    scaled.focal_q4 *= n;
+    scaled.center_q4[0] *= n;
+    scaled.center_q4[1] *= n;
+    std::vector<uint8_t> small(240 * 320 * 3), large(size_t{240} * 320 * 3 * n * n);
+    FrameStats sa, sb;
+    ASSERT_EQ(a.client.render(cam, small.data(), 240 * 3, &sa), ClientStatus::kOk);
+    ASSERT_EQ(b.client.render(scaled, large.data(), size_t{240} * n * 3, &sb), ClientStatus::kOk);
+    EXPECT_EQ(sa.points, sb.points);
+    size_t mismatches = 0;
+    for (int y = 0; y < 320; ++y)
+      for (int x = 0; x < 240; ++x)
+        for (int c = 0; c < 3; ++c) {
+          uint32_t sum = static_cast<uint32_t>(n * n / 2);
+          for (int dy = 0; dy < n; ++dy)
+            for (int dx = 0; dx < n; ++dx) sum += large[((size_t(y) * n + dy) * 240 * n + size_t(x) * n + dx) * 3 + c];
+          mismatches += small[(size_t(y) * 240 + x) * 3 + c] != sum / static_cast<uint32_t>(n * n);
+        }
+    EXPECT_EQ(mismatches, 0u) << n;
+  }
+  ClientConfig bad = small_config();
+  bad.supersample = 3;
+  EXPECT_EQ(client_arena_bytes(bad), 0u);
+}
+
 TEST(NodeCache, ServesNodesWithoutARenderer) {
   const SpgView& v = bunny().view;
   for (bool decoded : {false, true}) {

@@ -50,6 +50,8 @@ const char kRenderOptionsHelp[] =
     "  --mean-color           one colour per node (no per-point colour sampling)\n"
     "  --quality Q            points-per-node scale, 0.01..16 (default 1)\n"
     "  --point-size N         1..3 px (default 2)\n"
+    "  --supersample N        draw at N x N the screen's pixels (points of the point\n"
+    "                         size there) and average each block: 1, 2 or 4\n"
     "  --pseudo               pseudo-random instead of Sobol samples\n"
     "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
     "  --max-points N         frame budget (default 1048576)\n"
@@ -125,6 +127,11 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
     c.quality_q8 = static_cast<uint16_t>(std::lround(q * 256));
   }
   unsigned long long u = 0;
+  if (args.value("--supersample", v)) {
+    if (!cli::parse_uint(v, 4, u) || (u != 1 && u != 2 && u != 4))
+      return error = "--supersample: expected 1, 2 or 4, got '" + v + "'", false;
+    c.supersample = static_cast<uint8_t>(u);
+  }
   if (args.value("--point-size", v)) {
     if (!cli::parse_uint(v, 3, u) || u < 1) return error = "--point-size: expected 1, 2 or 3, got '" + v + "'", false;
     c.point_size = static_cast<uint8_t>(u);
