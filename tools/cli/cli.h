@@ -45,6 +45,7 @@ int cmd_serve(int argc, char** argv);
 int cmd_ppn_table(int argc, char** argv);
 int cmd_truth(int argc, char** argv);
 int cmd_trade(int argc, char** argv);
+int cmd_rd(int argc, char** argv);
 int cmd_image_diff(int argc, char** argv);
 int cmd_image_crc(int argc, char** argv);
 }  // namespace stipple

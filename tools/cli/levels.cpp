@@ -7,7 +7,7 @@
 #include "platform/png_io.h"
 #include "platform/progress.h"
 #include "tools/cli/cli.h"
-#include "tools/reference/metrics.h"
+#include "tools/reference/level_trade.h"
 #include "tools/reference/plot.h"
 #include "tools/reference/sampler.h"
 #include "tools/reference/spg_model.h"
@@ -66,39 +66,35 @@ int cmd_levels(int argc, char** argv) {
   } else {
     for (int l = 0; l <= model.header.depth; ++l) levels.push_back(l);
   }
-  const SpgHeader& h = model.header;
-  const double startup_bytes = static_cast<double>(spg_startup_bytes(h.class_count));
   const KdTree original_tree(original.positions);  // built once, shared by every level
   ProgressBar progress("levels");
+  std::vector<LevelPoint> points;
+  if (!measure_levels(model, original, original_tree, levels, points, error, [&](size_t i) {
+        progress.update(static_cast<double>(i) / static_cast<double>(levels.size()), "level " + std::to_string(levels[i]));
+      }))
+    return cli::fail(files[0] + ": " + error);
   std::string rows;
   PlotSeries one_sided{"one-sided (paper)", {}, {}, 0x1f77b4, {}}, symmetric{"symmetric", {}, {}, 0xd62728, {}};
-  if (!json) std::printf("%6s %10s %12s %10s %10s\n", "level", "nodes", "bits/point", "PSNR-1", "PSNR-sym");
-  for (size_t i = 0; i < levels.size(); ++i) {
-    progress.update(static_cast<double>(i) / static_cast<double>(levels.size()), "level " + std::to_string(levels[i]));
-    const std::vector<uint32_t> cut = level_cut(model, levels[i]);
-    const uint64_t limit = default_max_samples(physical_memory_bytes());
-    if (cut_sample_count(model, cut, 0) > limit)
-      return cli::fail(files[0] + ": level " + std::to_string(levels[i]) + " would generate more than " +
-                       cli::with_commas(limit) + " points (the limit for this host's memory)");
-    const CloudMetrics m = compare_clouds(original, original_tree, sample_cut(model, cut, 0));
-    const double bits = 8.0 * (startup_bytes + static_cast<double>(cut.size()) * h.layout.record_bytes()) /
-                        static_cast<double>(original.size());
-    for (PlotSeries* s : {&one_sided, &symmetric}) s->x.push_back(bits);
-    one_sided.y.push_back(m.psnr_one_sided);
-    symmetric.y.push_back(m.psnr_symmetric);
-    one_sided.point_labels.push_back(std::to_string(levels[i]));
+  if (!json) {
+    progress.finish();
+    std::printf("%6s %10s %12s %10s %10s\n", "level", "nodes", "bits/point", "PSNR-1", "PSNR-sym");
+  }
+  for (const LevelPoint& p : points) {
+    for (PlotSeries* s : {&one_sided, &symmetric}) s->x.push_back(p.bits_per_point);
+    one_sided.y.push_back(p.psnr_one_sided);
+    symmetric.y.push_back(p.psnr_symmetric);
+    one_sided.point_labels.push_back(std::to_string(p.level));
     if (json) {
       cli::Json j;
-      j.integer("level", levels[i])
-          .integer("nodes", static_cast<long long>(cut.size()))
-          .num("bits_per_point", bits)
-          .num("psnr_one_sided_db", m.psnr_one_sided)
-          .num("psnr_symmetric_db", m.psnr_symmetric)
-          .num("hausdorff", m.hausdorff);
+      j.integer("level", p.level)
+          .integer("nodes", static_cast<long long>(p.nodes))
+          .num("bits_per_point", p.bits_per_point)
+          .num("psnr_one_sided_db", p.psnr_one_sided)
+          .num("psnr_symmetric_db", p.psnr_symmetric)
+          .num("hausdorff", p.hausdorff);
       rows += (rows.empty() ? "" : ", ") + j.done();
     } else {
-      progress.finish();
-      std::printf("%6d %10zu %12.3f %10.2f %10.2f\n", levels[i], cut.size(), bits, m.psnr_one_sided, m.psnr_symmetric);
+      std::printf("%6d %10zu %12.3f %10.2f %10.2f\n", p.level, p.nodes, p.bits_per_point, p.psnr_one_sided, p.psnr_symmetric);
     }
   }
   progress.finish();

@@ -28,6 +28,7 @@ const Command kCommands[] = {
     {"cut", "the view-dependent cut along an orbit: nodes, culling, bytes of change", stipple::cmd_cut},
     {"serve", "serve a model's view-dependent cuts to clients over TCP", stipple::cmd_serve},
     {"ppn-table", "measure the points-per-node table with the client's rasterizer", stipple::cmd_ppn_table},
+    {"rd", "rate against distortion across encoder settings, level by level: CSV and plot", stipple::cmd_rd},
     {"trade", "sweep the client's knobs: frame time and error against the reference, CSV and plot", stipple::cmd_trade},
     {"truth", "draw the original scan with render's camera and lighting: the reference picture", stipple::cmd_truth},
     {"image-diff", "compare two PNG images: bytes, object PSNR, SSIM, dark and outside pixels", stipple::cmd_image_diff},
