@@ -43,7 +43,7 @@ struct RendererConfig {
   uint8_t point_size = 2;                  // 1..3 px (the paper drew 1.8 px points)
   uint16_t quality_q8 = 256;               // points-per-node scale (256 = as measured)
   Projection projection = Projection::kAffine;
-  ShadingMode shading = ShadingMode::kPerPoint;
+  ShadingMode shading = ShadingMode::kPerNode;  // measured best against the scan (docs/results.md)
   bool sample_color = true;                // per-point colour from sigma_c (else the node's mean colour)
   bool grey = false;                       // ignore the model's colour
   Lighting lighting;

@@ -44,7 +44,7 @@ const char kRenderOptionsHelp[] =
     "client:\n"
     "  --projection affine|reciprocal|exact   per-point projection (default affine)\n"
     "  --shading point|node|none              Lambert per sampled normal, per node, or\n"
-    "                                         none (default point)\n"
+    "                                         none (default node: docs/results.md)\n"
     "  --no-specular          Lambert only\n"
     "  --grey                 ignore the model's colours\n"
     "  --mean-color           one colour per node (no per-point colour sampling)\n"

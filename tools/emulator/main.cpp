@@ -174,7 +174,7 @@ int run(int argc, char** argv) {
     while (display.poll(&e)) changed = controls.apply(e) || changed;
     changed = controls.tick() || changed;
     if (changed) {
-      if (!client.set_view(controls.lighting() ? o.config.shading == ShadingMode::kNone ? ShadingMode::kPerPoint
+      if (!client.set_view(controls.lighting() ? o.config.shading == ShadingMode::kNone ? ShadingMode::kPerNode
                                                                                        : o.config.shading
                                                : ShadingMode::kNone,
                            controls.grey(), controls.quality_q8()))
