@@ -261,6 +261,21 @@ std::vector<uint32_t> cut_near_30000(const SpgView& view, const NodeDecoder& dec
   return cut;
 }
 
+// The frame benchmarks' scene: the default orbit camera at 640x480 and the
+// cut near 30,000 nodes for it.
+struct FrameScene {
+  std::vector<uint8_t> storage;
+  NodeDecoder decoder;
+  Camera camera;
+  std::vector<uint32_t> cut;
+  explicit FrameScene(const SpgView& view) : storage(node_decoder_bytes(view.header)) {
+    if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk ||
+        !orbit_camera(orbit_view(decoder.extent_mu(), ViewSpec{}), 640, 480, &camera))
+      std::abort();
+    cut = cut_near_30000(view, decoder, camera);
+  }
+};
+
 void BM_ClientFrame(benchmark::State& state) {
   const std::vector<uint8_t>& spg = encoded_scan();
   const SpgView view = parsed_scan();
@@ -270,12 +285,9 @@ void BM_ClientFrame(benchmark::State& state) {
   c.cache_decoded = state.range(1) != 0;
   c.shading = static_cast<ShadingMode>(state.range(2));
   c.node_capacity = view.header.node_count;
-  std::vector<uint8_t> storage(node_decoder_bytes(view.header));
-  NodeDecoder decoder;
-  if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk) std::abort();
-  Camera camera;
-  if (!orbit_camera(orbit_view(decoder.extent_mu(), ViewSpec{}), 640, 480, &camera)) std::abort();
-  const std::vector<uint32_t> cut = cut_near_30000(view, decoder, camera);
+  const FrameScene scene(view);
+  const Camera& camera = scene.camera;
+  const std::vector<uint32_t>& cut = scene.cut;
   const uint32_t n = static_cast<uint32_t>(cut.size());
   std::vector<uint64_t> arena(client_arena_bytes(c) / 8 + 1);
   Client client;
@@ -315,12 +327,9 @@ BENCHMARK(BM_ClientFrame)
 void BM_GlFrame(benchmark::State& state) {
   const std::vector<uint8_t>& spg = encoded_scan();
   const SpgView view = parsed_scan();
-  std::vector<uint8_t> storage(node_decoder_bytes(view.header));
-  NodeDecoder decoder;
-  if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk) std::abort();
-  Camera camera;
-  if (!orbit_camera(orbit_view(decoder.extent_mu(), ViewSpec{}), 640, 480, &camera)) std::abort();
-  const std::vector<uint32_t> cut = cut_near_30000(view, decoder, camera);
+  const FrameScene scene(view);
+  const Camera& camera = scene.camera;
+  const std::vector<uint32_t>& cut = scene.cut;
   NodeCacheLimits limits;
   limits.node_capacity = view.header.node_count;
   std::vector<uint64_t> cache_storage(node_cache_bytes(limits) / 8 + 1);

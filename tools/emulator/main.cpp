@@ -52,10 +52,6 @@ int fail(const std::string& message) {
   return 1;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
 // The stylus's rectangle while it is drawn, as an outline on the screen.
 void outline(uint8_t* frame, size_t stride, const RasterConfig& r, const int32_t rect[4]) {
   const auto put = [&](int x, int y) {
@@ -75,27 +71,17 @@ int run(int argc, char** argv) {
     std::fputs(kRenderOptionsHelp, stdout);
     return 0;
   }
-  RenderOptions o;
-  std::string error, connect, serial, output, script_path, v;
-  args.value("--connect", connect);
-  args.value("--serial", serial);
-  unsigned long long baud = 115200, scale = 2, frames = 0;
-  if (args.value("--baud", v) && !cli::parse_uint(v, 4000000, baud)) return fail("--baud: expected a rate, got '" + v + "'");
+  std::string error, v;
+  unsigned long long scale = 2;
   if (args.value("--scale", v) && (!cli::parse_uint(v, 4, scale) || scale < 1))
     return fail("--scale: expected 1..4, got '" + v + "'");
-  if (args.value("--frames", v) && (!cli::parse_uint(v, 100000, frames) || frames < 1))
-    return fail("--frames: expected 1..100000, got '" + v + "'");
-  const bool headless = args.flag("--headless");
-  if (!args.value("-o", output)) args.value("--output", output);
-  args.value("--script", script_path);
-  if (!parse_render_options(args, o, error)) return fail(error);
-  const std::vector<std::string> files = args.positionals();
-  if (args.bad()) return fail(args.error());
-  if (!args.unknown_option().empty()) return fail("unknown option '" + args.unknown_option() + "'");
-  if (files.size() > 1) return fail("expected one .spg file");
-  const std::string model = files.empty() ? "" : files[0];
-  if (model.empty() && connect.empty() && serial.empty())
-    return fail("expected a .spg file, --connect HOST:PORT or --serial DEV (stipple encode data/bunny.ply -o bunny.spg makes one)");
+  ViewerOptions vo;
+  if (!parse_viewer_options(args, vo, error)) return fail(error);
+  const RenderOptions& o = vo.render;
+  const std::string &model = vo.model, &connect = vo.connect, &serial = vo.serial, &output = vo.output,
+                    &script_path = vo.script;
+  const bool headless = vo.headless;
+  const unsigned long long baud = vo.baud, frames = vo.frames;
   if (headless && output.empty() && script_path.empty()) return fail("--headless needs -o FRAME.png (or a --script)");
   std::vector<ScriptStep> script;
   if (!script_path.empty() && !read_script(script_path, script, error)) return fail(error);
@@ -183,11 +169,7 @@ int run(int argc, char** argv) {
       if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(source.name() + ": " + error);
     }
     // What the link has, for at most 10 ms of this frame.
-    for (int k = 0; k < 64 && seconds_since(frame_start) < 0.010; ++k) {
-      const uint64_t before = m.bytes_received();
-      if (!m.service(0, error)) return fail(source.name() + ": " + error);
-      if (m.bytes_received() == before && k > 0) break;
-    }
+    if (!service_for(m, 0.010, error)) return fail(source.name() + ": " + error);
     if (!m.render(camera, frame.data(), stride, &stats, error)) return fail(error);
     int32_t rect[4];
     if (controls.dragging(rect)) outline(frame.data(), stride, r, rect);

@@ -52,10 +52,6 @@ int fail(const std::string& message) {
   return 1;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
 GlRenderOptions gl_options(const RenderOptions& o, bool gpu, const ViewerControls* c) {
   GlRenderOptions g;
   g.gpu_decode = gpu;
@@ -95,29 +91,19 @@ int run(int argc, char** argv) {
   }
   bool cache_given = false;
   for (int i = 1; i < argc; ++i) cache_given = cache_given || std::strcmp(argv[i], "--cache") == 0;
-  RenderOptions o;
-  std::string error, connect, serial, output, script_path, decode = "gpu", v;
-  args.value("--connect", connect);
-  args.value("--serial", serial);
+  std::string error, decode = "gpu", v;
   args.value("--decode", decode);
-  unsigned long long baud = 115200, frames = 0, msaa = 0;
-  if (args.value("--baud", v) && !cli::parse_uint(v, 4000000, baud)) return fail("--baud: expected a rate, got '" + v + "'");
+  unsigned long long msaa = 0;
   if (args.value("--msaa", v) && (!cli::parse_uint(v, 8, msaa) || (msaa != 0 && msaa != 2 && msaa != 4 && msaa != 8)))
     return fail("--msaa: expected 0, 2, 4 or 8, got '" + v + "'");
-  if (args.value("--frames", v) && (!cli::parse_uint(v, 100000, frames) || frames < 1))
-    return fail("--frames: expected 1..100000, got '" + v + "'");
-  const bool headless = args.flag("--headless");
-  if (!args.value("-o", output)) args.value("--output", output);
-  args.value("--script", script_path);
-  if (!parse_render_options(args, o, error)) return fail(error);
-  const std::vector<std::string> files = args.positionals();
-  if (args.bad()) return fail(args.error());
-  if (!args.unknown_option().empty()) return fail("unknown option '" + args.unknown_option() + "'");
   if (decode != "gpu" && decode != "cpu") return fail("--decode: expected gpu or cpu, got '" + decode + "'");
-  if (files.size() > 1) return fail("expected one .spg file");
-  const std::string model = files.empty() ? "" : files[0];
-  if (model.empty() && connect.empty() && serial.empty())
-    return fail("expected a .spg file, --connect HOST:PORT or --serial DEV (stipple encode data/bunny.ply -o bunny.spg makes one)");
+  ViewerOptions vo;
+  if (!parse_viewer_options(args, vo, error)) return fail(error);
+  RenderOptions& o = vo.render;
+  const std::string &model = vo.model, &connect = vo.connect, &serial = vo.serial, &output = vo.output,
+                    &script_path = vo.script;
+  const bool headless = vo.headless;
+  const unsigned long long baud = vo.baud, frames = vo.frames;
   if (headless && output.empty()) return fail("--headless needs -o FRAME.png");
   if (!o.sized) o.config.raster.width = 640, o.config.raster.height = 480;
   if (!cache_given) o.config.node_capacity = 200000;
@@ -195,11 +181,8 @@ int run(int argc, char** argv) {
       if (!controls.camera(static_cast<uint16_t>(w), static_cast<uint16_t>(h), &camera)) return fail("the camera left its range");
       if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(source.name() + ": " + error);
     }
-    for (int k = 0; k < 64 && seconds_since(frame_start) < 0.010; ++k) {
-      const uint64_t before = m.bytes_received();
-      if (!m.service(0, error)) return fail(source.name() + ": " + error);
-      if (m.bytes_received() == before && k > 0) break;
-    }
+    // What the link has, for at most 10 ms of this frame.
+    if (!service_for(m, 0.010, error)) return fail(source.name() + ": " + error);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     if (!renderer.draw(cache, camera, window.width(), window.height(), gl_options(o, gpu, &controls), &stats, error))
       return fail(error);

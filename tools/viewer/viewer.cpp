@@ -15,6 +15,34 @@
 
 namespace stipple {
 
+bool parse_viewer_options(cli::Args& args, ViewerOptions& o, std::string& error) {
+  std::string v;
+  unsigned long long u = 0;
+  args.value("--connect", o.connect);
+  args.value("--serial", o.serial);
+  if (args.value("--baud", v)) {
+    if (!cli::parse_uint(v, 4000000, u)) return error = "--baud: expected a rate, got '" + v + "'", false;
+    o.baud = static_cast<uint32_t>(u);
+  }
+  if (args.value("--frames", v)) {
+    if (!cli::parse_uint(v, 100000, u) || u < 1) return error = "--frames: expected 1..100000, got '" + v + "'", false;
+    o.frames = static_cast<uint32_t>(u);
+  }
+  o.headless = args.flag("--headless");
+  if (!args.value("-o", o.output)) args.value("--output", o.output);
+  args.value("--script", o.script);
+  if (!parse_render_options(args, o.render, error)) return false;
+  const std::vector<std::string> files = args.positionals();
+  if (args.bad()) return error = args.error(), false;
+  if (!args.unknown_option().empty()) return error = "unknown option '" + args.unknown_option() + "'", false;
+  if (files.size() > 1) return error = "expected one .spg file", false;
+  o.model = files.empty() ? "" : files[0];
+  if (o.model.empty() && o.connect.empty() && o.serial.empty())
+    return error = "expected a .spg file, --connect HOST:PORT or --serial DEV (stipple encode data/bunny.ply -o bunny.spg makes one)",
+           false;
+  return true;
+}
+
 struct ViewerSource::Links {
   Server local;
   LoopbackPipe pipe;
@@ -234,6 +262,20 @@ bool read_script(const std::string& path, std::vector<ScriptStep>& out, std::str
     if (words >> arg) return bad("unexpected '" + arg + "'");
   }
   std::stable_sort(out.begin(), out.end(), [](const ScriptStep& a, const ScriptStep& b) { return a.frame < b.frame; });
+  return true;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+bool service_for(RemoteModel& model, double budget, std::string& error) {
+  const auto start = std::chrono::steady_clock::now();
+  for (int k = 0; k < 64 && (k == 0 || seconds_since(start) < budget); ++k) {
+    const uint64_t before = model.bytes_received();
+    if (!model.service(0, error)) return false;
+    if (model.bytes_received() == before && k > 0) break;
+  }
   return true;
 }
 

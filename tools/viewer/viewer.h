@@ -22,6 +22,7 @@
 // Blank lines and # comments are ignored.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -33,6 +34,19 @@
 #include "tools/server/server.h"
 
 namespace stipple {
+
+// The options both viewers take: the source, render's view and client
+// options, --headless, -o, --frames, --script.
+struct ViewerOptions {
+  RenderOptions render;
+  std::string model, connect, serial, output, script;
+  uint32_t baud = 115200;
+  bool headless = false;
+  uint32_t frames = 0;  // --frames (0: not given)
+};
+// Consumes them from `args` (a program takes its own options first) and
+// checks what is left: one source, no stray option; false with a message.
+bool parse_viewer_options(cli::Args& args, ViewerOptions& o, std::string& error);
 
 // The stream's source and the link under it; owns what it opened.
 class ViewerSource {
@@ -90,6 +104,13 @@ struct ScriptStep {
 
 // Parses a script file; false with "FILE:LINE: why".
 bool read_script(const std::string& path, std::vector<ScriptStep>& out, std::string& error);
+
+// Seconds since `t` (steady clock).
+double seconds_since(std::chrono::steady_clock::time_point t);
+
+// Takes what the link brings for at most `budget` seconds of a frame (and
+// at least one read); false on a link failure.
+bool service_for(RemoteModel& model, double budget, std::string& error);
 
 // The status line's two lines.
 void status_lines(double fps, const FrameStats& stats, uint64_t bytes, double bytes_per_s, const ViewerControls& c,
