@@ -1,6 +1,7 @@
 // stipple rd — rate against distortion across encoder settings (TOG05 Fig.
 // 19a): each setting's model, level by level, bits per original point
 // against the PSNR of points regenerated from the level's cut.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -19,7 +20,7 @@ namespace stipple {
 namespace {
 
 const char kRdHelp[] =
-    "usage: stipple rd SCAN.ply -o DIR [--settings NAME,...]\n"
+    "usage: stipple rd SCAN.ply -o DIR [--settings NAME,...] [--extra CSV]\n"
     "\n"
     "Encodes the scan with each encoder setting and measures every tree level of\n"
     "each model as `stipple levels` does: bits per original point a client\n"
@@ -27,6 +28,9 @@ const char kRdHelp[] =
     "tables) against the PSNR of points regenerated from it, one-sided (the\n"
     "paper's) and symmetric. Writes DIR/rd.csv and DIR/rd.png (one-sided PSNR\n"
     "against bits per point, one line per setting). A progress bar on a terminal.\n"
+    "--extra CSV adds another coder's points to the plot: lines of\n"
+    "NAME,BITS_PER_POINT,PSNR_ONE_SIDED_DB[,...] after a header line, as\n"
+    "tools/draco_rd.sh writes for Draco.\n"
     "\n"
     "settings (default: all):\n"
     "  default        stipple encode's defaults (leaves under 16 points; class\n"
@@ -58,7 +62,8 @@ int cmd_rd(int argc, char** argv) {
     std::fputs(kRdHelp, stdout);
     return 0;
   }
-  std::string output, chosen, error;
+  std::string output, chosen, extra, error;
+  args.value("--extra", extra);
   if (!args.value("-o", output)) args.value("--output", output);
   args.value("--settings", chosen);
   const std::vector<std::string> files = args.positionals();
@@ -126,6 +131,31 @@ int cmd_rd(int argc, char** argv) {
     spec.series.push_back(series);
   }
   progress.finish();
+  if (!extra.empty()) {
+    std::vector<uint8_t> bytes;
+    if (!read_file(extra, bytes, error)) return cli::fail(error);
+    const std::string text(bytes.begin(), bytes.end());
+    size_t line_no = 0;
+    for (size_t at = 0; at < text.size();) {
+      const size_t end = std::min(text.find('\n', at), text.size());
+      const std::string line = text.substr(at, end - at);
+      at = end + 1;
+      if (line_no++ == 0 || line.empty()) continue;  // the header
+      const size_t c1 = line.find(','), c2 = c1 == std::string::npos ? c1 : line.find(',', c1 + 1);
+      double bits = 0, psnr = 0;
+      if (c2 == std::string::npos || !cli::parse_double(line.substr(c1 + 1, c2 - c1 - 1), bits) ||
+          !cli::parse_double(line.substr(c2 + 1, line.find(',', c2 + 1) - c2 - 1), psnr))
+        return cli::fail(extra + ":" + std::to_string(line_no) + ": expected NAME,BITS_PER_POINT,PSNR_ONE_SIDED_DB");
+      const std::string name = line.substr(0, c1);
+      auto it = std::find_if(spec.series.begin(), spec.series.end(), [&](const PlotSeries& p) { return p.label == name; });
+      if (it == spec.series.end()) {
+        spec.series.push_back(PlotSeries{name, {}, {}, 0x000000, {}});
+        it = spec.series.end() - 1;
+      }
+      it->x.push_back(bits);
+      it->y.push_back(psnr);
+    }
+  }
   if (!write_file_atomic(output + "/rd.csv", std::vector<uint8_t>(csv.begin(), csv.end()), error)) return cli::fail(error);
   if (!write_png(output + "/rd.png", render_plot(spec), error)) return cli::fail(error);
   std::printf("%s: %zu settings -> %s/rd.csv, %s/rd.png\n", files[0].c_str(), settings.size(), output.c_str(), output.c_str());
