@@ -102,20 +102,17 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
   return 0;
 }
 
-// Frames through the node stream: from a server over TCP, or from an
-// in-process server over loopback for a local file.
-int render_stream(const std::string& source, bool remote, const RenderOptions& o, uint32_t steps, bool folder,
-                  const std::string& output) {
+// Frames through the node stream: from a server over TCP or a serial line,
+// or from an in-process server over loopback for a local file (exactly one
+// of `model`, `connect`, `serial`).
+int render_stream(const std::string& model_path, const std::string& connect, const std::string& serial, uint32_t baud,
+                  const RenderOptions& o, uint32_t steps, bool folder, const std::string& output) {
+  const bool remote = model_path.empty();
+  const std::string source =
+      !remote ? model_path : !connect.empty() ? connect : "serial:" + serial + "@" + std::to_string(baud);
   std::string error;
   ViewerSource src;
-  std::string serial_dev;
-  uint32_t baud = 115200;
-  if (remote && source.rfind("serial:", 0) == 0) {
-    serial_dev = source.substr(7, source.rfind('@') - 7);
-    baud = static_cast<uint32_t>(std::stoul(source.substr(source.rfind('@') + 1)));
-  }
-  if (!src.open(remote ? "" : source, remote && serial_dev.empty() ? source : "", serial_dev, baud, o, error))
-    return cli::fail("render: " + error);
+  if (!src.open(model_path, connect, serial, baud, o, error)) return cli::fail("render: " + error);
   RemoteModel& model = src.model();
   if (folder) std::filesystem::create_directories(output);
   // The view as render resolves it, from the header the server sent.
@@ -171,7 +168,6 @@ int cmd_render(int argc, char** argv) {
   if (args.value("--baud", baud_text) && !cli::parse_uint(baud_text, 4000000, baud))
     return cli::fail("render: --baud: expected a rate, got '" + baud_text + "'");
   const bool remote = args.value("--connect", connect) || over_serial, has_path = args.value("--path", path);
-  if (over_serial) connect = "serial:" + serial_dev + "@" + std::to_string(baud);
   const bool reference = args.flag("--reference"), psnr = args.flag("--psnr"), json = args.flag("--json");
   std::string frames_text;
   unsigned long long frames = 1;
@@ -187,7 +183,8 @@ int cmd_render(int argc, char** argv) {
       return cli::fail("render: --path: expected orbit:N with N in 1..100000, got '" + path + "'");
     if (remote != files.empty()) return cli::fail(remote ? "render: --connect takes no MODEL.spg" : "render: expected one .spg file");
     if (output.empty()) return cli::fail(has_path ? "render: -o FOLDER is required with --path" : "render: -o IMAGE.png is required");
-    return render_stream(remote ? connect : files[0], remote, o, static_cast<uint32_t>(steps), has_path, output);
+    return render_stream(remote ? "" : files[0], over_serial ? "" : connect, serial_dev, static_cast<uint32_t>(baud), o,
+                         static_cast<uint32_t>(steps), has_path, output);
   }
   if (files.size() != 1) return cli::fail("render: expected one .spg file (see stipple render --help)");
   if (output.empty() && !psnr && frames == 1) return cli::fail("render: -o IMAGE.png is required");
