@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "platform/png_io.h"
@@ -134,10 +133,7 @@ int run(int argc, char** argv) {
   size_t next_step = 0;
   uint32_t frame_number = 0;
   FrameStats stats;
-  double fps = 0, rate = 0;
-  uint64_t rate_bytes = m.bytes_received();
-  auto rate_start = std::chrono::steady_clock::now();
-  int rate_frames = 0;
+  RateMeter rates;
   Image shot;
   while (!controls.quit()) {
     const auto frame_start = std::chrono::steady_clock::now();
@@ -174,22 +170,13 @@ int run(int argc, char** argv) {
     int32_t rect[4];
     if (controls.dragging(rect)) outline(frame.data(), stride, r, rect);
     else if (controls.window()[0] < controls.window()[2]) outline(frame.data(), stride, r, controls.window());
-    ++rate_frames;
-    const double elapsed = seconds_since(rate_start);
-    if (elapsed >= 0.5) {
-      fps = rate_frames / elapsed;
-      rate = static_cast<double>(m.bytes_received() - rate_bytes) / elapsed;
-      rate_bytes = m.bytes_received();
-      rate_start = std::chrono::steady_clock::now();
-      rate_frames = 0;
-    }
+    rates.frame(m.bytes_received());
     std::string line1, line2;
-    status_lines(fps, stats, m.bytes_received(), rate, controls, m.converged(), line1, line2);
+    status_lines(rates.fps(), stats, m.bytes_received(), rates.bytes_per_s(), controls, m.converged(), line1, line2);
     display.set_status(line1, line2);
     if (!display.present(frame.data(), stride, r.width, r.height, r.format, error)) return fail(error);
     ++frame_number;
-    const double spare = 1.0 / 30 - seconds_since(frame_start);
-    if (spare > 0) std::this_thread::sleep_for(std::chrono::duration<double>(spare));
+    pace_frame(frame_start, 30);
   }
   if (!output.empty()) {
     Image image;

@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <epoxy/gl.h>
@@ -126,7 +125,6 @@ int run(int argc, char** argv) {
   Camera camera;
   if (!controls.camera(static_cast<uint16_t>(w), static_cast<uint16_t>(h), &camera))
     return fail("--camera: the view is out of the camera's range");
-  std::vector<uint8_t> rgb;
   Image image;
   GlFrameStats stats;
 
@@ -142,10 +140,9 @@ int run(int argc, char** argv) {
       glFinish();
       times.push_back(seconds_since(t));
     }
-    if (!target.read(rgb, error)) return fail(error);
     image.width = w;
     image.height = h;
-    image.rgb = rgb;
+    if (!target.read(image.rgb, error)) return fail(error);
     if (!write_png(output, image, error)) return fail(error);
     std::sort(times.begin(), times.end());
     std::printf("%s: %s; %u nodes, %llu points, %llu bytes received -> %s", source.name().c_str(),
@@ -163,15 +160,16 @@ int run(int argc, char** argv) {
   if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(error);
   size_t next_step = 0;
   uint32_t frame_number = 0;
-  double fps = 0;
-  auto rate_start = std::chrono::steady_clock::now();
-  int rate_frames = 0;
+  RateMeter rates;
+  std::vector<std::string> shots;  // this frame's screenshots
   while (!controls.quit()) {
     const auto frame_start = std::chrono::steady_clock::now();
+    shots.clear();
     for (; next_step < script.size() && script[next_step].frame <= frame_number; ++next_step) {
       const ScriptStep& s = script[next_step];
       if (s.kind == ScriptStep::kInput) window.inject(s.event);
       else if (s.kind == ScriptStep::kQuit) window.inject(InputEvent{InputKind::kQuit, Button::kNone, 0, 0});
+      else shots.push_back(s.path);
     }
     bool changed = false;
     InputEvent e;
@@ -190,34 +188,24 @@ int run(int argc, char** argv) {
     if (controls.dragging(rect)) outline(window.height(), rect);
     else if (controls.window()[0] < controls.window()[2]) outline(window.height(), controls.window());
     // Screenshots see this frame, as it will be shown.
-    for (size_t k = 0; k < next_step; ++k) {
-      ScriptStep& s = script[k];
-      if (s.kind != ScriptStep::kScreenshot || s.path.empty()) continue;
-      if (!gl_read_pixels(window.width(), window.height(), rgb, error)) return fail(error);
+    for (const std::string& path : shots) {
       image.width = window.width();
       image.height = window.height();
-      image.rgb = rgb;
-      if (!write_png(s.path, image, error)) return fail(error);
-      std::printf("frame %u: screenshot %s %dx%d, crc32 %08x\n", frame_number, s.path.c_str(), image.width, image.height,
+      if (!gl_read_pixels(window.width(), window.height(), image.rgb, error) || !write_png(path, image, error))
+        return fail(error);
+      std::printf("frame %u: screenshot %s %dx%d, crc32 %08x\n", frame_number, path.c_str(), image.width, image.height,
                   crc32(image.rgb.data(), image.rgb.size()));
-      s.path.clear();
     }
     window.swap();
     ++frame_number;
-    ++rate_frames;
-    const double elapsed = seconds_since(rate_start);
-    if (elapsed >= 0.5) {
-      fps = rate_frames / elapsed;
-      rate_start = std::chrono::steady_clock::now();
-      rate_frames = 0;
+    if (rates.frame(m.bytes_received())) {
       char title[160];
-      std::snprintf(title, sizeof title, "stipple-gl  %.1f fps  %u nodes  %llu points  %llu KB%s", fps, stats.nodes,
+      std::snprintf(title, sizeof title, "stipple-gl  %.1f fps  %u nodes  %llu points  %llu KB%s", rates.fps(), stats.nodes,
                     static_cast<unsigned long long>(stats.points), static_cast<unsigned long long>(m.bytes_received() / 1024),
                     m.converged() ? "" : "  ...");
       window.set_title(title);
     }
-    const double spare = 1.0 / 60 - seconds_since(frame_start);
-    if (spare > 0) std::this_thread::sleep_for(std::chrono::duration<double>(spare));
+    pace_frame(frame_start, 60);
   }
   std::printf("%s: %u frames, last %u nodes, %llu points, %llu bytes received\n", source.name().c_str(), frame_number,
               stats.nodes, static_cast<unsigned long long>(stats.points), static_cast<unsigned long long>(m.bytes_received()));

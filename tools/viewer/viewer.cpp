@@ -269,6 +269,28 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
+bool RateMeter::frame(uint64_t bytes_received) {
+  if (!started_) {  // the window starts at the first frame, with what had arrived by then
+    started_ = true;
+    bytes_ = bytes_received;
+    start_ = std::chrono::steady_clock::now();
+  }
+  ++frames_;
+  const double elapsed = seconds_since(start_);
+  if (elapsed < 0.5) return false;
+  fps_ = frames_ / elapsed;
+  bytes_per_s_ = static_cast<double>(bytes_received - bytes_) / elapsed;
+  bytes_ = bytes_received;
+  start_ = std::chrono::steady_clock::now();
+  frames_ = 0;
+  return true;
+}
+
+void pace_frame(std::chrono::steady_clock::time_point start, double fps) {
+  const double spare = 1.0 / fps - seconds_since(start);
+  if (spare > 0) std::this_thread::sleep_for(std::chrono::duration<double>(spare));
+}
+
 bool service_for(RemoteModel& model, double budget, std::string& error) {
   const auto start = std::chrono::steady_clock::now();
   for (int k = 0; k < 64 && (k == 0 || seconds_since(start) < budget); ++k) {

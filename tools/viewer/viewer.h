@@ -108,6 +108,26 @@ bool read_script(const std::string& path, std::vector<ScriptStep>& out, std::str
 // Seconds since `t` (steady clock).
 double seconds_since(std::chrono::steady_clock::time_point t);
 
+// Frames a second and bytes received a second, over half-second windows:
+// the status line's rates.
+class RateMeter {
+ public:
+  // Counts a presented frame; true when the rates were just renewed.
+  bool frame(uint64_t bytes_received);
+  double fps() const { return fps_; }
+  double bytes_per_s() const { return bytes_per_s_; }
+
+ private:
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  uint64_t bytes_ = 0;
+  bool started_ = false;
+  int frames_ = 0;
+  double fps_ = 0, bytes_per_s_ = 0;
+};
+
+// Sleeps out what is left of a frame begun at `start` at `fps` frames a second.
+void pace_frame(std::chrono::steady_clock::time_point start, double fps);
+
 // Takes what the link brings for at most `budget` seconds of a frame (and
 // at least one read); false on a link failure.
 bool service_for(RemoteModel& model, double budget, std::string& error);
