@@ -242,11 +242,15 @@ bool GlRenderer::draw(const NodeCache& cache, const Camera& camera, int width, i
   const uint32_t n = cache.count();
   const float focal = static_cast<float>(camera.focal_q4) / 16.f;
   // Per node: in front of the near plane, and its count from its size on screen.
+  // Each node is decoded once a frame: for its count, and kept for the
+  // CPU-decode path's instance data.
   counts_.assign(n, 0);
+  if (!o.gpu_decode) decoded_.resize(n);
   uint32_t in_bucket[kBuckets] = {};
-  FixedNode node;
+  FixedNode scratch;
   const float point_area = static_cast<float>(o.point_size) * o.point_size;
   for (uint32_t slot = 0; slot < n; ++slot) {
+    FixedNode& node = o.gpu_decode ? scratch : decoded_[slot];
     if (!cache.node_at(slot, &node)) continue;
     int32_t c[3];
     camera_space(camera, node.mean, c);
@@ -285,7 +289,7 @@ bool GlRenderer::draw(const NodeCache& cache, const Camera& camera, int width, i
       std::memcpy(out, record, cache.record_bytes());
       std::memcpy(out + 32, &count, 4);
     } else {
-      if (!cache.node_at(slot, &node)) continue;
+      const FixedNode& node = decoded_[slot];
       float f[18];
       for (int k = 0; k < 3; ++k) f[k] = static_cast<float>(node.mean[k]);
       for (int a = 0; a < 3; ++a)

@@ -84,6 +84,7 @@ class GlRenderer {
   std::vector<uint8_t> staging_;  // instance data, bucket by bucket
   std::vector<uint32_t> order_;   // cache slots by bucket
   std::vector<uint16_t> counts_;  // per slot
+  std::vector<FixedNode> decoded_;  // per slot, CPU decode
 };
 
 // An offscreen framebuffer (optionally multisampled) to draw into and read
