@@ -41,8 +41,9 @@ const char kTradeHelp[] =
     "pseudo-random samples, the projection, the point size, supersampling, the\n"
     "shading mode, the tile size, colour on/off — and for each setting measures,\n"
     "over N orbit views (default 3): the frame time (median of R frames, default\n"
-    "5), the instructions a frame takes (the CPU's counter through perf_event_open;\n"
-    "empty where the kernel refuses it), points, nodes, the bytes that stream the\n"
+    "5), the instructions a frame takes (the CPU's counter through perf_event_open:\n"
+    "R frames less one frame, over R - 1, so the cut and set-up cancel; empty where\n"
+    "the kernel refuses the counter or R is 1), points, nodes, the bytes that stream the\n"
     "cut cold, and the picture against the reference: object PSNR, SSIM, dark where\n"
     "lit, outside the silhouette, missing (stipple image-diff's measures). The\n"
     "reference is SCAN.ply drawn by `stipple truth` (the scan the model was encoded\n"
@@ -211,15 +212,19 @@ int cmd_trade(int argc, char** argv) {
     double instructions = 0;
     bool counted = true;
     for (const ViewSpec& s : specs) {
+      // One frame and R frames, each with the cut and the set-up: their
+      // difference over R - 1 is what a frame takes.
       FixedRender f;
       counter.start();
       if (!render_fixed(view, file.data(), o.config, o.rule, s, f, error, 1)) return cli::fail(files[0] + ": " + error);
-      const long long n = counter.stop();  // the cut, the set-up and one frame
-      counted = counted && n >= 0;
-      instructions += static_cast<double>(n);
+      const long long one = counter.stop();
       FixedRender timed;
+      counter.start();
       if (!render_fixed(view, file.data(), o.config, o.rule, s, timed, error, static_cast<int>(repeat)))
         return cli::fail(files[0] + ": " + error);
+      const long long all_frames = counter.stop();
+      counted = counted && repeat > 1 && one >= 0 && all_frames >= one;
+      if (counted) instructions += static_cast<double>(all_frames - one) / static_cast<double>(repeat - 1);
       times.insert(times.end(), timed.frame_seconds.begin(), timed.frame_seconds.end());
       const ImageComparison m = compare_images(references[&s - specs.data()], f.image);
       row.m.object_psnr += m.object_psnr / static_cast<double>(specs.size());
