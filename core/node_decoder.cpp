@@ -119,19 +119,23 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
     extent_mu_[a] = static_cast<int32_t>((axis_scale_q8_[a] + 128) >> 8);
   }
 
-  // Class tables: sigma_p in MU, sigma_n and sigma_c in Q12.
+  // Class tables: sigma_p in MU, sigma_n and sigma_c in Q12 — converted from
+  // float32 (version 1) or read from the 16-bit codes (version 2, where
+  // sigma_p is relative to E and sigma_n, sigma_c are Q12 already).
   int32_t* sigmas = reinterpret_cast<int32_t*>(at);
   const int64_t limit = int64_t{1} << 30;
+  const bool floats = spg_class_value_bytes(header_.version) == 4;
   for (uint32_t i = 0; i < 3u * header_.class_count[0]; ++i)
-    sigmas[i] = static_cast<int32_t>(ratio(dyadic_of(load_u32le(view.sigma_p + 4 * i)), largest, kModelUnitBits, limit));
+    sigmas[i] = floats ? static_cast<int32_t>(ratio(dyadic_of(load_u32le(view.sigma_p + 4 * i)), largest, kModelUnitBits, limit))
+                       : static_cast<int32_t>(spg_sigma_p_code_units(load_u16le(view.sigma_p + 2 * i), kModelUnitBits));
   sigma_p_ = sigmas;
   sigmas += 3u * header_.class_count[0];
   for (uint32_t i = 0; i < 2u * header_.class_count[1]; ++i)
-    sigmas[i] = f32_bits_to_fixed(load_u32le(view.sigma_n + 4 * i), 12, nullptr);
+    sigmas[i] = floats ? f32_bits_to_fixed(load_u32le(view.sigma_n + 4 * i), 12, nullptr) : load_u16le(view.sigma_n + 2 * i);
   sigma_n_ = sigmas;
   sigmas += 2u * header_.class_count[1];
   for (uint32_t i = 0; i < 3u * header_.class_count[2]; ++i)
-    sigmas[i] = f32_bits_to_fixed(load_u32le(view.sigma_c + 4 * i), 12, nullptr);
+    sigmas[i] = floats ? f32_bits_to_fixed(load_u32le(view.sigma_c + 4 * i), 12, nullptr) : load_u16le(view.sigma_c + 2 * i);
   sigma_c_ = sigmas;
   return DecodeStatus::kOk;
 }

@@ -125,7 +125,7 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   if (size < kSpgFixedHeaderBytes) return fail(SpgError::kTruncated, size);
   using namespace spg_offset;
   h.version = load_u16le(data + kVersion);
-  if (h.version != kSpgVersion) return fail(SpgError::kBadVersion, kVersion);
+  if (h.version < kSpgOldestVersion || h.version > kSpgVersion) return fail(SpgError::kBadVersion, kVersion);
   h.flags = load_u16le(data + kFlags);
   if ((h.flags & ~kAttrKnownMask) != 0) return fail(SpgError::kBadFlags, kFlags);
   h.tree_arity = data[kArity];
@@ -176,17 +176,21 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   if (load_u16le(data + kReserved) != 0) return fail(SpgError::kBadLayout, kReserved);
   in.pos = kSpgFixedHeaderBytes;
 
-  // §2 class tables: non-negative finite float32.
-  const size_t table_floats = (spg_startup_bytes(h.class_count) - kSpgFixedHeaderBytes) / 4;
-  if (in.remaining() < table_floats * 4) return fail(SpgError::kTruncated, size);
+  // §2 class tables: non-negative finite float32 (version 1) or 16-bit
+  // codes, every one of which is a valid value (version 2).
+  const size_t value_bytes = spg_class_value_bytes(h.version);
+  const size_t table_bytes = spg_startup_bytes(h.version, h.class_count) - kSpgFixedHeaderBytes;
+  if (in.remaining() < table_bytes) return fail(SpgError::kTruncated, size);
   view.sigma_p = data + in.pos;
-  view.sigma_n = view.sigma_p + 12u * h.class_count[0];
-  view.sigma_c = view.sigma_n + 8u * h.class_count[1];
-  for (size_t i = 0; i < table_floats; ++i) {
-    const uint32_t bits = load_u32le(data + in.pos);
-    if (!f32_finite(bits) || f32_negative(bits)) return fail(SpgError::kBadFloat, in.pos);
-    in.pos += 4;
+  view.sigma_n = view.sigma_p + 3 * value_bytes * h.class_count[0];
+  view.sigma_c = view.sigma_n + 2 * value_bytes * h.class_count[1];
+  if (value_bytes == 4) {
+    for (size_t i = 0; i < table_bytes; i += 4) {
+      const uint32_t bits = load_u32le(data + in.pos + i);
+      if (!f32_finite(bits) || f32_negative(bits)) return fail(SpgError::kBadFloat, in.pos + i);
+    }
   }
+  in.pos += table_bytes;
 
   return SpgResult{};
 }

@@ -19,7 +19,11 @@
 namespace stipple {
 
 inline constexpr uint8_t kSpgMagic[4] = {'S', 'T', 'P', 'G'};
-inline constexpr uint16_t kSpgVersion = 1;
+// The version written; the reader also takes every version from
+// kSpgOldestVersion. Version 1 stores the class tables as float32, version 2
+// as 16-bit codes (docs/format.md §2); nothing else differs.
+inline constexpr uint16_t kSpgVersion = 2;
+inline constexpr uint16_t kSpgOldestVersion = 1;
 inline constexpr size_t kSpgFixedHeaderBytes = 76;
 
 // Byte offsets of the fixed header's fields (docs/format.md §1): the reader,
@@ -67,11 +71,33 @@ struct SpgViewHint {
   }
 };
 
+// Bytes of one class table value: a float32 in version 1, a 16-bit code
+// from version 2.
+inline size_t spg_class_value_bytes(uint16_t version) { return version == 1 ? 4 : 2; }
+
 // The startup message, defined once: the fixed header and the class tables
 // (§1-§2), the prefix a client needs before any node record. Its length for
-// a header's class counts.
-inline size_t spg_startup_bytes(const uint16_t class_count[3]) {
-  return kSpgFixedHeaderBytes + 4 * (3 * size_t{class_count[0]} + 2 * size_t{class_count[1]} + 3 * size_t{class_count[2]});
+// a header's version and class counts.
+inline size_t spg_startup_bytes(uint16_t version, const uint16_t class_count[3]) {
+  return kSpgFixedHeaderBytes + spg_class_value_bytes(version) * (3 * size_t{class_count[0]} + 2 * size_t{class_count[1]} +
+                                                                   3 * size_t{class_count[2]});
+}
+
+// Version 2's class codes (docs/format.md §2), decoded without floating
+// point. sigma_p is a 16-bit floating-point code relative to the box's largest
+// extent E: exponent e = code >> 11, mantissa m = code & 2047, value
+// E (2048 + m) 2^(e - 42) for e >= 1 and E m 2^-41 for e = 0 (so E 2^-41
+// steps near zero, 12 significant bits above, at most about 2 E).
+// sigma_n (radians) and sigma_c (colour, 0..1) are Q12: value = code / 4096.
+// The sigma_p value in units of E / 2^unit_bits, rounded half up (unit_bits
+// <= 30, so the result stays below 2^32).
+inline uint32_t spg_sigma_p_code_units(uint16_t code, int unit_bits) {
+  const uint32_t e = code >> 11u, m = code & 2047u;
+  const uint32_t mant = e == 0 ? m : 2048u + m;
+  const int shift = (e == 0 ? 41 : 42 - static_cast<int>(e)) - unit_bits;  // value = mant 2^-shift units
+  if (shift <= 0) return mant << -shift;
+  if (shift > 31) return 0;
+  return static_cast<uint32_t>((uint64_t{mant} + (uint64_t{1} << (shift - 1))) >> shift);
 }
 
 enum class SpgError : uint8_t {
@@ -117,9 +143,11 @@ struct SpgHeader {
 // Views into a validated file. Pointers refer to the caller's buffer.
 struct SpgView {
   SpgHeader header;
-  const uint8_t* sigma_p = nullptr;  // class_count[0] x 3 float32 LE (sigma1 >= sigma2 >= sigma3)
-  const uint8_t* sigma_n = nullptr;  // class_count[1] x 2 float32 LE
-  const uint8_t* sigma_c = nullptr;  // class_count[2] x 3 float32 LE
+  // Class tables, little-endian: float32 in version 1, 16-bit codes from
+  // version 2 (spg_class_value_bytes(header.version) each).
+  const uint8_t* sigma_p = nullptr;  // class_count[0] x 3 (sigma1 >= sigma2 >= sigma3)
+  const uint8_t* sigma_n = nullptr;  // class_count[1] x 2
+  const uint8_t* sigma_c = nullptr;  // class_count[2] x 3
   const uint8_t* topology = nullptr; // child counts, BFS order (1 bit/node for arity 2, 4 bits for 8)
   size_t topology_bytes = 0;
   const uint8_t* leaf_counts = nullptr;  // LEB128 point count per leaf, BFS order

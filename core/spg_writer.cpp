@@ -4,10 +4,6 @@
 namespace stipple {
 namespace {
 
-size_t table_words(const uint16_t class_count[3]) {
-  return 3 * size_t{class_count[0]} + 2 * size_t{class_count[1]} + 3 * size_t{class_count[2]};
-}
-
 void write_fixed_header(const SpgHeader& h, uint8_t* out) {
   using namespace spg_offset;
   for (int i = 0; i < 4; ++i) out[kMagic + i] = kSpgMagic[i];
@@ -26,14 +22,25 @@ void write_fixed_header(const SpgHeader& h, uint8_t* out) {
   store_u16le(out + kReserved, 0);
 }
 
-uint8_t* write_startup(const SpgHeader& h, const SpgClassTables& t, uint8_t* out) {
+// False when a version-2 code does not fit its 16 bits.
+bool write_startup(const SpgHeader& h, const SpgClassTables& t, uint8_t* out) {
   write_fixed_header(h, out);
   uint8_t* at = out + kSpgFixedHeaderBytes;
   const uint32_t* tables[3] = {t.sigma_p, t.sigma_n, t.sigma_c};
   const size_t per_class[3] = {3, 2, 3};
+  const bool floats = spg_class_value_bytes(h.version) == 4;
   for (int c = 0; c < 3; ++c)
-    for (size_t i = 0; i < per_class[c] * h.class_count[c]; ++i, at += 4) store_u32le(at, tables[c][i]);
-  return at;
+    for (size_t i = 0; i < per_class[c] * h.class_count[c]; ++i) {
+      if (floats) {
+        store_u32le(at, tables[c][i]);
+        at += 4;
+      } else {
+        if (tables[c][i] > 0xFFFFu) return false;
+        store_u16le(at, static_cast<uint16_t>(tables[c][i]));
+        at += 2;
+      }
+    }
+  return true;
 }
 
 SpgWriteStatus status_of(SpgError e) {
@@ -64,20 +71,21 @@ const char* spg_write_status_text(SpgWriteStatus s) {
 size_t spg_write_bound(const SpgHeader& h) {
   if (h.node_count == 0 || h.leaf_count == 0 || h.leaf_count > h.node_count) return 0;
   const uint64_t bits_per_node = h.tree_arity == 8 ? 4 : 1;
-  const uint64_t bytes = spg_startup_bytes(h.class_count) + (uint64_t{h.node_count} * bits_per_node + 7) / 8 +
+  const uint64_t bytes = spg_startup_bytes(h.version, h.class_count) + (uint64_t{h.node_count} * bits_per_node + 7) / 8 +
                          5 * uint64_t{h.leaf_count} + uint64_t{h.node_count} * static_cast<uint64_t>(h.layout.record_bytes()) + 4;
   return bytes > static_cast<uint64_t>(SIZE_MAX) ? 0 : static_cast<size_t>(bytes);
 }
 
 SpgWriteStatus spg_write_startup(const SpgHeader& h, const SpgClassTables& classes, uint8_t* out, size_t capacity,
                                  size_t* written) {
-  const size_t n = spg_startup_bytes(h.class_count);
+  if (h.version < kSpgOldestVersion || h.version > kSpgVersion) return SpgWriteStatus::kBadHeader;
+  const size_t n = spg_startup_bytes(h.version, h.class_count);
   if (capacity < n) return SpgWriteStatus::kOutputTooSmall;
   for (int c = 0; c < 3; ++c) {
     const uint32_t* table = c == 0 ? classes.sigma_p : c == 1 ? classes.sigma_n : classes.sigma_c;
     if (h.class_count[c] > 0 && table == nullptr) return SpgWriteStatus::kBadHeader;
   }
-  write_startup(h, classes, out);
+  if (!write_startup(h, classes, out)) return SpgWriteStatus::kBadHeader;
   SpgView view;
   size_t used = 0;
   const SpgResult r = spg_parse_startup(out, n, &view, &used);
@@ -88,14 +96,15 @@ SpgWriteStatus spg_write_startup(const SpgHeader& h, const SpgClassTables& class
 
 SpgWriteStatus spg_write_startup_le(const SpgHeader& h, const uint8_t* sigma_p, const uint8_t* sigma_n,
                                     const uint8_t* sigma_c, uint8_t* out, size_t capacity, size_t* written) {
-  const size_t n = spg_startup_bytes(h.class_count);
+  if (h.version < kSpgOldestVersion || h.version > kSpgVersion) return SpgWriteStatus::kBadHeader;
+  const size_t n = spg_startup_bytes(h.version, h.class_count);
   if (capacity < n) return SpgWriteStatus::kOutputTooSmall;
   const uint8_t* tables[3] = {sigma_p, sigma_n, sigma_c};
   for (int c = 0; c < 3; ++c)
     if (h.class_count[c] > 0 && tables[c] == nullptr) return SpgWriteStatus::kBadHeader;
   write_fixed_header(h, out);
   uint8_t* at = out + kSpgFixedHeaderBytes;
-  const size_t per_class[3] = {12, 8, 12};
+  const size_t b = spg_class_value_bytes(h.version), per_class[3] = {3 * b, 2 * b, 3 * b};
   for (int c = 0; c < 3; ++c)
     for (size_t i = 0; i < per_class[c] * h.class_count[c]; ++i) *at++ = tables[c][i];
   SpgView view;
@@ -109,7 +118,7 @@ SpgWriteStatus spg_write_startup_le(const SpgHeader& h, const uint8_t* sigma_p, 
 SpgWriteStatus spg_write(const SpgContent& c, uint8_t* out, size_t capacity, size_t* written) {
   const SpgHeader& h = c.header;
   const size_t bound = spg_write_bound(h);
-  if (bound == 0 || c.child_counts == nullptr || c.leaf_points == nullptr || c.records == nullptr)
+  if (bound == 0 || h.version < kSpgOldestVersion || h.version > kSpgVersion || c.child_counts == nullptr || c.leaf_points == nullptr || c.records == nullptr)
     return SpgWriteStatus::kBadHeader;
   // Representable child counts, and exactly leaf_count leaves (leaf_points
   // is read for each of them).
@@ -126,7 +135,7 @@ SpgWriteStatus spg_write(const SpgContent& c, uint8_t* out, size_t capacity, siz
     uint32_t v = c.leaf_points[i];
     do ++leb_bytes; while (v >>= 7);
   }
-  const size_t table_bytes = 4 * table_words(h.class_count);
+  const size_t table_bytes = spg_startup_bytes(h.version, h.class_count) - kSpgFixedHeaderBytes;
   const size_t topology_bytes = static_cast<size_t>((uint64_t{h.node_count} * (h.tree_arity == 8 ? 4 : 1) + 7) / 8);
   const size_t record_bytes = static_cast<size_t>(h.layout.record_bytes());
   const size_t size = kSpgFixedHeaderBytes + table_bytes + topology_bytes + leb_bytes + size_t{h.node_count} * record_bytes + 4;

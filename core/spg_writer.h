@@ -3,7 +3,8 @@
 // The caller owns every buffer: `spg_write_bound` says how many bytes a file
 // with a given header can take, `spg_write` writes it into `out` and returns
 // the bytes written. Nothing is allocated or thrown and no floating point is
-// used (class tables and the bounding box are float32 bit patterns). The
+// used (the bounding box is float32 bit patterns, the class tables float32
+// bit patterns or 16-bit codes). The
 // writer checks what it is given as the reader would — counts, topology,
 // leaf counts, class indices — so it never writes a file `spg_parse`
 // refuses; it returns a status instead.
@@ -36,7 +37,9 @@ enum class SpgWriteStatus : uint8_t {
 
 const char* spg_write_status_text(SpgWriteStatus s);
 
-// The class tables as float32 bit patterns: class_count[0] x 3 for sigma_p
+// The class tables as the header's version stores them — float32 bit
+// patterns in version 1, 16-bit codes (docs/format.md §2; a value above
+// 0xFFFF is kBadHeader) from version 2: class_count[0] x 3 for sigma_p
 // (sigma1 >= sigma2 >= sigma3), class_count[1] x 2 for sigma_n,
 // class_count[2] x 3 for sigma_c. Null where the count is 0.
 struct SpgClassTables {
@@ -62,12 +65,13 @@ size_t spg_write_bound(const SpgHeader& header);
 [[nodiscard]] SpgWriteStatus spg_write(const SpgContent& content, uint8_t* out, size_t capacity, size_t* written);
 
 // Writes the startup message (fixed header and class tables) into
-// out[0 .. capacity); spg_startup_bytes(header.class_count) bytes.
+// out[0 .. capacity); spg_startup_bytes(header.version, header.class_count) bytes.
 [[nodiscard]] SpgWriteStatus spg_write_startup(const SpgHeader& header, const SpgClassTables& classes, uint8_t* out,
                                                size_t capacity, size_t* written);
 
-// The same from class tables as they lie in a file (little-endian float32
-// bytes, e.g. an SpgView's): what a server sends without converting them.
+// The same from class tables as they lie in a file of the header's version
+// (little-endian bytes, e.g. an SpgView's): what a server sends without
+// converting them.
 [[nodiscard]] SpgWriteStatus spg_write_startup_le(const SpgHeader& header, const uint8_t* sigma_p, const uint8_t* sigma_n,
                                                   const uint8_t* sigma_c, uint8_t* out, size_t capacity, size_t* written);
 

@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
   if (client.init(client_config, client_arena.data(), client_arena.size() * 8) != stipple::ClientStatus::kOk) return 2;
   std::vector<uint8_t> cut_scratch(stipple::cut_scratch_bytes(view.header));
   std::vector<uint32_t> cut(view.header.node_count);
-  const size_t startup_bytes = stipple::spg_startup_bytes(view.header.class_count);
+  const size_t startup_bytes = stipple::spg_startup_bytes(view.header.version, view.header.class_count);
   before = g_heap_calls.load();
   bool client_ok = true;
   stipple::FrameStats stats;

@@ -183,26 +183,34 @@ TEST(Metrics, KnownDistances) {
 }
 
 // The bundled bunny, encoded with the defaults, must reproduce
-// tests/golden/bunny_v1.spg bit for bit. Regenerate only on purpose, with
+// tests/golden/bunny_v2.spg (and bunny_v1.spg) bit for bit. Regenerate only on purpose, with
 // tests/golden/regenerate.sh; on failure the actual bytes are written beside
 // the test binary.
 TEST(Golden, BundledBunnyBitstream) {
   PointCloud cloud;
   std::string error;
   ASSERT_TRUE(read_point_cloud(test::source_path("data/bunny.ply"), cloud, error)) << error;
-  std::vector<uint8_t> spg;
-  EncodeReport r;
-  ASSERT_TRUE(encode_cloud(cloud, EncodeOptions{}, spg, r, error)) << error;
-  std::vector<uint8_t> golden;
-  ASSERT_TRUE(read_file(test::source_path("tests/golden/bunny_v1.spg"), golden, error))
-      << error << " (a missing golden file fails; run tests/golden/regenerate.sh on purpose)";
-  if (spg != golden) {
-    const std::string actual = "bunny_v1.spg.actual";
-    write_file_atomic(actual, spg, error);
-    size_t first = 0;
-    while (first < std::min(spg.size(), golden.size()) && spg[first] == golden[first]) ++first;
-    FAIL() << "bitstream differs from tests/golden/bunny_v1.spg at byte " << first << " (sizes " << spg.size()
-           << " vs " << golden.size() << "); actual written to " << std::filesystem::absolute(actual);
+  // Both versions the encoder writes: the default (16-bit class tables) and
+  // --format-version 1 (float32 tables; the file every golden image is drawn
+  // from, and the proof that version 1 is still read everywhere).
+  for (const int version : {2, 1}) {
+    const std::string name = "bunny_v" + std::to_string(version) + ".spg";
+    std::vector<uint8_t> spg;
+    EncodeReport r;
+    EncodeOptions o;
+    o.format_version = version;
+    ASSERT_TRUE(encode_cloud(cloud, o, spg, r, error)) << error;
+    std::vector<uint8_t> golden;
+    ASSERT_TRUE(read_file(test::source_path("tests/golden/" + name), golden, error))
+        << error << " (a missing golden file fails; run tests/golden/regenerate.sh on purpose)";
+    if (spg != golden) {
+      const std::string actual = name + ".actual";
+      write_file_atomic(actual, spg, error);
+      size_t first = 0;
+      while (first < std::min(spg.size(), golden.size()) && spg[first] == golden[first]) ++first;
+      ADD_FAILURE() << "bitstream differs from tests/golden/" << name << " at byte " << first << " (sizes " << spg.size()
+                    << " vs " << golden.size() << "); actual written to " << std::filesystem::absolute(actual);
+    }
   }
 }
 

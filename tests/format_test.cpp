@@ -14,7 +14,7 @@
 namespace stipple {
 namespace {
 
-std::vector<uint8_t> small_spg(bool normals = true, bool colors = false, bool octree = false) {
+std::vector<uint8_t> small_spg(bool normals = true, bool colors = false, bool octree = false, int version = kSpgVersion) {
   PointCloud cloud = test::sphere_cloud(600);
   if (colors)
     for (const Vec3& p : cloud.positions) cloud.colors.push_back((p + Vec3::Ones()) / 2);
@@ -22,6 +22,7 @@ std::vector<uint8_t> small_spg(bool normals = true, bool colors = false, bool oc
   o.normals = normals;
   o.tree.octree = octree;
   o.tree.leaf_size = 8;
+  o.format_version = version;
   return test::encode(cloud, o);
 }
 
@@ -46,11 +47,13 @@ TEST(SpgFormat, FixturesAreTheEncodersOutput) {
   const struct {
     const char* name;
     bool normals, colors, octree;
-  } variants[] = {{"normals", true, false, false}, {"plain", false, false, false}, {"colour", true, true, false},
-                  {"octree", true, false, true}};
+    int version;
+  } variants[] = {{"normals", true, false, false, kSpgVersion}, {"plain", false, false, false, kSpgVersion},
+                  {"colour", true, true, false, kSpgVersion},   {"octree", true, false, true, kSpgVersion},
+                  {"normals_v1", true, false, false, 1}};
   for (const auto& v : variants) {
     const std::string path = test::source_path(std::string("tests/data/sphere600_") + v.name + ".spg");
-    const std::vector<uint8_t> f = small_spg(v.normals, v.colors, v.octree);
+    const std::vector<uint8_t> f = small_spg(v.normals, v.colors, v.octree, v.version);
     std::string error;
     if (std::getenv("STIPPLE_WRITE_FIXTURES")) {
       ASSERT_TRUE(write_file_atomic(path, f, error)) << error;

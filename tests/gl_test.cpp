@@ -42,7 +42,7 @@ struct Scene {
     limits.node_capacity = 200000;
     storage.assign(node_cache_bytes(limits) / 8 + 1, 0);
     EXPECT_EQ(cache.init(limits, storage.data(), storage.size() * 8), CacheStatus::kOk);
-    EXPECT_EQ(cache.load_startup(file.data(), spg_startup_bytes(view.header.class_count)), CacheStatus::kOk);
+    EXPECT_EQ(cache.load_startup(file.data(), spg_startup_bytes(view.header.version, view.header.class_count)), CacheStatus::kOk);
     for (uint32_t id : software.cut)
       EXPECT_EQ(cache.put(NodeId{id}, view.records + size_t{id} * view.record_bytes, view.record_bytes), CacheStatus::kOk);
   }

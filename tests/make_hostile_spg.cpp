@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string dir = argv[1];
-  const uint32_t sigma[3] = {0x3D800000u, 0x3D800000u, 0x3D800000u};  // 1/16
+  const uint32_t sigma[3] = {0xD800u, 0xD800u, 0xD800u};  // version-2 codes: 1/16 of the box (e = 27, m = 0)
   {
     const uint8_t child[1] = {0};
     const uint32_t points[1] = {1u << 28};

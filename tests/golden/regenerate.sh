@@ -1,9 +1,14 @@
 #!/usr/bin/env bash
-# Regenerates the golden bitstream on purpose, after a deliberate format or
-# encoder change: encodes the bundled bunny with default options. Review the
-# diff in `stipple info` output and say why in the commit message.
+# Regenerates the golden bitstreams on purpose, after a deliberate format or
+# encoder change: encodes the bundled bunny with default options (version 2,
+# 16-bit class tables) and with --format-version 1 (float32 tables: the file
+# the golden images are drawn from). Review the diff in `stipple info` output
+# and say why in the commit message; a changed bunny_v1.spg means the golden
+# images need tests/golden/regenerate_images.sh too.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 stipple=${STIPPLE:-build/release/tools/stipple}
-"$stipple" encode data/bunny.ply -o tests/golden/bunny_v1.spg --quiet
+"$stipple" encode data/bunny.ply -o tests/golden/bunny_v2.spg --quiet
+"$stipple" encode data/bunny.ply -o tests/golden/bunny_v1.spg --quiet --format-version 1
+"$stipple" info tests/golden/bunny_v2.spg
 "$stipple" info tests/golden/bunny_v1.spg

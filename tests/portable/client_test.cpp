@@ -29,7 +29,7 @@ const Model& bunny() {
     Model out;
     out.file = test::fixture("tests/golden/bunny_v1.spg");
     EXPECT_TRUE(spg_parse(out.file.data(), out.file.size(), &out.view).ok());
-    out.startup_bytes = spg_startup_bytes(out.view.header.class_count);
+    out.startup_bytes = spg_startup_bytes(out.view.header.version, out.view.header.class_count);
     return out;
   }();
   return m;

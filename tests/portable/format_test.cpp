@@ -68,9 +68,11 @@ TEST(Crc32, KnownValue) {
 struct Variant {
   const char* name;
   bool normals, colors, octree;
+  uint16_t version;
 };
-constexpr Variant kVariants[] = {
-    {"normals", true, false, false}, {"plain", false, false, false}, {"colour", true, true, false}, {"octree", true, false, true}};
+constexpr Variant kVariants[] = {{"normals", true, false, false, 2},   {"plain", false, false, false, 2},
+                                 {"colour", true, true, false, 2},     {"octree", true, false, true, 2},
+                                 {"normals_v1", true, false, false, 1}};
 
 std::vector<uint8_t> sphere_spg(const char* variant) {
   return test::fixture(std::string("tests/data/sphere600_") + variant + ".spg");
@@ -97,6 +99,12 @@ TEST(SpgFormat, EveryVariantParses) {
     EXPECT_EQ(v.header.has_color(), variant.colors);
     EXPECT_EQ(v.header.tree_arity, variant.octree ? 8 : 2);
     EXPECT_EQ(v.record_bytes, variant.colors ? 17u : variant.normals ? 13u : 9u);
+    EXPECT_EQ(v.header.version, variant.version);
+    // The tables' bytes: 12 + 8 per class in version 1, 6 + 4 from version 2.
+    const size_t b = variant.version == 1 ? 4 : 2;
+    EXPECT_EQ(static_cast<size_t>(v.sigma_n - v.sigma_p), 3 * b * v.header.class_count[0]);
+    EXPECT_EQ(spg_startup_bytes(v.header.version, v.header.class_count),
+              kSpgFixedHeaderBytes + b * (3u * v.header.class_count[0] + 2u * v.header.class_count[1] + 3u * v.header.class_count[2]));
   }
 }
 
@@ -131,7 +139,8 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
   };
   const Case cases[] = {
       {0, {'S', 'T', 'P', 'X'}, SpgError::kBadMagic},
-      {4, {2, 0}, SpgError::kBadVersion},
+      {4, {0, 0}, SpgError::kBadVersion},
+      {4, {3, 0}, SpgError::kBadVersion},
       {6, {4, 0}, SpgError::kBadFlags},
       {8, {3}, SpgError::kBadArity},
       {9, {17}, SpgError::kBadLayout},
@@ -149,8 +158,6 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
       {44, {0, 0, 0x80, 0x4F}, SpgError::kBadBoundingBox},  // min x = 4.3e9 > max x
       {68, {0, 0}, SpgError::kBadClassCount},
       {68, {0x01, 0x10}, SpgError::kBadClassCount},       // 4097 classes in 12 bits
-      {76, {0, 0, 0xC0, 0xFF}, SpgError::kBadFloat},      // NaN sigma
-      {76, {0, 0, 0x80, 0xBF}, SpgError::kBadFloat},      // negative sigma
   };
   for (const Case& c : cases) {
     std::vector<uint8_t> g = f;
@@ -160,6 +167,45 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
     const SpgResult r = spg_parse(g.data(), g.size(), &v);
     EXPECT_EQ(r.error, c.expect) << "offset " << c.offset << ": got " << spg_error_text(r.error);
   }
+  // Version 1's float32 tables: NaN, infinite and negative sigmas are refused
+  // at their byte. Version 2's codes have no such values: any 16 bits parse.
+  const std::vector<uint8_t> f1 = sphere_spg("normals_v1");
+  const Case float_cases[] = {
+      {76, {0, 0, 0xC0, 0xFF}, SpgError::kBadFloat},  // NaN sigma
+      {80, {0, 0, 0x80, 0x7F}, SpgError::kBadFloat},  // +inf
+      {84, {0, 0, 0x80, 0xBF}, SpgError::kBadFloat},  // negative sigma
+  };
+  for (const Case& c : float_cases) {
+    std::vector<uint8_t> g = f1;
+    std::copy(c.value.begin(), c.value.end(), g.begin() + static_cast<ptrdiff_t>(c.offset));
+    fix_crc(g);
+    SpgView v;
+    const SpgResult r = spg_parse(g.data(), g.size(), &v);
+    EXPECT_EQ(r.error, c.expect) << "version 1, offset " << c.offset << ": got " << spg_error_text(r.error);
+    EXPECT_EQ(r.offset, c.offset);
+  }
+  std::vector<uint8_t> g = f;
+  for (size_t i = 76; i < 82; ++i) g[i] = 0xFF;  // the largest sigma_p code, thrice
+  fix_crc(g);
+  EXPECT_EQ(parse_error(g), SpgError::kOk);
+}
+
+// Version 2's sigma_p code: a 16-bit float relative to the box (docs/format.md
+// §2), decoded by shifts alone.
+TEST(SpgFormat, SigmaPCodesDecodeByShifts) {
+  EXPECT_EQ(spg_sigma_p_code_units(0, 24), 0u);
+  EXPECT_EQ(spg_sigma_p_code_units(27u << 11, 24), 1u << 20);           // 2^-4 E
+  EXPECT_EQ(spg_sigma_p_code_units((27u << 11) | 1024, 24), 3u << 19);  // 1.5 x 2^-4 E
+  EXPECT_EQ(spg_sigma_p_code_units(31u << 11, 24), 1u << 24);           // E
+  EXPECT_EQ(spg_sigma_p_code_units(0xFFFF, 24), 4095u << 13);           // the largest: 2 E less one step
+  EXPECT_EQ(spg_sigma_p_code_units(0xFFFF, 30), 4095u << 19);           // still below 2^32
+  EXPECT_EQ(spg_sigma_p_code_units(1u << 11, 30), 1u);                  // 2^-30 E
+  EXPECT_EQ(spg_sigma_p_code_units(2047, 41), 2047u);                   // below 2^-30 E: m 2^-41 E
+  EXPECT_EQ(spg_sigma_p_code_units(1, 24), 0u);                         // rounds to nothing
+  // Monotonic and continuous across the binades: each step is one mantissa unit.
+  for (uint32_t c = 1; c <= 0xFFFF; ++c)
+    ASSERT_LE(spg_sigma_p_code_units(static_cast<uint16_t>(c - 1), 30), spg_sigma_p_code_units(static_cast<uint16_t>(c), 30))
+        << c;
 }
 
 TEST(SpgFormat, RecordClassIndexBeyondTable) {

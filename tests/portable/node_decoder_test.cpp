@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -52,12 +53,42 @@ TEST(NodeDecoder, DecodesToTheSameBytesOnEveryPlatform) {
   const struct {
     const char* file;
     uint32_t crc;
-  } cases[] = {{"tests/golden/bunny_v1.spg", 0x58aaed0du}, {"tests/data/sphere600_colour.spg", 0x15cd31bau}};
+  } cases[] = {{"tests/golden/bunny_v1.spg", 0x58aaed0du},
+               {"tests/golden/bunny_v2.spg", 0xb878954du},
+               {"tests/data/sphere600_colour.spg", 0x9712f81au}};
   for (const auto& c : cases) {
     const uint32_t crc = decoded_crc(test::fixture(c.file));
     std::printf("%s: decoded nodes crc32 %08x\n", c.file, crc);
     EXPECT_EQ(crc, c.crc) << c.file;
   }
+}
+
+// The same scan written both ways: version 2's 16-bit codes decode to
+// version 1's sigma_n and sigma_c exactly (both are Q12 in the client) and to
+// its sigma_p within 2^-12 of the value, plus the rounding to a model unit.
+TEST(NodeDecoder, SixteenBitTablesDecodeAsTheFloatTablesDo) {
+  const std::vector<uint8_t> f1 = test::fixture("tests/golden/bunny_v1.spg"), f2 = test::fixture("tests/golden/bunny_v2.spg");
+  SpgView v1, v2;
+  ASSERT_TRUE(spg_parse(f1.data(), f1.size(), &v1).ok());
+  ASSERT_TRUE(spg_parse(f2.data(), f2.size(), &v2).ok());
+  ASSERT_EQ(v1.header.version, 1);
+  ASSERT_EQ(v2.header.version, 2);
+  for (int t = 0; t < 3; ++t) ASSERT_EQ(v1.header.class_count[t], v2.header.class_count[t]);
+  ASSERT_EQ(std::memcmp(v1.records, v2.records, v1.header.node_count * v1.record_bytes), 0);
+  std::vector<uint32_t> s1(node_decoder_bytes(v1.header) / 4), s2(node_decoder_bytes(v2.header) / 4);
+  NodeDecoder d1, d2;
+  ASSERT_EQ(d1.init(v1, s1.data(), s1.size() * 4), DecodeStatus::kOk);
+  ASSERT_EQ(d2.init(v2, s2.data(), s2.size() * 4), DecodeStatus::kOk);
+  int differ = 0;
+  for (uint16_t c = 0; c < v1.header.class_count[0]; ++c) {
+    for (int k = 0; k < 3; ++k) {
+      const int64_t a = d1.sigma_p_mu(ClassId{c})[k], b = d2.sigma_p_mu(ClassId{c})[k];
+      ASSERT_LE(std::llabs(a - b), a / 4096 + 1) << "class " << c << " axis " << k;
+      differ += a != b;
+    }
+    for (int k = 0; k < 2; ++k) ASSERT_EQ(d1.sigma_n_q12(ClassId{c})[k], d2.sigma_n_q12(ClassId{c})[k]) << "class " << c;
+  }
+  EXPECT_GT(differ, 0);  // the codes are not float32 in disguise
 }
 
 TEST(NodeDecoder, RejectsBadRecordsAndSmallStorage) {

@@ -34,7 +34,8 @@ Parts take_apart(const std::vector<uint8_t>& file) {
   const uint8_t* tables[3] = {p.view.sigma_p, p.view.sigma_n, p.view.sigma_c};
   const uint32_t per_class[3] = {3, 2, 3};
   for (int c = 0; c < 3; ++c)
-    for (uint32_t i = 0; i < per_class[c] * h.class_count[c]; ++i) p.tables[c].push_back(load_u32le(tables[c] + 4 * i));
+    for (uint32_t i = 0; i < per_class[c] * h.class_count[c]; ++i)
+      p.tables[c].push_back(h.version == 1 ? load_u32le(tables[c] + 4 * i) : load_u16le(tables[c] + 2 * i));
   for (uint32_t i = 0; i < h.node_count; ++i) p.child_counts.push_back(static_cast<uint8_t>(spg_child_count(p.view, i)));
   const uint8_t* at = p.view.leaf_counts;
   for (uint32_t i = 0; i < h.leaf_count; ++i) {
@@ -50,7 +51,8 @@ Parts take_apart(const std::vector<uint8_t>& file) {
   return p;
 }
 
-const char* const kFiles[] = {"tests/golden/bunny_v1.spg", "tests/data/sphere600_normals.spg",
+const char* const kFiles[] = {"tests/golden/bunny_v1.spg", "tests/golden/bunny_v2.spg",
+                              "tests/data/sphere600_normals_v1.spg", "tests/data/sphere600_normals.spg",
                               "tests/data/sphere600_plain.spg", "tests/data/sphere600_colour.spg",
                               "tests/data/sphere600_octree.spg"};
 
@@ -66,7 +68,7 @@ TEST(SpgWriter, RewritesEveryCommittedFileByteForByte) {
     out.resize(written);
     EXPECT_EQ(out, file) << name;
     // The startup message alone: the file's prefix, spg_startup_bytes long.
-    std::vector<uint8_t> startup(spg_startup_bytes(p.view.header.class_count));
+    std::vector<uint8_t> startup(spg_startup_bytes(p.view.header.version, p.view.header.class_count));
     ASSERT_EQ(spg_write_startup(p.view.header, p.content().classes, startup.data(), startup.size(), &written),
               SpgWriteStatus::kOk);
     EXPECT_EQ(written, startup.size());
@@ -123,8 +125,20 @@ TEST(SpgWriter, ContentTheReaderWouldRefuseIsRefused) {
   }
   {
     Parts p = take_apart(file);
-    p.tables[0][1] = 0x7FC00000u;  // NaN sigma
+    p.tables[0][1] = 0x10000u;  // a version-2 code beyond 16 bits
     EXPECT_EQ(write(p), SpgWriteStatus::kBadHeader);
+  }
+  {
+    const std::vector<uint8_t> v1 = test::fixture("tests/data/sphere600_normals_v1.spg");
+    std::vector<uint8_t> out1(v1.size() + 64);
+    const auto write1 = [&](const Parts& p) { return spg_write(p.content(), out1.data(), out1.size(), &written); };
+    Parts p = take_apart(v1);
+    ASSERT_EQ(write1(p), SpgWriteStatus::kOk);
+    p.tables[0][1] = 0x7FC00000u;  // a NaN sigma in version 1's float32 table
+    EXPECT_EQ(write1(p), SpgWriteStatus::kBadHeader);
+    p.tables[0][1] = 0x3D800000u;
+    p.view.header.version = 3;  // a version the reader does not know
+    EXPECT_EQ(write1(p), SpgWriteStatus::kBadHeader);
   }
   {
     Parts p = take_apart(file);

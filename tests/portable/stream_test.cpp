@@ -99,7 +99,7 @@ TEST(Stream, ClientFramesEqualAFreshLocalLoadAfterEveryUpdate) {
     resend += sender.cut().sent_count() * (4 + m.view.record_bytes);
     // A fresh client loaded locally with the same cut draws the same bytes.
     Device local;
-    ASSERT_EQ(local.cache.load_startup(m.file.data(), spg_startup_bytes(m.view.header.class_count)), CacheStatus::kOk);
+    ASSERT_EQ(local.cache.load_startup(m.file.data(), spg_startup_bytes(m.view.header.version, m.view.header.class_count)), CacheStatus::kOk);
     for (uint32_t i = 0; i < sender.cut().sent_count(); ++i) {
       const uint32_t id = index_of(sender.cut().sent()[i]);
       ASSERT_EQ(local.cache.put(NodeId{id}, m.view.records + size_t{id} * m.view.record_bytes, m.view.record_bytes),
@@ -133,7 +133,7 @@ TEST(Stream, FewerAttributesMeanSmallerRecordsAndTheirPicture) {
   EXPECT_FALSE(grey.cache.header().has_normals());
   EXPECT_EQ(grey.cache.record_bytes(), 9u);  // 13 with normals
   // The same picture as the full records drawn without shading.
-  ASSERT_EQ(flat.cache.load_startup(m.file.data(), spg_startup_bytes(m.view.header.class_count)), CacheStatus::kOk);
+  ASSERT_EQ(flat.cache.load_startup(m.file.data(), spg_startup_bytes(m.view.header.version, m.view.header.class_count)), CacheStatus::kOk);
   for (uint32_t i = 0; i < sender.cut().sent_count(); ++i) {
     const uint32_t id = index_of(sender.cut().sent()[i]);
     ASSERT_EQ(flat.cache.put(NodeId{id}, m.view.records + size_t{id} * m.view.record_bytes, m.view.record_bytes),

@@ -292,7 +292,7 @@ void BM_ClientFrame(benchmark::State& state) {
   std::vector<uint64_t> arena(client_arena_bytes(c) / 8 + 1);
   Client client;
   if (client.init(c, arena.data(), arena.size() * 8) != ClientStatus::kOk ||
-      client.load_startup(spg.data(), spg_startup_bytes(view.header.class_count)) != ClientStatus::kOk)
+      client.load_startup(spg.data(), spg_startup_bytes(view.header.version, view.header.class_count)) != ClientStatus::kOk)
     std::abort();
   for (uint32_t i = 0; i < n; ++i)
     if (client.put_node(NodeId{cut[i]}, view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes) !=
@@ -335,7 +335,7 @@ void BM_GlFrame(benchmark::State& state) {
   std::vector<uint64_t> cache_storage(node_cache_bytes(limits) / 8 + 1);
   NodeCache cache;
   if (cache.init(limits, cache_storage.data(), cache_storage.size() * 8) != CacheStatus::kOk ||
-      cache.load_startup(spg.data(), spg_startup_bytes(view.header.class_count)) != CacheStatus::kOk)
+      cache.load_startup(spg.data(), spg_startup_bytes(view.header.version, view.header.class_count)) != CacheStatus::kOk)
     std::abort();
   for (uint32_t id : cut)
     if (cache.put(NodeId{id}, view.records + size_t{id} * view.record_bytes, view.record_bytes) != CacheStatus::kOk) std::abort();

@@ -35,6 +35,8 @@ const char kEncodeHelp[] =
     "  --octree              octree partition (SGP03, TOG05 Table II baseline)\n"
     "  --no-normals          store no normals (13 -> 9 bytes per node)\n"
     "  --no-color            store no colours even if the scan has them\n"
+    "  --format-version V    2 (default: 16-bit class tables) or 1 (float32 tables,\n"
+    "                        for readers older than version 2)\n"
     "  --shrink ETA0,ETA1    curvature shrink of the thin axis (default 0.25,2)\n"
     "  --no-shrink           no curvature shrink\n"
     "  --neighbours K        k for normals of bare point clouds (default 12)\n"

@@ -72,6 +72,11 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
   }
   if (args.value("--up", v) && !spg_parse_axis(v.c_str(), &o.orient.up))
     return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
+  if (args.value("--format-version", v)) {
+    if (!cli::parse_uint(v, kSpgVersion, u) || u < kSpgOldestVersion)
+      return error = "--format-version: expected 1 or 2, got '" + v + "'", false;
+    o.format_version = static_cast<int>(u);
+  }
   if (args.flag("--no-shrink")) o.tree.stats.shrink_eta0 = 1.0;
   o.tree.octree = args.flag("--octree");
   o.normals = !args.flag("--no-normals");

@@ -61,7 +61,7 @@ int cmd_info(int argc, char** argv) {
   const std::vector<uint32_t> point_count = spg_point_counts(view);
   const auto sigma1_of = [&](uint32_t node) {
     const NodeFields f = unpack_record(h.layout, view.records + size_t{node} * view.record_bytes);
-    return f32_value(load_u32le(view.sigma_p + 12 * size_t{f[Field::kSigmaP]}));
+    return spg_class_value(view, 0, 3 * size_t{f[Field::kSigmaP]});
   };
   PartitionRatioAccumulator acc;
   double counts[8], sigma1[8];
@@ -112,6 +112,7 @@ int cmd_info(int argc, char** argv) {
         .integer("classes_p", h.class_count[0])
         .integer("classes_n", h.class_count[1])
         .integer("classes_c", h.class_count[2])
+        .integer("class_table_bytes", static_cast<long long>(spg_startup_bytes(h.version, h.class_count) - kSpgFixedHeaderBytes))
         .num("apr", ratios.apr)
         .num("capr", ratios.capr)
         .integer("capr_excluded", static_cast<long long>(ratios.capr_excluded))
@@ -130,8 +131,10 @@ int cmd_info(int argc, char** argv) {
   std::printf("  records      %d bytes each, %s bytes in all\n", h.layout.record_bytes(),
               cli::with_commas(record_total).c_str());
   std::printf("  file         %s bytes, %.2f bits per original point\n", cli::with_commas(file.size()).c_str(), bpp);
-  std::printf("  classes      sigma_p %u, sigma_n %u, sigma_c %u\n", h.class_count[0], h.class_count[1],
-              h.class_count[2]);
+  std::printf("  classes      sigma_p %u, sigma_n %u, sigma_c %u (tables %s bytes, %s)\n", h.class_count[0],
+              h.class_count[1], h.class_count[2],
+              cli::with_commas(spg_startup_bytes(h.version, h.class_count) - kSpgFixedHeaderBytes).c_str(),
+              h.version == 1 ? "float32" : "16-bit codes");
   std::printf("  APR %.3f, cAPR %.3f (TOG05 Table II; cAPR from class-quantized sigma1, %llu of %llu families\n"
               "               with a degenerate child left out)\n",
               ratios.apr, ratios.capr, static_cast<unsigned long long>(ratios.capr_excluded),

@@ -185,7 +185,7 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
   std::vector<uint64_t> arena(out.arena_bytes / 8 + 1);
   Client client;
   ClientStatus s = client.init(config, arena.data(), arena.size() * 8);
-  if (s == ClientStatus::kOk) s = client.load_startup(file, spg_startup_bytes(view.header.class_count));
+  if (s == ClientStatus::kOk) s = client.load_startup(file, spg_startup_bytes(view.header.version, view.header.class_count));
   for (size_t i = 0; s == ClientStatus::kOk && i < cut.size(); ++i)
     s = client.put_node(NodeId{cut[i]}, view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes);
   const size_t stride = static_cast<size_t>(config.raster.width) * bytes_per_pixel(config.raster.format);

@@ -46,6 +46,8 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   if (o.classes_p < 0 || o.classes_p > 4096) return error = "--classes: sigma_p classes must be 1..4096", false;
   if (o.classes_n < 0 || o.classes_n > 4096) return error = "--classes: sigma_n classes must be 1..4096", false;
   if (o.classes_c < 0 || o.classes_c > 64) return error = "--classes: sigma_c classes must be 1..64", false;
+  if (o.format_version < kSpgOldestVersion || o.format_version > kSpgVersion)
+    return error = "--format-version: expected " + std::to_string(kSpgOldestVersion) + " or " + std::to_string(kSpgVersion), false;
   if (o.tree.leaf_size < 2) return error = "--leaf-size must be at least 2", false;
   if (!(o.tree.balance >= 0 && o.tree.balance <= 0.5)) return error = "--balance must be in [0, 0.5]", false;
   if (cloud.size() == 0) return error = "the scan has no points", false;
@@ -124,7 +126,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
 
   if (progress) progress->update(0.95, "writing");
   SpgHeader header;
-  header.version = kSpgVersion;
+  header.version = static_cast<uint16_t>(o.format_version);
   header.flags = flags;
   header.tree_arity = tree.octree ? 8 : 2;
   header.layout = layout;
@@ -140,13 +142,19 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   header.class_count[0] = static_cast<uint16_t>(cp.centers.size());
   header.class_count[1] = static_cast<uint16_t>(cn.centers.size());
   header.class_count[2] = static_cast<uint16_t>(cc.centers.size());
+  // Class tables: float32 (version 1) or 16-bit codes, sigma_p relative to
+  // the stored box's largest side (docs/format.md §2).
+  const bool float_tables = header.version == 1;
+  double largest = 0;
+  for (int a = 0; a < 3; ++a) largest = std::max(largest, double(bmax[a]) - double(bmin[a]));
+  if (!(largest > 0)) largest = 1;  // one point: as the client's decoder takes it
   std::vector<uint32_t> sigma_p, sigma_n, sigma_c;
   for (const Vec3& c : cp.centers)
-    for (int d = 0; d < 3; ++d) sigma_p.push_back(f32_bits(static_cast<float>(c[d])));
+    for (int d = 0; d < 3; ++d) sigma_p.push_back(float_tables ? f32_bits(static_cast<float>(c[d])) : sigma_p_code(c[d], largest));
   for (const Vec3& c : cn.centers)
-    for (int d = 0; d < 2; ++d) sigma_n.push_back(f32_bits(static_cast<float>(c[d])));
+    for (int d = 0; d < 2; ++d) sigma_n.push_back(float_tables ? f32_bits(static_cast<float>(c[d])) : q12_code(c[d]));
   for (const Vec3& c : cc.centers)
-    for (int d = 0; d < 3; ++d) sigma_c.push_back(f32_bits(static_cast<float>(c[d])));
+    for (int d = 0; d < 3; ++d) sigma_c.push_back(float_tables ? f32_bits(static_cast<float>(c[d])) : q12_code(c[d]));
   std::vector<uint8_t> child_counts(n);
   std::vector<uint32_t> leaf_points;
   for (size_t i = 0; i < n; ++i) {

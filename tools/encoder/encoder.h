@@ -23,6 +23,9 @@ struct EncodeOptions {
   bool normals = true;  // store normals (computed when the scan has none)
   bool colors = true;   // store colours when the scan has them
   int normal_neighbours = 12;
+  // The .spg version written: kSpgVersion (16-bit class tables) or 1
+  // (float32 tables, for readers that predate version 2).
+  int format_version = kSpgVersion;
   OrientOptions orient;  // how estimated normals face; also gives the file's view hint (tools/encoder/orientation.h)
 };
 

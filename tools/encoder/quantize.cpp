@@ -85,4 +85,29 @@ uint16_t quantize_unit(double v, int bits) {
 
 double dequantize_unit(uint16_t q, int bits) { return q / (std::ldexp(1.0, bits) - 1); }
 
+uint16_t sigma_p_code(double sigma, double largest_extent) {
+  if (!(sigma > 0) || !(largest_extent > 0)) return 0;
+  const double r = sigma / largest_extent;  // value = (2048 + m) 2^(e - 42), or m 2^-41 for e = 0
+  if (r < std::ldexp(1.0, -30)) return static_cast<uint16_t>(std::nearbyint(std::ldexp(r, 41)));  // 2048 is e = 1, m = 0
+  int e2 = 0;
+  std::frexp(r, &e2);  // r in [2^(e2-1), 2^e2)
+  int e = e2 - 1 + 31;
+  if (e > 31) return 0xFFFF;
+  double m = std::nearbyint(std::ldexp(r, 42 - e) - 2048);
+  if (m >= 2048) m = 0, ++e;  // rounded up into the next binade
+  if (e > 31) return 0xFFFF;
+  return static_cast<uint16_t>((e << 11) | static_cast<int>(m));
+}
+
+double sigma_p_of_code(uint16_t code, double largest_extent) {
+  const int e = code >> 11, m = code & 2047;
+  return largest_extent * (e == 0 ? std::ldexp(m, -41) : std::ldexp(2048 + m, e - 42));
+}
+
+uint16_t q12_code(double value) {
+  const double v = static_cast<float>(value) * 4096.0;
+  if (!(v > 0)) return 0;
+  return static_cast<uint16_t>(std::min(65535.0, std::floor(v + 0.5)));
+}
+
 }  // namespace stipple

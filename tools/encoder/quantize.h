@@ -46,4 +46,14 @@ double dequantize_cell(uint16_t q, double lo, double hi, int bits);
 uint16_t quantize_unit(double v, int bits);
 double dequantize_unit(uint16_t q, int bits);
 
+// Version 2's class table codes (docs/format.md §2, core/spg_format.h).
+// sigma_p: a 16-bit float relative to `largest_extent` (the stored box's
+// largest side), rounded to the nearest code (12 significant bits, so within
+// 2^-12 of the value; at most about 2 x the extent, saturated above).
+uint16_t sigma_p_code(double sigma, double largest_extent);
+double sigma_p_of_code(uint16_t code, double largest_extent);
+// sigma_n (radians) and sigma_c (0..1): Q12, the value the client's integer
+// conversion of the float32 gives (round half away from zero), saturated.
+uint16_t q12_code(double value);
+
 }  // namespace stipple

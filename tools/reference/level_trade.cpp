@@ -11,7 +11,7 @@ bool measure_levels(const DecodedModel& model, const PointCloud& original, const
                     const std::vector<int>& levels, std::vector<LevelPoint>& out, std::string& error,
                     const std::function<void(size_t)>& progress) {
   const SpgHeader& h = model.header;
-  const double startup_bytes = static_cast<double>(spg_startup_bytes(h.class_count));
+  const double startup_bytes = static_cast<double>(spg_startup_bytes(h.version, h.class_count));
   out.clear();
   for (size_t i = 0; i < levels.size(); ++i) {
     if (progress) progress(i);

@@ -1,6 +1,7 @@
 // stipple host — reference `.spg` decoder. See spg_model.h.
 #include "tools/reference/spg_model.h"
 
+#include <algorithm>
 #include <cstring>
 
 #include "platform/file_io.h"
@@ -31,13 +32,13 @@ bool decode_spg(const std::string& name, const uint8_t* data, size_t size, Decod
     model.bbox_max[a] = f32_of(h.bbox_bits[3 + a]);
   }
   for (uint32_t c = 0; c < h.class_count[0]; ++c)
-    model.sigma_p.emplace_back(f32_of(load_u32le(view.sigma_p + 12 * c)), f32_of(load_u32le(view.sigma_p + 12 * c + 4)),
-                               f32_of(load_u32le(view.sigma_p + 12 * c + 8)));
+    model.sigma_p.emplace_back(spg_class_value(view, 0, 3 * c), spg_class_value(view, 0, 3 * c + 1),
+                               spg_class_value(view, 0, 3 * c + 2));
   for (uint32_t c = 0; c < h.class_count[1]; ++c)
-    model.sigma_n.emplace_back(f32_of(load_u32le(view.sigma_n + 8 * c)), f32_of(load_u32le(view.sigma_n + 8 * c + 4)));
+    model.sigma_n.emplace_back(spg_class_value(view, 1, 2 * c), spg_class_value(view, 1, 2 * c + 1));
   for (uint32_t c = 0; c < h.class_count[2]; ++c)
-    model.sigma_c.emplace_back(f32_of(load_u32le(view.sigma_c + 12 * c)), f32_of(load_u32le(view.sigma_c + 12 * c + 4)),
-                               f32_of(load_u32le(view.sigma_c + 12 * c + 8)));
+    model.sigma_c.emplace_back(spg_class_value(view, 2, 3 * c), spg_class_value(view, 2, 3 * c + 1),
+                               spg_class_value(view, 2, 3 * c + 2));
 
   const RecordLayout& layout = h.layout;
   const AngleBits fp_bits = frame_bits(layout, Field::kFpTheta, false);
@@ -91,6 +92,19 @@ bool decode_spg(const std::string& name, const uint8_t* data, size_t size, Decod
 }
 
 double f32_value(uint32_t bits) { return f32_of(bits); }
+
+double spg_largest_extent(const SpgHeader& h) {
+  double largest = 0;
+  for (int a = 0; a < 3; ++a) largest = std::max(largest, f32_of(h.bbox_bits[3 + a]) - f32_of(h.bbox_bits[a]));
+  return largest > 0 ? largest : 1;  // one point: as the client's decoder takes it
+}
+
+double spg_class_value(const SpgView& view, int table, size_t index) {
+  const uint8_t* t = table == 0 ? view.sigma_p : table == 1 ? view.sigma_n : view.sigma_c;
+  if (spg_class_value_bytes(view.header.version) == 4) return f32_of(load_u32le(t + 4 * index));
+  const uint16_t code = load_u16le(t + 2 * index);
+  return table == 0 ? sigma_p_of_code(code, spg_largest_extent(view.header)) : code / 4096.0;
+}
 
 std::vector<uint32_t> spg_point_counts(const SpgView& view) {
   const uint32_t n = view.header.node_count;

@@ -48,6 +48,15 @@ std::vector<uint32_t> spg_point_counts(const SpgView& view);
 // A float32 bit pattern as a double.
 double f32_value(uint32_t bits);
 
+// The stored bounding box's largest side (1 for a single point, as the
+// client takes it): what version-2 sigma_p codes are relative to.
+double spg_largest_extent(const SpgHeader& header);
+
+// Value `index` of a class table of a validated view (table 0 sigma_p in
+// model units, 1 sigma_n in radians, 2 sigma_c in colour units), from
+// either version's encoding.
+double spg_class_value(const SpgView& view, int table, size_t index);
+
 // The cut made of the nodes at `level`, plus the leaves above it.
 std::vector<uint32_t> level_cut(const DecodedModel& model, int level);
 // All leaves.
