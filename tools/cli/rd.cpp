@@ -39,7 +39,9 @@ const char kRdHelp[] =
     "  leaf-32        leaves under 32 points\n"
     "  classes-1024   1024 sigma_p and sigma_n classes\n"
     "  classes-256    256 of each\n"
-    "  no-normals     positions only (9-byte records)\n";
+    "  no-normals     positions only (9-byte records)\n"
+    "  float-tables   the defaults in format version 1 (float32 class tables,\n"
+    "                 twice the startup of version 2's 16-bit codes)\n";
 
 struct RdSetting {
   const char* name;
@@ -52,6 +54,7 @@ const RdSetting kSettings[] = {
     {"classes-1024", [](EncodeOptions& o) { o.classes_p = o.classes_n = 1024; }},
     {"classes-256", [](EncodeOptions& o) { o.classes_p = o.classes_n = 256; }},
     {"no-normals", [](EncodeOptions& o) { o.normals = false; }},
+    {"float-tables", [](EncodeOptions& o) { o.format_version = 1; }},
 };
 
 }  // namespace
@@ -99,7 +102,7 @@ int cmd_rd(int argc, char** argv) {
   spec.title = std::filesystem::path(files[0]).filename().string() + ": rate against distortion by encoder setting";
   spec.x_label = "bits per original point (cut records + startup tables)";
   spec.y_label = "PSNR one-sided (dB)";
-  static const uint32_t colors[] = {0x1f77b4, 0xff7f0e, 0x2ca02c, 0xd62728, 0x9467bd, 0x8c564b};
+  static const uint32_t colors[] = {0x1f77b4, 0xff7f0e, 0x2ca02c, 0xd62728, 0x9467bd, 0x8c564b, 0xe377c2};
   for (size_t i = 0; i < settings.size(); ++i) {
     const double share = 1.0 / static_cast<double>(settings.size());
     progress.update(static_cast<double>(i) * share, std::string("encoding, ") + settings[i]->name);
@@ -119,7 +122,7 @@ int cmd_rd(int argc, char** argv) {
                           std::string(settings[i]->name) + ", level " + std::to_string(k));
         }))
       return cli::fail(files[0] + ": " + settings[i]->name + ": " + error);
-    PlotSeries series{settings[i]->name, {}, {}, colors[i % 6], {}};
+    PlotSeries series{settings[i]->name, {}, {}, colors[i % (sizeof colors / sizeof colors[0])], {}};
     for (const LevelPoint& p : points) {
       char line[256];
       std::snprintf(line, sizeof line, "%s,%d,%zu,%.4f,%.3f,%.3f,%.6g\n", settings[i]->name, p.level, p.nodes,
