@@ -122,13 +122,13 @@ void PointRaster::split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t
   }
 }
 
-void PointRaster::draw(uint32_t clear_rgb, uint8_t* frame, size_t stride) const {
-  if (config_.format == PixelFormat::kRgb565) draw_tiles<uint32_t>(rgb565(clear_rgb), frame, stride);
-  else draw_tiles<uint64_t>(clear_rgb & 0xFFFFFFu, frame, stride);
+void PointRaster::draw(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage) const {
+  if (config_.format == PixelFormat::kRgb565) draw_tiles<uint32_t>(rgb565(clear_rgb), frame, stride, coverage);
+  else draw_tiles<uint64_t>(clear_rgb & 0xFFFFFFu, frame, stride, coverage);
 }
 
 template <class Word>
-void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride) const {
+void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride, uint8_t* coverage) const {
   const int sh = config_.tile_log2, tile = 1 << sh;
   Word* words = static_cast<Word*>(tile_words_);
   const Word clear = pack<Word>(0xFFFFFFFFu, clear_color);
@@ -166,6 +166,22 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
         uint8_t* out = frame + static_cast<size_t>(py0 + y) * stride + static_cast<size_t>(px0) * bpp;
         const Word* row = words + (y << sh);
         for (int x = 0; x < pw; ++x, out += bpp) store(out, row[x]);
+      }
+      if (coverage != nullptr) {
+        // Covered: the depth is not the clear word's (all ones). Tiles are
+        // at least 8 px, so a tile's row starts on a whole byte.
+        const size_t row_bytes = (size_t{config_.width} + 7) / 8;
+        constexpr int kDepthShift = sizeof(Word) == 8 ? 32 : 16;
+        constexpr Word kFar = sizeof(Word) == 8 ? Word{0xFFFFFFFFu} : Word{0xFFFFu};
+        for (int y = 0; y < ph; ++y) {
+          uint8_t* bits = coverage + static_cast<size_t>(py0 + y) * row_bytes + (px0 >> 3);
+          const Word* row = words + (y << sh);
+          for (int x = 0; x < pw; x += 8) {
+            uint32_t b = 0;
+            for (int k = 0; k < 8 && x + k < pw; ++k) b |= static_cast<uint32_t>((row[x + k] >> kDepthShift) != kFar) << k;
+            bits[x >> 3] = static_cast<uint8_t>(b);
+          }
+        }
       }
     }
   }

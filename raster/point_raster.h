@@ -92,7 +92,9 @@ class PointRaster {
   }
   // Draws the binned points over `clear_rgb` into `frame` (height rows of
   // `stride` bytes, pixels in the configured format, little-endian RGB565).
-  void draw(uint32_t clear_rgb, uint8_t* frame, size_t stride) const;
+  // With `coverage`, also writes which pixels a point covered: one bit a
+  // pixel, LSB first, rows of (width + 7) / 8 bytes (raster/resolve.h).
+  void draw(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage = nullptr) const;
 
   uint32_t points() const { return count_; }
 
@@ -116,7 +118,7 @@ class PointRaster {
   }
   void split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t depth, uint32_t color);
   template <class Word>
-  void draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride) const;
+  void draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage) const;
 
   RasterConfig config_{};
   int tiles_x_ = 0, tiles_y_ = 0;

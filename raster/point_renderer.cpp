@@ -2,6 +2,8 @@
 // formats and measured errors are in docs/fixed_point.md.
 #include "raster/point_renderer.h"
 
+#include "raster/resolve.h"
+
 #include "core/arena.h"
 
 namespace stipple {
@@ -12,7 +14,7 @@ constexpr int32_t kMaxDepthMu = 1 << 30;
 constexpr int32_t kMaxSigmaN = 4 << 12;       // theta table covers theta <= 4 rad
 
 struct Layout {
-  size_t raster, internal_frame, g_position, g_normal, g_color, shading, reciprocal, total;
+  size_t raster, internal_frame, coverage, screen_coverage, resolve, g_position, g_normal, g_color, shading, reciprocal, total;
 };
 
 // The raster's configuration: the screen, times the supersampling, in
@@ -34,6 +36,11 @@ Layout layout_of(const RendererConfig& c) {
   const RasterConfig r = internal_raster(c);
   l.raster = take(point_raster_bytes(r));
   l.internal_frame = take(c.supersample > 1 ? size_t{r.width} * r.height * 3 : 0);
+  // The resolve works on the screen: the internal frame's coverage, then
+  // (supersampling) the screen's, a pixel covered where any of its block is.
+  l.coverage = take(c.resolve ? coverage_bytes(r.width, r.height) : 0);
+  l.screen_coverage = take(c.resolve && c.supersample > 1 ? coverage_bytes(c.raster.width, c.raster.height) : 0);
+  l.resolve = take(c.resolve ? resolve_scratch_bytes(c.raster.width) : 0);
   l.g_position = take(sizeof(Gaussian3Q12) * c.samples);
   l.g_normal = take(c.normals ? sizeof(Gaussian2Q12) * c.samples : 0);
   l.g_color = take(c.color ? sizeof(Gaussian3Q12) * c.samples : 0);
@@ -108,6 +115,9 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   if (raster_.init(internal_, base + l.raster, l.internal_frame - l.raster) != RasterStatus::kOk)
     return RenderStatus::kBadConfig;
   internal_frame_ = config.supersample > 1 ? base + l.internal_frame : nullptr;
+  coverage_ = config.resolve ? base + l.coverage : nullptr;
+  screen_coverage_ = config.resolve ? base + (config.supersample > 1 ? l.screen_coverage : l.coverage) : nullptr;
+  resolve_scratch_ = config.resolve ? base + l.resolve : nullptr;
   config_ = config;
   g_position_ = reinterpret_cast<Gaussian3Q12*>(base + l.g_position);
   g_normal_ = config.normals ? reinterpret_cast<Gaussian2Q12*>(base + l.g_normal) : nullptr;
@@ -324,12 +334,28 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
       (this->*draw)(f, header, node, stats);
     }
   }
-  if (n == 1) {
-    raster_.draw(config_.clear_rgb, frame, stride);
-  } else {
+  uint8_t* const target = n == 1 ? frame : internal_frame_;
+  const size_t target_stride = n == 1 ? stride : size_t{internal_.width} * 3;
+  raster_.draw(config_.clear_rgb, target, target_stride, coverage_);
+  if (n > 1 && coverage_ != nullptr) {
+    // A screen pixel is covered where any pixel of its block is.
+    const size_t in_row = coverage_row_bytes(internal_.width), out_row = coverage_row_bytes(config_.raster.width);
+    const uint32_t block = (1u << n) - 1;
+    for (uint32_t y = 0; y < config_.raster.height; ++y) {
+      uint8_t* out = screen_coverage_ + y * out_row;
+      for (size_t i = 0; i < out_row; ++i) out[i] = 0;
+      for (int32_t dy = 0; dy < n; ++dy) {
+        const uint8_t* in = coverage_ + (y * n + static_cast<uint32_t>(dy)) * in_row;
+        for (uint32_t x = 0; x < config_.raster.width; ++x) {
+          const uint32_t bit = x * static_cast<uint32_t>(n);  // n divides 8: a block never straddles a byte
+          if ((in[bit >> 3] >> (bit & 7)) & block) out[x >> 3] = static_cast<uint8_t>(out[x >> 3] | (1u << (x & 7)));
+        }
+      }
+    }
+  }
+  if (n > 1) {
     // Each screen pixel is the rounded mean of its n x n block.
-    const size_t in_stride = size_t{internal_.width} * 3;
-    raster_.draw(config_.clear_rgb, internal_frame_, in_stride);
+    const size_t in_stride = target_stride;
     const uint32_t half = static_cast<uint32_t>(n * n) / 2, shift = n == 2 ? 2 : 4;
     for (uint32_t y = 0; y < config_.raster.height; ++y) {
       uint8_t* out = frame + y * stride;
@@ -356,6 +382,9 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
       }
     }
   }
+  if (screen_coverage_ != nullptr)
+    resolve_frame(frame, stride, config_.raster.format, config_.raster.width, config_.raster.height, screen_coverage_,
+                  config_.clear_rgb, resolve_scratch_);
   if (stats_out) *stats_out = stats;
   return RenderStatus::kOk;
 }

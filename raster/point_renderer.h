@@ -56,6 +56,11 @@ struct RendererConfig {
   // internal pixels — and each screen pixel is the mean of its block
   // (integer, rounded). The cut is the screen's: the same nodes, more points.
   uint8_t supersample = 1;
+  // The screen-space resolve (raster/resolve.h): fill pinholes, trim the
+  // squares' fringe at silhouettes, blend 3 x 3 — on the screen's frame,
+  // after supersampling's mean (a pixel covered where any of its block is).
+  // Measured best against the scan at a sixth of the frame (docs/results.md).
+  bool resolve = true;
 };
 
 enum class RenderStatus : uint8_t {
@@ -108,6 +113,9 @@ class PointRenderer {
   PointRaster raster_;
   RasterConfig internal_{};          // the raster's: the screen times the supersampling
   uint8_t* internal_frame_ = nullptr;  // supersampling: the internal RGB888 frame
+  uint8_t* coverage_ = nullptr;        // resolve: the internal frame's coverage bits
+  uint8_t* screen_coverage_ = nullptr; // resolve: the screen's (coverage_ itself without supersampling)
+  void* resolve_scratch_ = nullptr;    // resolve: its ring of rows
   Gaussian3Q12* g_position_ = nullptr;
   Gaussian2Q12* g_normal_ = nullptr;
   Gaussian3Q12* g_color_ = nullptr;

@@ -32,6 +32,7 @@ struct Scene {
     c.shading = ShadingMode::kPerNode;
     c.sample_color = false;
     c.lighting.specular_q8 = 0;
+    c.resolve = false;  // the points as drawn: the GL client has no screen-space resolve (docs/viewers.md)
     ViewSpec spec;
     std::string error;
     EXPECT_TRUE(parse_view(std::to_string(yaw) + ",20", spec, error));

@@ -58,6 +58,7 @@ TEST(Client, FixedPointAgainstDoubleReference) {
                               big ? PixelFormat::kRgb888 : PixelFormat::kRgb565, 1u << 20};
       c.projection = k.p;
       c.shading = k.s;
+      c.resolve = false;  // the points as drawn: the reference renderer has no resolve
       CutRule rule{CutRule::kProjectedSize, 0, 32};
       rule.cull = false;  // the projection's precision over the whole model, as the bounds were measured
       const ViewSpec spec;

@@ -245,8 +245,10 @@ TEST(Client, SupersamplingIsTheLargerFrameAveragedBlockByBlock) {
     ClientConfig ss = small_config();
     ss.raster.format = PixelFormat::kRgb888;
     ss.supersample = static_cast<uint8_t>(n);
+    ss.resolve = false;  // the mean alone (the resolve follows it: tests/portable/resolve_test.cpp)
     ClientConfig big = small_config();
     big.raster = RasterConfig{static_cast<uint16_t>(240 * n), static_cast<uint16_t>(320 * n), 5, PixelFormat::kRgb888, 200000};
+    big.resolve = false;
     EXPECT_GT(client_arena_bytes(ss), client_arena_bytes(small_config()) + size_t{240} * 320 * 3 * n * n);
     Harness a(ss), b(big);
     ASSERT_EQ(a.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);

@@ -39,7 +39,8 @@ const char kTradeHelp[] =
     "Sweeps each knob of the fixed-point client alone from the defaults — the cut's\n"
     "pixel threshold (--max-size), the points-per-node scale (--quality), quasi- vs\n"
     "pseudo-random samples, the projection, the point size, supersampling, the\n"
-    "shading mode, the tile size, colour on/off — and for each setting measures,\n"
+    "shading mode, the screen-space resolve, the tile size, colour on/off — and for\n"
+    "each setting measures,\n"
     "over N orbit views (default 3): the frame time (median of R frames, default\n"
     "5), the instructions a frame takes (the CPU's counter through perf_event_open:\n"
     "R frames less one frame, over R - 1, so the cut and set-up cancel; empty where\n"
@@ -122,9 +123,18 @@ std::vector<Setting> settings(bool color) {
       o.config.supersample = static_cast<uint8_t>(n);
       o.config.raster.max_points <<= n / 2;  // room for the points the larger frame takes
     });
-  add("shading", "point", true, [](RenderOptions&) {});
-  add("shading", "node", false, [](RenderOptions& o) { o.config.shading = ShadingMode::kPerNode; });
+  // Supersampling once more without the resolve, which takes most of its gain.
+  for (int n : {1, 2, 4})
+    add("supersample-resolve-off", std::to_string(n), false, [n](RenderOptions& o) {
+      o.config.supersample = static_cast<uint8_t>(n);
+      o.config.raster.max_points <<= n / 2;
+      o.config.resolve = false;
+    });
+  add("shading", "node", true, [](RenderOptions&) {});
+  add("shading", "point", false, [](RenderOptions& o) { o.config.shading = ShadingMode::kPerPoint; });
   add("shading", "none", false, [](RenderOptions& o) { o.config.shading = ShadingMode::kNone; });
+  add("resolve", "on", true, [](RenderOptions&) {});
+  add("resolve", "off", false, [](RenderOptions& o) { o.config.resolve = false; });
   for (int t : {4, 5, 6})
     add("tile", std::to_string(1 << t), t == 5, [t](RenderOptions& o) { o.config.raster.tile_log2 = static_cast<uint8_t>(t); });
   if (color) add("colour", "off", false, [](RenderOptions& o) { o.config.grey = true; });

@@ -52,6 +52,9 @@ const char kRenderOptionsHelp[] =
     "  --point-size N         1..3 px (default 2)\n"
     "  --supersample N        draw at N x N the screen's pixels (points of the point\n"
     "                         size there) and average each block: 1, 2 or 4\n"
+    "  --resolve on|off       the screen-space resolve: fill pinholes, trim the\n"
+    "                         points' fringe at silhouettes, blend 3x3\n"
+    "                         (default on: docs/results.md)\n"
     "  --pseudo               pseudo-random instead of Sobol samples\n"
     "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
     "  --max-points N         frame budget (default 1048576)\n"
@@ -114,6 +117,11 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
     else if (v == "node") c.shading = ShadingMode::kPerNode;
     else if (v == "none") c.shading = ShadingMode::kNone;
     else return error = "--shading: expected point, node or none, got '" + v + "'", false;
+  }
+  if (args.value("--resolve", v)) {
+    if (v == "on") c.resolve = true;
+    else if (v == "off") c.resolve = false;
+    else return error = "--resolve: expected on or off, got '" + v + "'", false;
   }
   if (args.flag("--no-specular")) c.lighting.specular_q8 = 0;
   if (args.flag("--grey")) c.grey = true;
