@@ -9,7 +9,7 @@ namespace stipple {
 namespace {
 
 struct Layout {
-  size_t decoder, records, ids, hash, total;
+  size_t decoder, records, ids, points, hash, total;
   size_t decoder_bytes, record_stride;
   uint32_t hash_entries;
 };
@@ -45,6 +45,7 @@ Layout layout_of(const NodeCacheLimits& c) {
   l.decoder = take(l.decoder_bytes);
   l.records = take(l.record_stride * c.node_capacity);
   l.ids = take(4 * size_t{c.node_capacity});
+  l.points = take(size_t{c.node_capacity});
   l.hash = take(4 * size_t{l.hash_entries});
   l.total = arena.total();
   return l;
@@ -83,6 +84,7 @@ CacheStatus NodeCache::init(const NodeCacheLimits& limits, void* storage, size_t
   record_stride_ = l.record_stride;
   records_ = base + l.records;
   ids_ = reinterpret_cast<uint32_t*>(base + l.ids);
+  points_ = base + l.points;
   hash_ = reinterpret_cast<uint32_t*>(base + l.hash);
   hash_mask_ = l.hash_entries - 1;
   ready_ = false;
@@ -148,7 +150,7 @@ void NodeCache::erase_hash(uint32_t* entry) {
   hash_[hole] = 0;
 }
 
-CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size) {
+CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size, uint8_t points) {
   if (!ready_) return CacheStatus::kNoStartup;
   if (size != record_bytes_) return CacheStatus::kBadRecordSize;
   const int pad_bits = static_cast<int>(record_bytes_ * 8) - header_.layout.total_bits();
@@ -170,6 +172,7 @@ CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size) {
   if (limits_.decoded) *reinterpret_cast<FixedNode*>(dst) = decoded;
   else
     for (size_t i = 0; i < record_bytes_; ++i) dst[i] = record[i];
+  points_[slot] = points;
   return CacheStatus::kOk;
 }
 
@@ -184,6 +187,7 @@ CacheStatus NodeCache::drop(NodeId node) {
     uint8_t* dst = records_ + slot * record_stride_;
     for (size_t i = 0; i < record_stride_; ++i) dst[i] = src[i];
     ids_[slot] = ids_[last];
+    points_[slot] = points_[last];
     *find(ids_[slot]) = slot + 1;
   }
   --count_;

@@ -70,7 +70,9 @@ class NodeCache {
   const NodeDecoder& decoder() const { return decoder_; }
   size_t record_bytes() const { return record_bytes_; }
 
-  [[nodiscard]] CacheStatus put(NodeId id, const uint8_t* record, size_t size);
+  // `points`: the original points under the node (saturated at 255; 0 when
+  // unknown), what the renderer caps a node's points by (docs/results.md).
+  [[nodiscard]] CacheStatus put(NodeId id, const uint8_t* record, size_t size, uint8_t points = 0);
   [[nodiscard]] CacheStatus drop(NodeId id);
   bool has(NodeId id) const;
   uint32_t count() const { return count_; }
@@ -79,6 +81,7 @@ class NodeCache {
 
   // Dense iteration, slot 0 .. count() - 1 (order changes on drop).
   NodeId id_at(uint32_t slot) const { return NodeId{ids_[slot]}; }
+  uint8_t points_at(uint32_t slot) const { return points_[slot]; }
   // The node in slot `slot`, decoded into *out (copied when cached
   // decoded); false only if its record fails to decode, which put() rules out.
   [[nodiscard]] bool node_at(uint32_t slot, FixedNode* out) const;
@@ -102,6 +105,7 @@ class NodeCache {
   void* decoder_storage_ = nullptr;
   uint8_t* records_ = nullptr;  // node_capacity x record_stride_
   uint32_t* ids_ = nullptr;     // per slot
+  uint8_t* points_ = nullptr;   // per slot: original points, saturated at 255
   uint32_t* hash_ = nullptr;    // slot + 1, 0 = empty; linear probing
   uint32_t hash_mask_ = 0;
   uint32_t count_ = 0;

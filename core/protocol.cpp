@@ -267,13 +267,13 @@ bool parse_sequence(const uint8_t* p, size_t size, uint16_t* out) {
   return true;
 }
 
-NodeId NodeBatch::id(uint32_t i) const { return NodeId{load_u32le(entries + size_t{i} * (4 + record_bytes))}; }
+NodeId NodeBatch::id(uint32_t i) const { return NodeId{load_u32le(entries + size_t{i} * node_entry_bytes(record_bytes))}; }
 NodeId DropBatch::id(uint32_t i) const { return NodeId{load_u32le(ids + size_t{i} * 4)}; }
 
 bool parse_nodes(const uint8_t* p, size_t size, size_t record_bytes, uint32_t node_count, NodeBatch* out) {
   if (size < 4 || record_bytes == 0) return false;
   const uint32_t count = load_u32le(p);
-  if (count > nodes_per_frame(record_bytes) || size != 4 + size_t{count} * (4 + record_bytes)) return false;
+  if (count > nodes_per_frame(record_bytes) || size != 4 + size_t{count} * node_entry_bytes(record_bytes)) return false;
   NodeBatch b;
   b.count = count;
   b.record_bytes = record_bytes;

@@ -24,7 +24,7 @@
 
 namespace stipple {
 
-inline constexpr uint16_t kProtocolVersion = 1;
+inline constexpr uint16_t kProtocolVersion = 2;  // 2: node entries carry their original point count
 inline constexpr size_t kFrameHeaderBytes = 8;
 inline constexpr size_t kFrameTrailerBytes = 4;
 // The largest payload: a startup message with the default client's largest
@@ -166,12 +166,15 @@ inline constexpr size_t kSequenceBytes = 4;
 size_t write_sequence(uint16_t sequence, uint8_t out[kSequenceBytes]);
 [[nodiscard]] bool parse_sequence(const uint8_t* payload, size_t size, uint16_t* out);
 
-// kNodes: u32 count, then count x (u32 id, record_bytes record). The payload
+// kNodes: u32 count, then count x (u32 id, u8 points, record_bytes record). The payload
 // must be exactly that long and every id below node_count.
 // kDrop: u32 count, then count x u32 id.
 // Node batches: how many fit one frame.
+// A nodes entry: u32 node id, u8 original points under the node (saturated
+// at 255; 0: unknown), then the record.
+inline constexpr size_t node_entry_bytes(size_t record_bytes) { return 5 + record_bytes; }
 inline constexpr uint32_t nodes_per_frame(size_t record_bytes) {
-  return static_cast<uint32_t>((kMaxPayload - 4) / (4 + record_bytes));
+  return static_cast<uint32_t>((kMaxPayload - 4) / node_entry_bytes(record_bytes));
 }
 // What a server puts in one node batch: small enough that a client over a
 // 115,200-baud line has its first nodes 0.7 s after the startup.
@@ -183,7 +186,8 @@ struct NodeBatch {
   size_t record_bytes = 0;
   const uint8_t* entries = nullptr;
   NodeId id(uint32_t i) const;
-  const uint8_t* record(uint32_t i) const { return entries + size_t{i} * (4 + record_bytes) + 4; }
+  uint8_t points(uint32_t i) const { return entries[size_t{i} * node_entry_bytes(record_bytes) + 4]; }
+  const uint8_t* record(uint32_t i) const { return entries + size_t{i} * node_entry_bytes(record_bytes) + 5; }
 };
 [[nodiscard]] bool parse_nodes(const uint8_t* payload, size_t size, size_t record_bytes, uint32_t node_count,
                                NodeBatch* out);

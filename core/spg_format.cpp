@@ -111,6 +111,35 @@ uint32_t spg_child_count(const SpgView& view, uint32_t node) {
   return (view.topology[node >> 1] >> ((node & 1) * 4)) & 0xFu;
 }
 
+void spg_node_points(const SpgView& view, uint8_t* out, size_t stride) {
+  const uint32_t n = view.header.node_count;
+  const uint8_t* at = view.leaf_counts;
+  for (uint32_t i = 0; i < n; ++i) {
+    uint32_t v = 0;
+    if (at != nullptr && spg_child_count(view, i) == 0) {
+      for (int shift = 0;; shift += 7) {  // validated by spg_parse: at most 5 bytes
+        const uint8_t byte = *at++;
+        v |= static_cast<uint32_t>(byte & 0x7Fu) << shift;
+        if ((byte & 0x80u) == 0) break;
+      }
+    }
+    out[size_t{i} * stride] = static_cast<uint8_t>(v < 255 ? v : 255);
+  }
+  if (at == nullptr) return;
+  // Bottom up: the children of the k-th internal node follow those of the
+  // (k-1)-th, so walking back, each internal node's children end where the
+  // next one's begin.
+  uint32_t end = n;
+  for (uint32_t i = n; i-- > 0;) {
+    const uint32_t k = spg_child_count(view, i);
+    if (k == 0) continue;
+    uint32_t sum = 0;
+    for (uint32_t c = end - k; c < end; ++c) sum += out[size_t{c} * stride];
+    end -= k;
+    out[size_t{i} * stride] = static_cast<uint8_t>(sum < 255 ? sum : 255);
+  }
+}
+
 namespace {
 
 // §1 fixed header and §2 class tables: the startup message. With

@@ -176,6 +176,12 @@ struct SpgResult {
 // Children of node `i` of a validated view: number of children.
 uint32_t spg_child_count(const SpgView& view, uint32_t node);
 
+// The original points under every node of a validated view (its leaves'
+// counts from §4, summed), saturated at 255 — what a client caps a node's
+// drawn points by — into out[i * stride], breadth-first. No storage besides
+// `out`; all zero when the view has no leaf counts (spg_parse_startup's).
+void spg_node_points(const SpgView& view, uint8_t* out, size_t stride);
+
 // Little-endian readers shared by the parser and its users.
 inline uint16_t load_u16le(const uint8_t* p) { return static_cast<uint16_t>(p[0] | (p[1] << 8)); }
 inline uint32_t load_u32le(const uint8_t* p) {

@@ -100,8 +100,8 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
   }
   // Batches of at most kNodeBatchBytes, coarse nodes first (ids are
   // breadth-first): on a slow link the first arrive soon after the startup.
-  const uint32_t per_frame = static_cast<uint32_t>((kNodeBatchBytes - 4) / (4 + reduced_record_bytes_));
-  const size_t stride = 4 + reduced_record_bytes_;
+  const size_t stride = node_entry_bytes(reduced_record_bytes_);
+  const uint32_t per_frame = static_cast<uint32_t>((kNodeBatchBytes - 4) / stride);
   for (uint32_t done = 0; done < cut_.entered_count();) {
     const uint32_t n = cut_.entered_count() - done < per_frame ? cut_.entered_count() - done : per_frame;
     store_u32le(payload_, n);
@@ -109,11 +109,12 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
       const uint32_t id = index_of(cut_.entered()[done + i]);
       uint8_t* entry = payload_ + 4 + size_t{i} * stride;
       store_u32le(entry, id);
+      entry[4] = cut_.points(NodeId{id});
       const uint8_t* record = view_->records + size_t{id} * view_->record_bytes;
       if (same_layout_)
-        for (size_t b = 0; b < reduced_record_bytes_; ++b) entry[4 + b] = record[b];
+        for (size_t b = 0; b < reduced_record_bytes_; ++b) entry[5 + b] = record[b];
       else
-        transcode_record(view_->header.layout, reduced_.layout, record, entry + 4);
+        transcode_record(view_->header.layout, reduced_.layout, record, entry + 5);
     }
     if (!send(MessageType::kNodes, payload_, 4 + size_t{n} * stride, sink, context)) return false;
     done += n;
@@ -166,7 +167,7 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
           !parse_nodes(f.payload, f.payload_bytes, cache_->record_bytes(), cache_->header().node_count, &b))
         return ReceiveStatus::kBadMessage;
       for (uint32_t i = 0; i < b.count; ++i) {
-        const CacheStatus s = cache_->put(b.id(i), b.record(i), b.record_bytes);
+        const CacheStatus s = cache_->put(b.id(i), b.record(i), b.record_bytes, b.points(i));
         if (s != CacheStatus::kOk) return refused(s);
       }
       return ReceiveStatus::kOk;

@@ -21,7 +21,7 @@ struct ViewCut::Bound {
   int16_t cone_sin_q14;  // sin of the normal cone's half-angle (CutBounds::init); 0x7FFF: none
   uint16_t pad0;
   uint8_t children;
-  uint8_t pad1;
+  uint8_t points;        // original points under the node, saturated at 255 (0: the file did not say)
 };
 static_assert(sizeof(ViewCut::Bound) == 36);
 
@@ -124,7 +124,7 @@ CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void*
     b.first_child = next_child;
     next_child += b.children;
     b.pad0 = 0;
-    b.pad1 = 0;
+    b.points = 0;
     // The statistical cone for now (its sine, and its cosine in pad0's
     // place until the pass below).
     const Cone cone = normals_ ? statistical_cone(node.sigma_n[0], b.children ? cones.gamma_q8 : cones.leaf_gamma_q8)
@@ -132,6 +132,8 @@ CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void*
     b.cone_sin_q14 = static_cast<int16_t>(cone.sin);
     b.pad0 = static_cast<uint16_t>(cone.cos);
   }
+  // Original points under each node, saturated (what clients cap by).
+  spg_node_points(view, &bounds[0].points, sizeof(Bound));
   // Bottom up (children come after their parents): the sphere about each
   // centre that holds its own and every descendant's, padded for the
   // rounding of the camera transform (its rows' lengths are within 2^-12 of
@@ -212,6 +214,8 @@ CutStatus ViewCut::init(const CutBounds& shared, void* storage, size_t bytes) {
   ready_ = true;
   return CutStatus::kOk;
 }
+
+uint8_t ViewCut::points(NodeId id) const { return bounds_[index_of(id)].points; }
 
 void ViewCut::reset() {
   for (uint32_t i = 0; i < sent_count_; ++i) {

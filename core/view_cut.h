@@ -107,6 +107,10 @@ class ViewCut {
   // The sent nodes, in id (breadth-first) order, and each one's projected
   // radius (1/16 px; what the client's points-per-node table is indexed by).
   uint32_t sent_count() const { return sent_count_; }
+  // The original points under a node (its leaves' counts from the file),
+  // saturated at 255; 0 when the view had no leaf counts. `id` below the
+  // node count.
+  uint8_t points(NodeId id) const;
   const NodeId* sent() const { return sent_; }
   const uint32_t* sent_size_q4() const { return sent_size_; }
   // Every node of the cut, culled ones included (update's order).

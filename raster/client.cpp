@@ -82,8 +82,8 @@ ClientStatus Client::init(const ClientConfig& config, void* arena, size_t bytes)
 
 ClientStatus Client::load_startup(const uint8_t* data, size_t size) { return status_of(cache_.load_startup(data, size)); }
 
-ClientStatus Client::put_node(NodeId id, const uint8_t* record, size_t size) {
-  return status_of(cache_.put(id, record, size));
+ClientStatus Client::put_node(NodeId id, const uint8_t* record, size_t size, uint8_t points) {
+  return status_of(cache_.put(id, record, size, points));
 }
 
 ClientStatus Client::drop_node(NodeId id) { return status_of(cache_.drop(id)); }

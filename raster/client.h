@@ -68,8 +68,10 @@ class Client {
   [[nodiscard]] ClientStatus load_startup(const uint8_t* data, size_t size);
   SpgResult startup_error() const { return cache_.startup_error(); }
 
-  // Adds or replaces node `id`.
-  [[nodiscard]] ClientStatus put_node(NodeId id, const uint8_t* record, size_t size);
+  // Adds or replaces node `id`; `points` is the original points under it
+  // (saturated at 255, 0 when unknown: ViewCut::points), which
+  // RendererConfig::point_cap caps its drawn points by.
+  [[nodiscard]] ClientStatus put_node(NodeId id, const uint8_t* record, size_t size, uint8_t points = 0);
   [[nodiscard]] ClientStatus drop_node(NodeId id);
   bool has_node(NodeId id) const { return cache_.has(id); }
   uint32_t node_count() const { return cache_.count(); }

@@ -178,7 +178,8 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
           const Word* row = words + (y << sh);
           for (int x = 0; x < pw; x += 8) {
             uint32_t b = 0;
-            for (int k = 0; k < 8 && x + k < pw; ++k) b |= static_cast<uint32_t>((row[x + k] >> kDepthShift) != kFar) << k;
+            if (fill != 0)  // a tile without points covers nothing
+              for (int k = 0; k < 8 && x + k < pw; ++k) b |= static_cast<uint32_t>((row[x + k] >> kDepthShift) != kFar) << k;
             bits[x >> 3] = static_cast<uint8_t>(b);
           }
         }

@@ -178,6 +178,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
   }
   // a, c: (1/16 px)^2 = 1/256 px^2, below 3 * 2^48.
   setup.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
+  if (setup.count > node_cap_) setup.count = node_cap_;
   setup.near = f.camera.near_mu;
   setup.shift = f.depth_shift;
   setup.size = config_.point_size;
@@ -325,12 +326,23 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   const uint32_t count = cache.count();
   stats.nodes = count;
   raster_.begin_frame();
+  // The point cap: a node draws at most point_cap times the original points
+  // under it (times the supersampling's n^2, so it means the same on screen).
+  const uint32_t cap_scale = uint32_t{config_.point_cap} * static_cast<uint32_t>(n * n);
+  const auto cap_of = [&](uint32_t s) {
+    const uint32_t p = cache.points_at(s);
+    return cap_scale == 0 || p == 0 ? 0xFFFFFFFFu : cap_scale * p;
+  };
   if (cache.decoded()) {
-    for (uint32_t s = 0; s < count; ++s) (this->*draw)(f, header, cache.decoded_at(s), stats);
+    for (uint32_t s = 0; s < count; ++s) {
+      node_cap_ = cap_of(s);
+      (this->*draw)(f, header, cache.decoded_at(s), stats);
+    }
   } else {
     FixedNode node;
     for (uint32_t s = 0; s < count; ++s) {
       if (!cache.node_at(s, &node)) continue;  // checked at put
+      node_cap_ = cap_of(s);
       (this->*draw)(f, header, node, stats);
     }
   }

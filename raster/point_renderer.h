@@ -61,6 +61,10 @@ struct RendererConfig {
   // after supersampling's mean (a pixel covered where any of its block is).
   // Measured best against the scan at a sixth of the frame (docs/results.md).
   bool resolve = true;
+  // Sparse scans: a node draws at most point_cap times the original points
+  // under it (the counts the stream carries with each node; 0: no cap), so
+  // sparse returns stay sparse (docs/results.md).
+  uint8_t point_cap = 0;
 };
 
 enum class RenderStatus : uint8_t {
@@ -122,6 +126,7 @@ class PointRenderer {
   ShadingTables* shading_ = nullptr;
   uint16_t* reciprocal_ = nullptr;  // 1024 entries
   const PpnTable* ppn_ = nullptr;
+  uint32_t node_cap_ = 0xFFFFFFFFu;  // render: the node being drawn's point cap
 };
 
 }  // namespace stipple

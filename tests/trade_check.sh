@@ -12,7 +12,7 @@ rm -rf "$W"
 csv=$W/trade.csv
 [ -s "$W/trade.png" ] || { echo "no plot"; exit 1; }
 rows=$(($(wc -l <"$csv") - 1))
-[ "$rows" -ge 32 ] || { echo "expected every setting, got $rows rows"; exit 1; }
+[ "$rows" -ge 36 ] || { echo "expected every setting, got $rows rows"; exit 1; }
 awk -F, 'NR > 1 {
   for (i = 9; i <= 13; ++i) if ($i == "" || $i ~ /nan|inf/) { print "row " NR ": column " i " is not finite: " $i; bad = 1 }
   if ($1 == "quality") { if (seen_q && $13 > last_missing + 1e-9) { print "quality " $2 " leaves more pixels missing"; bad = 1 } last_missing = $13; seen_q = 1 }

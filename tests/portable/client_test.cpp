@@ -240,6 +240,49 @@ TEST(Client, FrameBudgetDropsPointsAndSaysSo) {
 // Supersampling is exactly the frame drawn at N x N the size with the
 // camera scaled, each block averaged (rounded); the arena grows by the
 // internal frame and raster, and nothing else changes.
+// The point cap: a node draws at most point_cap times the original points
+// under it, the count put_node was given (0: unknown, no cap).
+TEST(Client, PointCapBoundsEachNodeByItsOriginalPoints) {
+  std::vector<uint8_t> points(bunny().view.header.node_count);
+  spg_node_points(bunny().view, points.data(), 1);
+  uint32_t drawn[3] = {};
+  const uint8_t caps[3] = {0, 1, 3};
+  for (int k = 0; k < 3; ++k) {
+    ClientConfig c = small_config();
+    c.point_cap = caps[k];
+    c.resolve = false;
+    Harness h(c);
+    ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+    uint64_t bound = 0;
+    for (uint32_t id = 3000; id < 6913; ++id) {  // leaves and small nodes: a few points each
+      ASSERT_EQ(h.client.put_node(NodeId{id}, record(id), bunny().view.record_bytes, points[id]), ClientStatus::kOk);
+      bound += uint64_t{caps[k]} * points[id];
+    }
+    std::vector<uint8_t> frame(240 * 320 * 2);
+    FrameStats stats;
+    ASSERT_EQ(h.client.render(camera_for(h.client, 30, 20, 240, 320), frame.data(), 240 * 2, &stats), ClientStatus::kOk);
+    drawn[k] = stats.points;
+    if (caps[k] > 0) {
+      EXPECT_LE(stats.points, bound) << "cap " << int{caps[k]};
+    }
+  }
+  std::printf("points drawn: no cap %u, cap 1 %u, cap 3 %u\n", drawn[0], drawn[1], drawn[2]);
+  EXPECT_LT(drawn[1], drawn[2]);
+  EXPECT_LT(drawn[2], drawn[0]);
+  // Without the counts (put_node's default) nothing is capped.
+  ClientConfig c = small_config();
+  c.point_cap = 1;
+  c.resolve = false;
+  Harness h(c);
+  ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+  for (uint32_t id = 3000; id < 6913; ++id)
+    ASSERT_EQ(h.client.put_node(NodeId{id}, record(id), bunny().view.record_bytes), ClientStatus::kOk);
+  std::vector<uint8_t> frame(240 * 320 * 2);
+  FrameStats stats;
+  ASSERT_EQ(h.client.render(camera_for(h.client, 30, 20, 240, 320), frame.data(), 240 * 2, &stats), ClientStatus::kOk);
+  EXPECT_EQ(stats.points, drawn[0]);
+}
+
 TEST(Client, SupersamplingIsTheLargerFrameAveragedBlockByBlock) {
   for (int n : {2, 4}) {
     ClientConfig ss = small_config();

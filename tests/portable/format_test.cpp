@@ -208,6 +208,46 @@ TEST(SpgFormat, SigmaPCodesDecodeByShifts) {
         << c;
 }
 
+// The original points under every node: the leaves' counts, summed up the
+// tree and saturated at 255; a view without leaf counts knows none.
+TEST(SpgFormat, NodePointsAreTheLeafCountsSummedAndSaturated) {
+  for (const Variant& variant : kVariants) {
+    const std::vector<uint8_t> f = sphere_spg(variant.name);
+    SpgView v;
+    ASSERT_TRUE(spg_parse(f.data(), f.size(), &v).ok());
+    const uint32_t n = v.header.node_count;
+    std::vector<uint8_t> points(2 * n, 0xEE);
+    spg_node_points(v, points.data(), 2);  // strided: every other byte
+    // The exact counts, the slow way: leaves in order, then sums bottom up.
+    std::vector<uint32_t> exact(n, 0), first(n, 0);
+    const uint8_t* at = v.leaf_counts;
+    for (uint32_t i = 0, next = 1; i < n; ++i) {
+      first[i] = next;
+      next += spg_child_count(v, i);
+      if (spg_child_count(v, i) == 0)
+        for (int shift = 0;; shift += 7) {
+          exact[i] |= static_cast<uint32_t>(*at & 0x7F) << shift;
+          if (!(*at++ & 0x80)) break;
+        }
+    }
+    for (uint32_t i = n; i-- > 0;)
+      for (uint32_t c = 0; c < spg_child_count(v, i); ++c) exact[i] += exact[first[i] + c];
+    EXPECT_EQ(exact[0], 600u);
+    EXPECT_EQ(points[0], 255) << variant.name;
+    for (uint32_t i = 0; i < n; ++i) {
+      ASSERT_EQ(points[2 * i], exact[i] < 255 ? exact[i] : 255u) << variant.name << " node " << i;
+      ASSERT_EQ(points[2 * i + 1], 0xEE);  // the stride's other bytes untouched
+    }
+    SpgView startup_only;
+    size_t used = 0;
+    ASSERT_TRUE(spg_parse_startup(f.data(), f.size(), &startup_only, &used).ok());
+    startup_only.header.node_count = 3;
+    uint8_t none[3] = {9, 9, 9};
+    spg_node_points(startup_only, none, 1);
+    EXPECT_EQ(none[0] | none[1] | none[2], 0);
+  }
+}
+
 TEST(SpgFormat, RecordClassIndexBeyondTable) {
   std::vector<uint8_t> f = sphere_spg("normals");
   SpgView v;

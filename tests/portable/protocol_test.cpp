@@ -159,15 +159,20 @@ TEST(Protocol, MessagesParseOnlyInRange) {
   store_u32le_for_test(buf + 4 + 12 * 4, 0);  // focal length 0
   EXPECT_FALSE(parse_camera_update(buf, kCameraUpdateBytes, &cb));
 
-  // Node batches: exact length, ids below the tree's size.
-  std::vector<uint8_t> p(4 + 2 * (4 + 13));
+  // Node batches: exact length, ids below the tree's size; each entry the
+  // id, the original points under the node, the record.
+  std::vector<uint8_t> p(4 + 2 * (4 + 1 + 13));
   store_u32le_for_test(p.data(), 2);
   store_u32le_for_test(p.data() + 4, 7);
-  store_u32le_for_test(p.data() + 4 + 17, 99);
+  p[4 + 4] = 12;
+  store_u32le_for_test(p.data() + 4 + 18, 99);
+  p[4 + 18 + 4] = 255;
   NodeBatch nb;
   ASSERT_TRUE(parse_nodes(p.data(), p.size(), 13, 100, &nb));
   EXPECT_EQ(index_of(nb.id(1)), 99u);
-  EXPECT_EQ(nb.record(1), p.data() + 4 + 17 + 4);
+  EXPECT_EQ(nb.points(0), 12);
+  EXPECT_EQ(nb.points(1), 255);
+  EXPECT_EQ(nb.record(1), p.data() + 4 + 18 + 5);
   EXPECT_FALSE(parse_nodes(p.data(), p.size(), 13, 99, &nb));       // id 99 out of range
   EXPECT_FALSE(parse_nodes(p.data(), p.size() - 1, 13, 100, &nb));  // truncated
   store_u32le_for_test(p.data(), 0xFFFFFFFFu);

@@ -83,6 +83,8 @@ TEST(Stream, ClientFramesEqualAFreshLocalLoadAfterEveryUpdate) {
   ASSERT_TRUE(sender.start(hello, Link::sink, &link));
   ASSERT_EQ(receiver.receive(link.bytes.data(), link.bytes.size()), ReceiveStatus::kOk);
   uint64_t cold = link.bytes.size(), orbit = 0, resend = 0;
+  std::vector<uint8_t> points(m.view.header.node_count);
+  spg_node_points(m.view, points.data(), 1);
   for (uint32_t step = 0; step < 24; ++step) {
     CameraUpdate u;
     u.sequence = step;
@@ -96,13 +98,16 @@ TEST(Stream, ClientFramesEqualAFreshLocalLoadAfterEveryUpdate) {
     ASSERT_TRUE(receiver.converged(step));
     ASSERT_EQ(client.cache.count(), sender.cut().sent_count());
     (step == 0 ? cold : orbit) += link.bytes.size();
-    resend += sender.cut().sent_count() * (4 + m.view.record_bytes);
+    resend += sender.cut().sent_count() * node_entry_bytes(m.view.record_bytes);
+    // Every node arrived with the original points under it.
+    for (uint32_t slot = 0; slot < client.cache.count(); ++slot)
+      ASSERT_EQ(client.cache.points_at(slot), points[index_of(client.cache.id_at(slot))]) << "slot " << slot;
     // A fresh client loaded locally with the same cut draws the same bytes.
     Device local;
     ASSERT_EQ(local.cache.load_startup(m.file.data(), spg_startup_bytes(m.view.header.version, m.view.header.class_count)), CacheStatus::kOk);
     for (uint32_t i = 0; i < sender.cut().sent_count(); ++i) {
       const uint32_t id = index_of(sender.cut().sent()[i]);
-      ASSERT_EQ(local.cache.put(NodeId{id}, m.view.records + size_t{id} * m.view.record_bytes, m.view.record_bytes),
+      ASSERT_EQ(local.cache.put(NodeId{id}, m.view.records + size_t{id} * m.view.record_bytes, m.view.record_bytes, points[id]),
                 CacheStatus::kOk);
     }
     ASSERT_EQ(client.draw(u.camera), local.draw(u.camera)) << "step " << step;

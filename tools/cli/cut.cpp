@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/protocol.h"
 #include "core/view_cut.h"
 #include "platform/file_io.h"
 #include "tools/cli/cli.h"
@@ -21,8 +22,9 @@ const char kCutHelp[] =
     "cameras of an orbit about the up axis (the view's yaw + 360 k / N; default\n"
     "120), and prints: the cold start (nodes sent, culled, bytes), and per orbit\n"
     "step the mean nodes sent, entered and left, the bytes of the change (an\n"
-    "entering node costs its id and record, a leaving one its id: 4 + R and 4\n"
-    "bytes) against resending the whole cut (4 + R a node), and the nodes the\n"
+    "entering node costs its id, its point count and record, a leaving one its\n"
+    "id: 5 + R and 4 bytes) against resending the whole cut (5 + R a node), and\n"
+    "the nodes the\n"
     "update visited. Protocol framing is not counted. The view and cut options\n"
     "are render's: --size, --camera, --up, --max-size, --no-cull, --leaf-cone,\n"
     "--window, --cache (the node budget).\n";
@@ -69,7 +71,7 @@ int cmd_cut(int argc, char** argv) {
   const uint64_t record = view.record_bytes;
   Camera c;
   if (!camera_at(base.yaw, c) || cut.update(c, p) != CutStatus::kOk) return cli::fail("cut: the view is out of range");
-  const uint64_t cold_nodes = cut.sent_count(), cold_culled = cut.culled_count(), cold_bytes = cold_nodes * (4 + record);
+  const uint64_t cold_nodes = cut.sent_count(), cold_culled = cut.culled_count(), cold_bytes = cold_nodes * node_entry_bytes(record);
   double sent = 0, entered = 0, left = 0, visited = 0, change_bytes = 0, resend_bytes = 0;
   for (unsigned long long k = 1; k <= steps; ++k) {
     if (!camera_at(base.yaw + 360.0 * static_cast<double>(k) / static_cast<double>(steps), c) ||
@@ -79,8 +81,8 @@ int cmd_cut(int argc, char** argv) {
     entered += cut.entered_count();
     left += cut.left_count();
     visited += cut.visited();
-    change_bytes += static_cast<double>(cut.entered_count() * (4 + record) + cut.left_count() * 4);
-    resend_bytes += static_cast<double>(cut.sent_count() * (4 + record));
+    change_bytes += static_cast<double>(cut.entered_count() * node_entry_bytes(record) + cut.left_count() * 4);
+    resend_bytes += static_cast<double>(cut.sent_count() * node_entry_bytes(record));
   }
   const double n = static_cast<double>(steps);
   if (json) {

@@ -39,7 +39,8 @@ const char kTradeHelp[] =
     "Sweeps each knob of the fixed-point client alone from the defaults — the cut's\n"
     "pixel threshold (--max-size), the points-per-node scale (--quality), quasi- vs\n"
     "pseudo-random samples, the projection, the point size, supersampling, the\n"
-    "shading mode, the screen-space resolve, the tile size, colour on/off — and for\n"
+    "shading mode, the screen-space resolve, the point cap, the tile size, colour\n"
+    "on/off — and for\n"
     "each setting measures,\n"
     "over N orbit views (default 3): the frame time (median of R frames, default\n"
     "5), the instructions a frame takes (the CPU's counter through perf_event_open:\n"
@@ -133,6 +134,8 @@ std::vector<Setting> settings(bool color) {
   add("shading", "node", true, [](RenderOptions&) {});
   add("shading", "point", false, [](RenderOptions& o) { o.config.shading = ShadingMode::kPerPoint; });
   add("shading", "none", false, [](RenderOptions& o) { o.config.shading = ShadingMode::kNone; });
+  for (int k : {0, 2, 4, 8})
+    add("point-cap", std::to_string(k), k == 0, [k](RenderOptions& o) { o.config.point_cap = static_cast<uint8_t>(k); });
   add("resolve", "on", true, [](RenderOptions&) {});
   add("resolve", "off", false, [](RenderOptions& o) { o.config.resolve = false; });
   for (int t : {4, 5, 6})

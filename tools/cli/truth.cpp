@@ -2,6 +2,7 @@
 // scan (its mesh when it has faces, else its points) drawn with the camera,
 // size, up axis and lighting `stipple render` uses for the encoded model.
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,10 @@ int cmd_truth(int argc, char** argv) {
   stored_bounding_box(cloud.positions, bmin, bmax);
   SpgHeader header;
   header.view_hint = frame.hint;
+  for (int a = 0; a < 3; ++a) {  // the stored box: the default view of a scan taken from inside is placed by it
+    std::memcpy(&header.bbox_bits[a], &bmin[a], 4);
+    std::memcpy(&header.bbox_bits[3 + a], &bmax[a], 4);
+  }
   header.flags = static_cast<uint16_t>((cloud.has_normals() ? kAttrNormals : 0) | (cloud.has_colors() ? kAttrColor : 0));
   TruthStats stats;
   const Image image = render_truth(cloud, Vec3(bmin[0], bmin[1], bmin[2]), Vec3(bmax[0], bmax[1], bmax[2]), header, o.config,

@@ -186,8 +186,11 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
   Client client;
   ClientStatus s = client.init(config, arena.data(), arena.size() * 8);
   if (s == ClientStatus::kOk) s = client.load_startup(file, spg_startup_bytes(view.header.version, view.header.class_count));
+  std::vector<uint8_t> points(view.header.node_count);
+  spg_node_points(view, points.data(), 1);
   for (size_t i = 0; s == ClientStatus::kOk && i < cut.size(); ++i)
-    s = client.put_node(NodeId{cut[i]}, view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes);
+    s = client.put_node(NodeId{cut[i]}, view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes,
+                        points[cut[i]]);
   const size_t stride = static_cast<size_t>(config.raster.width) * bytes_per_pixel(config.raster.format);
   out.frame.assign(stride * config.raster.height, 0);
   out.frame_seconds.clear();

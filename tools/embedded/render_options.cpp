@@ -52,6 +52,8 @@ const char kRenderOptionsHelp[] =
     "  --point-size N         1..3 px (default 2)\n"
     "  --supersample N        draw at N x N the screen's pixels (points of the point\n"
     "                         size there) and average each block: 1, 2 or 4\n"
+    "  --point-cap K          draw a node with at most K times the original points\n"
+    "                         under it (0: no cap; keeps sparse scans sparse)\n"
     "  --resolve on|off       the screen-space resolve: fill pinholes, trim the\n"
     "                         points' fringe at silhouettes, blend 3x3\n"
     "                         (default on: docs/results.md)\n"
@@ -135,6 +137,10 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
     c.quality_q8 = static_cast<uint16_t>(std::lround(q * 256));
   }
   unsigned long long u = 0;
+  if (args.value("--point-cap", v)) {
+    if (!cli::parse_uint(v, 255, u)) return error = "--point-cap: expected 0..255, got '" + v + "'", false;
+    c.point_cap = static_cast<uint8_t>(u);
+  }
   if (args.value("--supersample", v)) {
     if (!cli::parse_uint(v, 4, u) || (u != 1 && u != 2 && u != 4))
       return error = "--supersample: expected 1, 2 or 4, got '" + v + "'", false;
