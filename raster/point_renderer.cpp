@@ -140,6 +140,7 @@ struct PointRenderer::PointSetup {
   int shift, size;
   uint32_t base_r, base_g, base_b, node_rgb, node_intensity, node_specular;
   int32_t sn0, sn1, l0, l1, l2, h0, h1, h2;
+  int32_t surface[2][3];  // kSurface: the normal sample (in sigma_n) per position sample component, Q14
   int64_t ca[3][3];  // colour axes, 8-bit levels per sigma in Q8
 };
 
@@ -151,7 +152,7 @@ struct PointRenderer::FrameSetup {
   bool model_color;
 };
 
-template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
 void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, FrameStats& stats) {
   PointSetup setup;  // filled in place: draw_points reads it by reference
   NodeProjection& proj = setup.proj;
@@ -199,6 +200,24 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
   setup.h0 = dot_q14(node.normal_frame[2], f.half);
   setup.h1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.half)} * sn0) >> 12);
   setup.h2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.half)} * sn1) >> 12);
+  if constexpr (kNormals == 2) {
+    // The surface's normal field: a position sample g lands at sum_i g_i
+    // axis_i; its offset along the normal frame's tangent f_k, over the
+    // node's positional spread along f_k, is how many sigma_n the normal
+    // turns there (a convex patch, its curvature sigma_n / sigma_p).
+    for (int k = 0; k < 2; ++k) {
+      int64_t along[3];
+      uint64_t s2 = 0;
+      for (int i = 0; i < 3; ++i) {
+        along[i] = (int64_t{node.axis[i][0]} * node.normal_frame[k][0] + int64_t{node.axis[i][1]} * node.normal_frame[k][1] +
+                    int64_t{node.axis[i][2]} * node.normal_frame[k][2]) >> 14;  // MU
+        s2 += static_cast<uint64_t>(along[i] * along[i]);
+      }
+      const int64_t spread = static_cast<int64_t>(isqrt64(s2));
+      for (int i = 0; i < 3; ++i)
+        setup.surface[k][i] = spread > 0 ? static_cast<int32_t>((along[i] << 14) / spread) : 0;  // |.| <= 2^14
+    }
+  }
   setup.node_rgb = base;
   setup.node_intensity = 256;
   setup.node_specular = 0;
@@ -214,14 +233,14 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
         const int64_t v = (int64_t{node.color_axis[k][ch]} * 255) >> 4;
         setup.ca[k][ch] = v > (1 << 24) ? (1 << 24) : v < -(1 << 24) ? -(1 << 24) : v;
       }
-  stats.points += draw_points<P, kShadePoints, kColorPoints, kSpecular>(setup, stats);
+  stats.points += draw_points<P, kNormals, kColorPoints, kSpecular>(setup, stats);
   ++stats.nodes_drawn;
 }
 
 // The per-point path: its own function, never inlined, so that the ARMv5
 // build can be checked symbol by symbol for run-time helper calls
 // (tests/handheld/per_point_helpers.cmake).
-template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
 uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
   const NodeProjection& proj = s.proj;
   const uint32_t count = s.count;
@@ -229,6 +248,8 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
   const uint32_t node_rgb = s.node_rgb, node_intensity = s.node_intensity, node_specular = s.node_specular;
   const int32_t sn0 = s.sn0, sn1 = s.sn1, l0 = s.l0, l1 = s.l1, l2 = s.l2, h0 = s.h0, h1 = s.h1, h2 = s.h2;
   const int64_t(&ca)[3][3] = s.ca;
+  const int32_t(&surface)[2][3] = s.surface;
+  constexpr bool kShadePoints = kNormals != 0;
   const int32_t near = s.near;
   const int shift = s.shift;
   const int size = s.size;
@@ -251,7 +272,16 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
       }
       uint32_t intensity = node_intensity, specular = node_specular;
       if constexpr (kShadePoints) {
-        const Gaussian2Q12 n = g_normal_[j];
+        Gaussian2Q12 n;
+        if constexpr (kNormals == 2) {
+          const Gaussian3Q12 g = g_position_[j];
+          for (int k = 0; k < 2; ++k) {
+            const int32_t v = (surface[k][0] * g.v[0] + surface[k][1] * g.v[1] + surface[k][2] * g.v[2]) >> 14;
+            n.v[k] = static_cast<int16_t>(v < -32767 ? -32767 : v > 32767 ? 32767 : v);
+          }
+        } else {
+          n = g_normal_[j];
+        }
         const int64_t al = (int64_t{sn0} * n.v[0]) >> 12, be = (int64_t{sn1} * n.v[1]) >> 12;  // Q12 radians
         const uint64_t t2 = static_cast<uint64_t>(al * al + be * be) >> kCosSincShift;          // theta^2 cell
         const CosSincQ14 cs = shading_->cos_sinc[t2 < kCosSincEntries ? t2 : kCosSincEntries - 1];
@@ -308,18 +338,19 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   f.model_color = header.has_color() && !config_.grey;
 
   const bool normals = header.has_normals() && config_.shading != ShadingMode::kNone;
-  const bool shade_points = normals && config_.shading == ShadingMode::kPerPoint;
+  const int point_normals = !normals ? 0 : config_.shading == ShadingMode::kPerPoint ? 1 : config_.shading == ShadingMode::kSurface ? 2 : 0;
   const bool color_points = f.model_color && config_.sample_color;
   const bool specular = normals && config_.lighting.specular_q8 > 0;
   using DrawFn = void (PointRenderer::*)(const FrameSetup&, const SpgHeader&, const FixedNode&, FrameStats&);
-#define STIPPLE_PICK(P)                                                                                        \
-  (shade_points ? (color_points ? (specular ? &PointRenderer::draw_node<P, true, true, true> : &PointRenderer::draw_node<P, true, true, false>)      \
-                                : (specular ? &PointRenderer::draw_node<P, true, false, true> : &PointRenderer::draw_node<P, true, false, false>))  \
-                : (color_points ? (specular ? &PointRenderer::draw_node<P, false, true, true> : &PointRenderer::draw_node<P, false, true, false>)  \
-                                : (specular ? &PointRenderer::draw_node<P, false, false, true> : &PointRenderer::draw_node<P, false, false, false>)))
+#define STIPPLE_PICK_N(P, N)                                                                                       \
+  (color_points ? (specular ? &PointRenderer::draw_node<P, N, true, true> : &PointRenderer::draw_node<P, N, true, false>) \
+                : (specular ? &PointRenderer::draw_node<P, N, false, true> : &PointRenderer::draw_node<P, N, false, false>))
+#define STIPPLE_PICK(P) \
+  (point_normals == 1 ? STIPPLE_PICK_N(P, 1) : point_normals == 2 ? STIPPLE_PICK_N(P, 2) : STIPPLE_PICK_N(P, 0))
   DrawFn draw = config_.projection == Projection::kAffine       ? STIPPLE_PICK(Projection::kAffine)
                 : config_.projection == Projection::kReciprocal ? STIPPLE_PICK(Projection::kReciprocal)
                                                                 : STIPPLE_PICK(Projection::kExact);
+#undef STIPPLE_PICK_N
 #undef STIPPLE_PICK
 
   FrameStats stats;

@@ -33,7 +33,12 @@
 
 namespace stipple {
 
-enum class ShadingMode : uint8_t { kPerPoint, kPerNode, kNone };
+// kPerPoint: each point its own sampled normal (TOG05); kSurface: each
+// point's normal follows where it lands in the node, the node's normal
+// spread along its surface as a convex patch would turn it (DP01's
+// differential points, docs/results.md); kPerNode: one normal a node;
+// kNone: unlit.
+enum class ShadingMode : uint8_t { kPerPoint, kPerNode, kNone, kSurface };
 
 struct RendererConfig {
   RasterConfig raster;                     // screen, pixel format, tiles, points per frame
@@ -43,7 +48,7 @@ struct RendererConfig {
   uint8_t point_size = 2;                  // 1..3 px (the paper drew 1.8 px points)
   uint16_t quality_q8 = 256;               // points-per-node scale (256 = as measured)
   Projection projection = Projection::kAffine;
-  ShadingMode shading = ShadingMode::kPerNode;  // measured best against the scan (docs/results.md)
+  ShadingMode shading = ShadingMode::kSurface;  // measured best against the scan (docs/results.md)
   bool sample_color = true;                // per-point colour from sigma_c (else the node's mean colour)
   bool grey = false;                       // ignore the model's colour
   Lighting lighting;
@@ -108,9 +113,10 @@ class PointRenderer {
  private:
   struct FrameSetup;
   struct PointSetup;
-  template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+  // kNormals: 0 the node's normal, 1 sampled per point, 2 following the surface.
+  template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
   void draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, FrameStats& stats);
-  template <Projection P, bool kShadePoints, bool kColorPoints, bool kSpecular>
+  template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
   [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
 
   RendererConfig config_{};

@@ -49,7 +49,7 @@ TEST(Client, FixedPointAgainstDoubleReference) {
     double bound;
   } cases[] = {{Projection::kExact, ShadingMode::kNone, 33},         {Projection::kExact, ShadingMode::kPerPoint, 32.5},
                {Projection::kReciprocal, ShadingMode::kPerPoint, 32.5}, {Projection::kAffine, ShadingMode::kNone, 32},
-               {Projection::kAffine, ShadingMode::kPerPoint, 30}};
+               {Projection::kAffine, ShadingMode::kPerPoint, 30},     {Projection::kAffine, ShadingMode::kSurface, 30}};
   for (const auto& k : cases) {
     for (const char* size : {"240x320", "640x480"}) {
       ClientConfig c;
@@ -67,7 +67,7 @@ TEST(Client, FixedPointAgainstDoubleReference) {
       const Image ref = render_reference(model, fixed.cut, c, spec);
       const double db = image_psnr(fixed.image, ref);
       const char* projections[] = {"affine", "reciprocal", "exact"};
-      const char* shadings[] = {"point", "node", "none"};
+      const char* shadings[] = {"point", "node", "none", "surface"};
       std::printf("%s projection %-10s shading %-5s: %.2f dB (%u points)\n", size, projections[static_cast<int>(k.p)],
                   shadings[static_cast<int>(k.s)], db, fixed.stats.points);
       EXPECT_GE(db, k.bound);

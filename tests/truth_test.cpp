@@ -123,32 +123,39 @@ TEST(Truth, SupersamplingBringsTheBunnyCloserToItsScan) {
   ViewSpec spec;
   ASSERT_TRUE(parse_view("30,20", spec, error));
   const Image truth = render_truth(scan, model.bbox_min, model.bbox_max, view.header, config, spec);
-  // Without the resolve: each supersampling step at least 1 dB better.
-  // With it (the default): 3 dB better than without at every N, and
-  // supersampling still never worse (docs/results.md).
-  double without[5] = {}, last = 0;
-  for (bool resolve : {false, true}) {
-    config.resolve = resolve;
+  // Where we started (per-point normals, no resolve): under 17 dB. Without
+  // the resolve each supersampling step is at least 1 dB better. The
+  // defaults (surface normals and the resolve) are at least 4 dB better
+  // than the start, within the dark-where-lit and outside bounds,
+  // and supersampling on top of them stays within 0.5 dB: the resolve has
+  // taken its gain (docs/results.md).
+  double start = 0, last = 0, best = 0;
+  for (int pass = 0; pass < 3; ++pass) {
+    config.shading = pass == 0 ? ShadingMode::kPerPoint : ShadingMode::kSurface;
+    config.resolve = pass == 2;
     for (int n : {1, 2, 4}) {
+      if (pass == 0 && n > 1) break;
       config.supersample = static_cast<uint8_t>(n);
       FixedRender r;
       ASSERT_TRUE(render_fixed(view, file.data(), config, CutRule{CutRule::kProjectedSize, 0, 32}, spec, r, error)) << error;
       const ImageComparison m = compare_images(truth, r.image);
-      std::printf("resolve %s, supersample %d: %u points, object PSNR %.2f dB, SSIM %.3f, dark where lit %.2f %%, outside %.2f %%\n",
-                  resolve ? "on" : "off", n, r.stats.points, m.object_psnr, m.ssim, 100 * m.dark_where_lit, 100 * m.outside);
-      if (!resolve) {
-        if (n == 1) EXPECT_LT(m.object_psnr, 17.0);  // where we start (docs/results.md)
-        else EXPECT_GT(m.object_psnr, last + 1.0) << n;
-        without[n] = m.object_psnr;
-      } else {
-        EXPECT_GT(m.object_psnr, without[n] + (n == 1 ? 3.0 : 1.0)) << n;
+      std::printf("%s, resolve %s, supersample %d: %u points, object PSNR %.2f dB, SSIM %.3f, dark where lit %.2f %%, outside %.2f %%\n",
+                  pass == 0 ? "point normals" : "surface normals", config.resolve ? "on" : "off", n, r.stats.points,
+                  m.object_psnr, m.ssim, 100 * m.dark_where_lit, 100 * m.outside);
+      if (pass == 0) {
+        EXPECT_LT(m.object_psnr, 17.0);
+        start = m.object_psnr;
+      } else if (pass == 1) {
         if (n > 1) {
-          EXPECT_GE(m.object_psnr, last) << n;
+          EXPECT_GT(m.object_psnr, last + 1.0) << n;
         }
-        if (n == 1) {
-          EXPECT_LT(m.dark_where_lit, 0.005);  // the targets at the default
-          EXPECT_LT(m.outside, 0.02);
-        }
+      } else if (n == 1) {
+        EXPECT_GT(m.object_psnr, start + 4.0);
+        EXPECT_LT(m.dark_where_lit, 0.005);
+        EXPECT_LT(m.outside, 0.02);
+        best = m.object_psnr;
+      } else {
+        EXPECT_GT(m.object_psnr, best - 0.5) << n;
       }
       last = m.object_psnr;
     }
@@ -157,8 +164,9 @@ TEST(Truth, SupersamplingBringsTheBunnyCloserToItsScan) {
 
 // The compact class tables of version 2 cost the picture almost nothing:
 // the bunny drawn from bunny_v2.spg against the same model with version 1's
-// float32 tables (whose drawing the golden images fix) — a few tens of
-// pixels out of 640x480 differ, where a node's points-per-node count moved.
+// float32 tables (whose drawing the golden images fix) — under a hundred
+// pixels out of 640x480 differ, where a node's points-per-node count or its
+// surface normals moved with its rounded sigma_p.
 TEST(Truth, SixteenBitClassTablesDrawAsTheFloatTablesDo) {
   ClientConfig config;
   config.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 22};
@@ -180,7 +188,7 @@ TEST(Truth, SixteenBitClassTablesDrawAsTheFloatTablesDo) {
   }
   std::printf("version 2 against version 1: %zu of %zu object pixels differ\n", differ, covered);
   EXPECT_GT(covered, 30000u);
-  EXPECT_LT(differ, covered / 500);  // under 0.2 %
+  EXPECT_LT(differ, covered / 200);  // under 0.5 % (the surface normals follow sigma_p too)
   EXPECT_EQ(r[0].stats.nodes, r[1].stats.nodes);  // the same cut
 }
 

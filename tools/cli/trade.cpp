@@ -131,7 +131,8 @@ std::vector<Setting> settings(bool color) {
       o.config.raster.max_points <<= n / 2;
       o.config.resolve = false;
     });
-  add("shading", "node", true, [](RenderOptions&) {});
+  add("shading", "surface", true, [](RenderOptions&) {});
+  add("shading", "node", false, [](RenderOptions& o) { o.config.shading = ShadingMode::kPerNode; });
   add("shading", "point", false, [](RenderOptions& o) { o.config.shading = ShadingMode::kPerPoint; });
   add("shading", "none", false, [](RenderOptions& o) { o.config.shading = ShadingMode::kNone; });
   for (int k : {0, 2, 4, 8})

@@ -43,8 +43,10 @@ const char kRenderOptionsHelp[] =
     "                         TOG05's on-demand mode)\n"
     "client:\n"
     "  --projection affine|reciprocal|exact   per-point projection (default affine)\n"
-    "  --shading point|node|none              Lambert per sampled normal, per node, or\n"
-    "                                         none (default node: docs/results.md)\n"
+    "  --shading point|surface|node|none      Lambert per sampled normal, per normal\n"
+    "                                         following the surface (DP01), per node,\n"
+    "                                         or none (default surface:\n"
+    "                                         docs/results.md)\n"
     "  --no-specular          Lambert only\n"
     "  --grey                 ignore the model's colours\n"
     "  --mean-color           one colour per node (no per-point colour sampling)\n"
@@ -118,7 +120,8 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
     if (v == "point") c.shading = ShadingMode::kPerPoint;
     else if (v == "node") c.shading = ShadingMode::kPerNode;
     else if (v == "none") c.shading = ShadingMode::kNone;
-    else return error = "--shading: expected point, node or none, got '" + v + "'", false;
+    else if (v == "surface") c.shading = ShadingMode::kSurface;
+    else return error = "--shading: expected point, surface, node or none, got '" + v + "'", false;
   }
   if (args.value("--resolve", v)) {
     if (v == "on") c.resolve = true;

@@ -156,7 +156,7 @@ int run(int argc, char** argv) {
     while (display.poll(&e)) changed = controls.apply(e) || changed;
     changed = controls.tick() || changed;
     if (changed) {
-      if (!client.set_view(controls.lighting() ? o.config.shading == ShadingMode::kNone ? ShadingMode::kPerNode
+      if (!client.set_view(controls.lighting() ? o.config.shading == ShadingMode::kNone ? ShadingMode::kSurface
                                                                                        : o.config.shading
                                                : ShadingMode::kNone,
                            controls.grey(), controls.quality_q8()))

@@ -90,6 +90,7 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
 
   const bool normals = model.header.has_normals() && config.shading != ShadingMode::kNone;
   const bool per_point_normals = normals && config.shading == ShadingMode::kPerPoint;
+  const bool surface_normals = normals && config.shading == ShadingMode::kSurface;
   const bool specular = normals && L.specular_q8 > 0;
   const bool color = model.header.has_color() && !config.grey;
   const bool color_points = color && config.sample_color;
@@ -136,6 +137,15 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
     const uint32_t count = points_per_node(table, ppn_index(q(S(0, 0)), q(S(0, 1)), q(S(1, 1))), config.quality_q8, config.samples);
     const Vec3 base = color ? Vec3(node.color.mean * 255.0) : grey;
     const Vec3 n0 = node.normal_frame.col(2);
+    // kSurface: the sample's offset along each tangent of the normal frame,
+    // in units of the node's spread along it, is how many sigma_n its
+    // normal turns (the fixed client's rule, raster/point_renderer.h).
+    Eigen::Matrix<double, 2, 3> surface = Eigen::Matrix<double, 2, 3>::Zero();
+    if (surface_normals)
+      for (int k = 0; k < 2; ++k) {
+        const Eigen::RowVector3d along = node.normal_frame.col(k).transpose() * axes;
+        if (along.norm() > 0) surface.row(k) = along / along.norm();
+      }
     for (uint32_t j = 0; j < count; ++j) {
       const Vec3 p = c + A * g3(j, 0);
       if (p.z() < near) continue;
@@ -147,8 +157,8 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
       double intensity = 1, highlight = 0;
       if (normals) {
         Vec3 n = n0;
-        if (per_point_normals) {
-          const Vec2 t = g2(j);
+        if (per_point_normals || surface_normals) {
+          const Vec2 t = surface_normals ? Vec2(surface * g3(j, 0)) : g2(j);
           const double a = node.sigma_n[0] * t.x(), b = node.sigma_n[1] * t.y();
           const double theta = std::hypot(a, b), phi = std::atan2(b, a);
           n = node.normal_frame * Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
