@@ -213,9 +213,15 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
                     int64_t{node.axis[i][2]} * node.normal_frame[k][2]) >> 14;  // MU
         s2 += static_cast<uint64_t>(along[i] * along[i]);
       }
-      const int64_t spread = static_cast<int64_t>(isqrt64(s2));
-      for (int i = 0; i < 3; ++i)
-        setup.surface[k][i] = spread > 0 ? static_cast<int32_t>((along[i] << 14) / spread) : 0;  // |.| <= 2^14
+      if (s2 == 0) {
+        setup.surface[k][0] = setup.surface[k][1] = setup.surface[k][2] = 0;
+        continue;
+      }
+      const RsqrtScale r = rsqrt_scale(*shading_, s2);  // 2^14 / spread, without a division
+      for (int i = 0; i < 3; ++i) {
+        const int64_t v = (along[i] * int64_t{r.mul}) >> r.shift;  // |.| <= 2^14 (1 + 1/512)
+        setup.surface[k][i] = static_cast<int32_t>(v > 16416 ? 16416 : v < -16416 ? -16416 : v);
+      }
     }
   }
   setup.node_rgb = base;

@@ -41,6 +41,15 @@ bool build_shading_tables(const Lighting& lighting, ShadingTables* out) {
     out->cos_sinc[i].sinc = static_cast<int16_t>((int64_t{sc.sin} << 24) / theta_q24);
   }
 
+  // Reciprocal square roots: round(2^19 / sqrt(m)) = round(sqrt(2^38 / m)),
+  // the square root of the rounded-down quotient, corrected to the nearest.
+  for (int i = 0; i < kRsqrtEntries; ++i) {
+    const uint64_t q = (uint64_t{1} << 38) / static_cast<uint64_t>(256 + i);
+    uint64_t r = isqrt64(q);
+    if ((r + 1) * (r + 1) - q < q - r * r) ++r;
+    out->rsqrt[i] = static_cast<uint16_t>(r);
+  }
+
   // Intensities: l = (i - 128) / 128.
   const int32_t ambient = lighting.ambient_q8 > 256 ? 256 : lighting.ambient_q8;
   for (int i = 0; i < kIntensityEntries; ++i) {

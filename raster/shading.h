@@ -35,8 +35,14 @@ struct CosSincQ14 {
   int16_t cos, sinc;
 };
 
+// Reciprocal square roots of m = 256 .. 1023: round(2^19 / sqrt(m)), for
+// normalizing a vector without a square root or a division per use
+// (rsqrt_shift).
+inline constexpr int kRsqrtEntries = 768;
+
 struct ShadingTables {
   CosSincQ14 cos_sinc[kCosSincEntries];
+  uint16_t rsqrt[kRsqrtEntries];
   uint16_t diffuse[kIntensityEntries];   // Q8
   uint16_t specular[kIntensityEntries];  // 8-bit levels added to each channel
   int32_t light_q14[3];                  // normalized, camera space
@@ -45,6 +51,21 @@ struct ShadingTables {
 
 // Fills the tables. Returns false for a zero light vector or a shininess outside 1..64.
 [[nodiscard]] bool build_shading_tables(const Lighting& lighting, ShadingTables* out);
+
+// v * 2^14 / sqrt(s2) for s2 >= 1, from the table: s2 = m 4^k with m in
+// [256, 1024), so 1 / sqrt(s2) = rsqrt[m - 256] 2^-19 2^-k; returns the
+// multiplier and the right shift that apply it (v * mul >> shift), within
+// 1/512 of the exact quotient. Integer only, no division.
+struct RsqrtScale {
+  uint32_t mul;
+  int shift;
+};
+inline RsqrtScale rsqrt_scale(const ShadingTables& t, uint64_t s2) {
+  const int e = 63 - __builtin_clzll(s2);  // floor log2, s2 >= 1
+  const int k = (e - 8) >= 0 ? (e - 8) / 2 : -((9 - e) / 2);  // s2 / 4^k in [256, 1024)
+  const uint64_t m = k >= 0 ? s2 >> (2 * k) : s2 << (-2 * k);
+  return RsqrtScale{t.rsqrt[m - 256], 5 + k};  // 2^14 / 2^19 / 2^k
+}
 
 // Table index of l in Q14 ([-16384, 16384]).
 inline int intensity_index(int32_t l_q14) {
