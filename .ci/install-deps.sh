@@ -3,6 +3,7 @@
 # Debian's packages. Runs apt-get directly as root, through sudo otherwise.
 set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev clang
+  liblzf-dev  # PCD's binary_compressed
   g++-arm-linux-gnueabi g++-arm-linux-gnueabihf g++-aarch64-linux-gnu qemu-user  # cross builds, their emulator
   socat  # a linked pseudo-terminal pair: the serial line in the CLI tests
   libsdl2-dev libepoxy-dev libegl-dev libgl-dev libgl1-mesa-dri libegl-mesa0  # the emulator, the GL client (llvmpipe)

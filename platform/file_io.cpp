@@ -1,12 +1,20 @@
 #include "platform/file_io.h"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 
 namespace stipple {
 
 bool read_file(const std::string& path, std::vector<uint8_t>& out, std::string& error, uint64_t max_bytes) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    error = path + ": is a directory, not a file";
+    return false;
+  }
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) {
     error = path + ": " + std::strerror(errno);
@@ -43,17 +51,23 @@ bool read_file(const std::string& path, std::vector<uint8_t>& out, std::string& 
 }
 
 bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data, std::string& error) {
-  const std::string tmp = path + ".partial";
+  // A temporary name of this process's own beside the target, renamed over
+  // it when complete: two runs writing one output at once each leave a
+  // whole file, never a mixture, and a failed write leaves the old one.
+  const std::string tmp = path + ".partial." + std::to_string(static_cast<long>(getpid()));
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) {
     error = path + ": " + std::strerror(errno);
     return false;
   }
   const bool wrote = data.empty() || std::fwrite(data.data(), 1, data.size(), f) == data.size();
+  const int write_errno = wrote ? 0 : errno;
   const bool closed = std::fclose(f) == 0;
+  const int close_errno = closed ? 0 : errno;
   if (!wrote || !closed) {
     std::remove(tmp.c_str());
-    error = path + ": write failed";
+    const int why = write_errno ? write_errno : close_errno;
+    error = path + ": write failed" + (why ? std::string(": ") + std::strerror(why) : std::string());
     return false;
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {

@@ -12,8 +12,12 @@ namespace stipple {
 bool read_file(const std::string& path, std::vector<uint8_t>& out, std::string& error,
                uint64_t max_bytes = uint64_t{1} << 34);
 
-// Writes `data` to `path` through a temporary file in the same folder and a
-// rename, so a failed or interrupted write never leaves a partial file.
+// Writes `data` to `path` through a temporary file in the same folder, named
+// for this process, and a rename: a failed or interrupted write never leaves
+// a partial file, and two processes writing one path at once each leave a
+// whole one. The reason of a failure (a full disk: "No space left on
+// device") is in the message. Refuses a directory as input ("is a
+// directory").
 bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data, std::string& error);
 
 }  // namespace stipple

@@ -1,6 +1,8 @@
 // stipple platform — PNG read/write with libpng's simplified API (1.6).
 #include "platform/png_io.h"
 
+#include "platform/file_io.h"
+
 #include <png.h>
 
 #include <cstdio>
@@ -19,18 +21,20 @@ bool write_png(const std::string& path, const Image& img, std::string& error) {
   image.width = static_cast<png_uint_32>(width);
   image.height = static_cast<png_uint_32>(height);
   image.format = PNG_FORMAT_RGB;
-  const std::string tmp = path + ".partial";
-  if (!png_image_write_to_file(&image, tmp.c_str(), 0, rgb.data(), width * 3, nullptr)) {
+  // Encoded in memory, then written as every output is: atomically, under
+  // a temporary name of this process's own (platform/file_io.h).
+  png_alloc_size_t bytes = 0;
+  if (!png_image_write_to_memory(&image, nullptr, &bytes, 0, rgb.data(), width * 3, nullptr)) {
     error = path + ": " + image.message;
-    std::remove(tmp.c_str());
     return false;
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    error = path + ": cannot rename the temporary file";
-    std::remove(tmp.c_str());
+  std::vector<uint8_t> encoded(bytes);
+  if (!png_image_write_to_memory(&image, encoded.data(), &bytes, 0, rgb.data(), width * 3, nullptr)) {
+    error = path + ": " + image.message;
     return false;
   }
-  return true;
+  encoded.resize(bytes);
+  return write_file_atomic(path, encoded, error);
 }
 
 bool read_png(const std::string& path, Image& img, std::string& error) {

@@ -27,6 +27,8 @@
 #include "tools/server/server.h"
 #include "platform/loopback/loopback_transport.h"
 #include "raster/point_raster.h"
+#include <lzf.h>
+
 #include "tools/encoder/classify.h"
 #include "tools/encoder/encoder.h"
 #include "tools/scan/kdtree.h"
@@ -524,6 +526,91 @@ void BM_PlyParse(benchmark::State& state) {
   state.SetBytesProcessed(state.iterations() * static_cast<int64_t>(bytes.size()));
 }
 BENCHMARK(BM_PlyParse)->Unit(benchmark::kMillisecond);
+
+// Every reader on the scan's points (positions and normals, as float32),
+// rewritten in memory in its format: 0 PCD ascii, 1 PCD binary, 2 PCD
+// binary_compressed, 3 LAS 1.4 format 6 (mm scale, a 1e6 offset), 4 text
+// x y z nx ny nz. Throughput is of the bytes parsed.
+std::vector<uint8_t> scan_as(int format) {
+  const PointCloud& c = scan();
+  const size_t n = c.size();
+  std::vector<uint8_t> out;
+  const auto text = [&](const std::string& s) { out.insert(out.end(), s.begin(), s.end()); };
+  const auto f32 = [&](double v) {
+    const float f = static_cast<float>(v);
+    uint8_t b[4];
+    std::memcpy(b, &f, 4);
+    out.insert(out.end(), b, b + 4);
+  };
+  char line[160];
+  if (format <= 2) {
+    text("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4\nTYPE F F F F F F\n"
+         "COUNT 1 1 1 1 1 1\nWIDTH " + std::to_string(n) + "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) +
+         "\nDATA " + (format == 0 ? "ascii" : format == 1 ? "binary" : "binary_compressed") + "\n");
+    if (format == 0) {
+      for (size_t i = 0; i < n; ++i) {
+        const Vec3 &p = c.positions[i], &q = c.normals[i];
+        std::snprintf(line, sizeof line, "%.7g %.7g %.7g %.7g %.7g %.7g\n", p.x(), p.y(), p.z(), q.x(), q.y(), q.z());
+        text(line);
+      }
+    } else {
+      std::vector<uint8_t> body;
+      std::swap(out, body);
+      for (int k = 0; k < 6; ++k)  // fields one after another (compressed), or records (binary) below
+        for (size_t i = 0; i < (format == 2 ? n : 0); ++i) f32(k < 3 ? c.positions[i][k] : c.normals[i][k - 3]);
+      for (size_t i = 0; i < (format == 1 ? n : 0); ++i)
+        for (int k = 0; k < 6; ++k) f32(k < 3 ? c.positions[i][k] : c.normals[i][k - 3]);
+      std::swap(out, body);
+      if (format == 1) {
+        out.insert(out.end(), body.begin(), body.end());
+      } else {
+        std::vector<uint8_t> packed(body.size() + body.size() / 16 + 64);
+        const unsigned m = lzf_compress(body.data(), static_cast<unsigned>(body.size()), packed.data(), static_cast<unsigned>(packed.size()));
+        const uint32_t sizes[2] = {m, static_cast<uint32_t>(body.size())};
+        out.insert(out.end(), reinterpret_cast<const uint8_t*>(sizes), reinterpret_cast<const uint8_t*>(sizes) + 8);
+        out.insert(out.end(), packed.begin(), packed.begin() + m);
+      }
+    }
+  } else if (format == 3) {
+    out.assign(375, 0);
+    std::memcpy(out.data(), "LASF", 4);
+    out[24] = 1, out[25] = 4, out[94] = 375 & 255, out[95] = 375 >> 8, out[96] = 375 & 255, out[97] = 375 >> 8;
+    out[104] = 6, out[105] = 30;
+    const double scale[3] = {1e-6, 1e-6, 1e-6}, offset[3] = {1e6, 1e6, 0};
+    const uint64_t count = n;
+    std::memcpy(&out[131], scale, 24);
+    std::memcpy(&out[155], offset, 24);
+    std::memcpy(&out[247], &count, 8);
+    for (size_t i = 0; i < n; ++i) {
+      uint8_t r[30] = {};
+      for (int k = 0; k < 3; ++k) {
+        const int32_t v = static_cast<int32_t>(std::llround(c.positions[i][k] / 1e-6));
+        std::memcpy(r + 4 * k, &v, 4);
+      }
+      out.insert(out.end(), r, r + 30);
+    }
+  } else {
+    for (size_t i = 0; i < n; ++i) {
+      const Vec3 &p = c.positions[i], &q = c.normals[i];
+      std::snprintf(line, sizeof line, "%.7g %.7g %.7g %.7g %.7g %.7g\n", p.x(), p.y(), p.z(), q.x(), q.y(), q.z());
+      text(line);
+    }
+  }
+  return out;
+}
+
+void BM_ReadScan(benchmark::State& state) {
+  const std::vector<uint8_t> bytes = scan_as(static_cast<int>(state.range(0)));
+  std::string error;
+  for (auto _ : state) {
+    PointCloud c;
+    if (!parse_point_cloud("scan", bytes.data(), bytes.size(), c, error)) state.SkipWithError(error.c_str());
+    benchmark::DoNotOptimize(c.positions.data());
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<int64_t>(bytes.size()));
+  state.counters["points"] = static_cast<double>(scan().size());
+}
+BENCHMARK(BM_ReadScan)->DenseRange(0, 4)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace stipple

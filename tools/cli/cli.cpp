@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 
 namespace stipple::cli {
 
@@ -62,6 +63,15 @@ std::string with_commas(unsigned long long v) {
     out += digits[i];
   }
   return out;
+}
+
+bool output_is_input(const std::string& input, const std::string& output, std::string& error) {
+  std::error_code ec;
+  if (input == output || (std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec))) {
+    error = output + ": the output is the input file; writing it would destroy " + input + " (choose another -o)";
+    return true;
+  }
+  return false;
 }
 
 int fail(const std::string& message) {

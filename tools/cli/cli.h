@@ -28,6 +28,10 @@ class Json {
 std::string with_commas(unsigned long long v);
 
 int fail(const std::string& message);  // prints "stipple: <message>" to stderr, returns 1
+
+// True (and `error` says so) when writing `output` would replace `input`:
+// the same path or the same file by another name.
+bool output_is_input(const std::string& input, const std::string& output, std::string& error);
 void warn(const std::vector<std::string>& messages);  // prints "stipple: warning: <message>" for each
 
 }  // namespace stipple::cli

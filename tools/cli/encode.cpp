@@ -75,6 +75,7 @@ int cmd_encode(int argc, char** argv) {
   if (!args.unknown_option().empty()) return cli::fail("encode: unknown option '" + args.unknown_option() + "'");
   if (inputs.size() != 1) return cli::fail("encode: expected one scan file (see stipple encode --help)");
   if (output.empty()) return cli::fail("encode: -o MODEL.spg is required");
+  if (cli::output_is_input(inputs[0], output, error)) return cli::fail("encode: " + error);
 
   const double start = monotonic_seconds();
   ProgressBar progress("encode", !quiet);

@@ -7,6 +7,8 @@
 #include <new>
 #include <string>
 
+#include "core/protocol.h"
+#include "core/spg_format.h"
 #include "tools/cli/cli.h"
 
 namespace {
@@ -19,7 +21,7 @@ struct Command {
 
 const Command kCommands[] = {
     {"demo", "encode the bundled scan, render it with the fixed-point client (the main job)", stipple::cmd_demo},
-    {"encode", "scan (.ply or x y z text) -> .spg", stipple::cmd_encode},
+    {"encode", "scan (PLY, PCD, LAS or x y z text) -> .spg", stipple::cmd_encode},
     {"info", "describe a .spg file", stipple::cmd_info},
     {"sample", "generate points from a .spg cut (reference decoder) -> .ply", stipple::cmd_sample},
     {"metrics", "nearest-neighbour error and PSNR between two point sets", stipple::cmd_metrics},
@@ -40,7 +42,8 @@ void usage(std::FILE* out) {
              "Statistical point geometry: scans -> hierarchy of Gaussians -> 13/17-byte nodes.\n\ncommands:\n",
              out);
   for (const Command& c : kCommands) std::fprintf(out, "  %-10s %s\n", c.name, c.summary);
-  std::fputs("\n`stipple <command> --help` describes each command.\n", out);
+  std::fputs("\n`stipple <command> --help` or `stipple help <command>` describes each command;\n"
+             "`stipple --version` prints the version.\n", out);
 }
 
 // What the command was working on, for a message that must name it: the
@@ -54,6 +57,24 @@ std::string subject(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 2 && (!std::strcmp(argv[1], "--version") || !std::strcmp(argv[1], "version"))) {
+    std::printf("stipple %s (.spg format %u, reads %u to %u; node stream protocol %u)\n", STIPPLE_VERSION,
+                unsigned{stipple::kSpgVersion}, unsigned{stipple::kSpgOldestVersion}, unsigned{stipple::kSpgVersion},
+                unsigned{stipple::kProtocolVersion});
+    return 0;
+  }
+  // `stipple help VERB` is `stipple VERB --help`.
+  if (argc == 3 && !std::strcmp(argv[1], "help")) {
+    for (const Command& c : kCommands)
+      if (!std::strcmp(argv[2], c.name)) {
+        char help[] = "--help";
+        char* args[] = {argv[0], argv[2], help, nullptr};
+        return c.run(3, args);
+      }
+    std::fprintf(stderr, "stipple: help: unknown command '%s'\n\n", argv[2]);
+    usage(stderr);
+    return 2;
+  }
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "help")) {
     usage(argc < 2 ? stderr : stdout);
     return argc < 2 ? 2 : 0;

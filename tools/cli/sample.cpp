@@ -50,6 +50,8 @@ int cmd_sample(int argc, char** argv) {
   if (files.size() != 1) return cli::fail("sample: expected one .spg file (see stipple sample --help)");
   if (has_level == leaves) return cli::fail("sample: give exactly one of --level L and --leaves");
   if (output.empty()) return cli::fail("sample: -o POINTS.ply is required");
+  std::string error;
+  if (cli::output_is_input(files[0], output, error)) return cli::fail("sample: " + error);
   unsigned long long level = 0, per_node = 0;
   if (has_level && !cli::parse_uint(level_text, 65535, level))
     return cli::fail("sample: --level: expected a non-negative integer, got '" + level_text + "'");
@@ -59,7 +61,6 @@ int cmd_sample(int argc, char** argv) {
   if (has_max && !cli::parse_uint(max_text, ~0ull, max_points))
     return cli::fail("sample: --max-points: expected a non-negative integer, got '" + max_text + "'");
   DecodedModel model;
-  std::string error;
   if (!load_spg(files[0], model, error)) return cli::fail(error);
   const std::vector<uint32_t> cut = leaves ? leaf_cut(model) : level_cut(model, static_cast<int>(level));
   const uint64_t count = cut_sample_count(model, cut, static_cast<uint32_t>(per_node));

@@ -45,6 +45,7 @@ int cmd_truth(int argc, char** argv) {
   if (!args.unknown_option().empty()) return cli::fail("truth: unknown option '" + args.unknown_option() + "'");
   if (files.size() != 1) return cli::fail("truth: expected one scan (see stipple truth --help)");
   if (output.empty()) return cli::fail("truth: -o TRUTH.png is required");
+  if (cli::output_is_input(files[0], output, error)) return cli::fail("truth: " + error);
   PointCloud cloud;
   if (!read_point_cloud(files[0], cloud, error)) return cli::fail(error);
   if (cloud.size() == 0) return cli::fail(files[0] + ": the scan has no points");

@@ -36,7 +36,12 @@ void stored_bounding_box(const std::vector<Vec3>& points, float min[3], float ma
 ScanFrame prepare_scan(PointCloud& cloud, const EncodeOptions& o, const std::function<void(double, const char*)>& progress) {
   const bool estimate = o.normals && !cloud.has_normals();
   if (estimate && !cloud.triangles.empty()) estimate_normals(cloud, o.normal_neighbours, ScanFrame{}, progress);
-  const ScanFrame frame = analyse_scan(cloud.positions, o.orient, cloud.has_normals() ? &cloud.normals : nullptr);
+  OrientOptions orient = o.orient;
+  if (cloud.has_viewpoint && !orient.has_viewpoint) {  // the file's sensor position, unless an option gives one
+    orient.has_viewpoint = true;
+    orient.viewpoint = cloud.viewpoint;
+  }
+  const ScanFrame frame = analyse_scan(cloud.positions, orient, cloud.has_normals() ? &cloud.normals : nullptr);
   if (estimate && !cloud.has_normals()) estimate_normals(cloud, o.normal_neighbours, frame, progress);
   return frame;
 }

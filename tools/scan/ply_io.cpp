@@ -10,6 +10,8 @@
 #include <sstream>
 
 #include "platform/file_io.h"
+#include "tools/scan/las_io.h"
+#include "tools/scan/pcd_io.h"
 
 namespace stipple {
 
@@ -398,12 +400,31 @@ bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointC
   return true;
 }
 
+// Plain text. Separators: whitespace, ',' and ';' — except in a file whose
+// numbers use decimal commas (European spreadsheets: "1,5 2,25 3"), which is
+// told by its first data line: three or more whitespace- or ';'-separated
+// words, none with a '.', at least one with a single ','.
 bool parse_text(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error) {
   cloud = PointCloud{};
+  const auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; };
+  // A binary file or a .spg given as a scan: say so instead of quoting its bytes.
+  const size_t probe = std::min<size_t>(size, 4096);
+  for (size_t i = 0; i < probe; ++i) {
+    const unsigned char c = data[i];
+    if (c == 0 || (c < 0x20 && c != '\n' && c != '\r' && c != '\t' && c != '\v' && c != '\f')) {
+      const bool spg = size >= 4 && std::memcmp(data, "STPG", 4) == 0;
+      error = name + ": byte " + std::to_string(i) + ": " +
+              (spg ? std::string("this is a .spg model, not a scan (stipple info or render read it)")
+                   : "a binary byte (" + std::to_string(c) + ") in what would be a text scan: not PLY, PCD, LAS or text");
+      return false;
+    }
+  }
   size_t pos = 0;
   int line_no = 0;
+  bool decimal_comma = false, decided = false;
   size_t columns = 0;
-  std::vector<double> row;
+  std::vector<double> row, extra;  // extra: columns 4-6 of a 6-column file, decided at the end
+  std::vector<int> extra_lines;
   while (pos < size) {
     size_t eol = pos;
     while (eol < size && data[eol] != '\n') ++eol;
@@ -411,19 +432,49 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, Point
     const char* end = reinterpret_cast<const char*>(data + eol);
     pos = eol + 1;
     ++line_no;
+    if (line_no == 1 && end - begin >= 3 && std::memcmp(begin, "\xEF\xBB\xBF", 3) == 0) begin += 3;  // a UTF-8 byte-order mark
     const char* hash = std::find(begin, end, '#');
     end = hash;
+    if (!decided) {
+      // The first line with a number decides the separators.
+      size_t words = 0, commas = 0;
+      bool dot = false, many = false, any = false;
+      for (const char* p = begin; p < end;) {
+        while (p < end && (is_space(*p) || *p == ';')) ++p;
+        if (p >= end) break;
+        size_t c = 0;
+        for (; p < end && !is_space(*p) && *p != ';'; ++p) {
+          c += *p == ',';
+          dot = dot || *p == '.';
+          any = any || (*p >= '0' && *p <= '9');
+        }
+        ++words;
+        commas += c > 0;
+        many = many || c > 1;
+      }
+      if (any) {
+        decimal_comma = words >= 3 && commas > 0 && !dot && !many;
+        decided = true;
+      }
+      if (decimal_comma) cloud.warnings.push_back(name + ": read with decimal commas (\"1,5\" is 1.5), as its first line suggests");
+    }
     row.clear();
     const char* p = begin;
     while (true) {
-      while (p < end && (std::isspace(static_cast<unsigned char>(*p)) || *p == ',')) ++p;
+      while (p < end && (is_space(*p) || *p == ';' || (!decimal_comma && *p == ','))) ++p;
       if (p >= end) break;
       const char* stop = p;
-      while (stop < end && !std::isspace(static_cast<unsigned char>(*stop)) && *stop != ',') ++stop;
+      while (stop < end && !is_space(*stop) && *stop != ';' && (decimal_comma || *stop != ',')) ++stop;
+      std::string word(p, stop);
+      if (decimal_comma) std::replace(word.begin(), word.end(), ',', '.');
       double v;
-      const auto r = std::from_chars(p, stop, v);
-      if (r.ec != std::errc() || r.ptr != stop) {
-        error = name + ": line " + std::to_string(line_no) + ": malformed number '" + std::string(p, stop) + "'";
+      const auto r = std::from_chars(word.data(), word.data() + word.size(), v);
+      if (r.ec == std::errc::result_out_of_range) {
+        error = name + ": line " + std::to_string(line_no) + ": '" + word.substr(0, 40) + "' is beyond the range of a double";
+        return false;
+      }
+      if (r.ec != std::errc() || r.ptr != word.data() + word.size()) {
+        error = name + ": line " + std::to_string(line_no) + ": malformed number '" + word.substr(0, 40) + "'";
         return false;
       }
       if (!std::isfinite(v)) {
@@ -436,8 +487,9 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, Point
     if (row.empty()) continue;
     if (columns == 0) {
       columns = row.size();
-      if (columns != 3 && columns != 6 && columns != 9) {
-        error = name + ": line " + std::to_string(line_no) + ": expected 3, 6 or 9 columns (x y z [nx ny nz] [r g b]), got " +
+      if (columns != 3 && columns != 6 && columns != 7 && columns != 9) {
+        error = name + ": line " + std::to_string(line_no) +
+                ": expected 3, 6, 7 or 9 columns (x y z, x y z nx ny nz or x y z r g b, x y z r g b a, x y z nx ny nz r g b), got " +
                 std::to_string(columns);
         return false;
       }
@@ -447,16 +499,43 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, Point
       return false;
     }
     cloud.positions.emplace_back(row[0], row[1], row[2]);
-    if (columns >= 6) {
+    if (columns == 6 || columns == 7) extra.insert(extra.end(), row.begin() + 3, row.begin() + 6);
+    if (columns == 9) {
       Vec3 n(row[3], row[4], row[5]);
       const double len = n.norm();
       cloud.normals.push_back(len > 0 ? Vec3(n / len) : Vec3::Zero());
+      cloud.colors.push_back((Vec3(row[6], row[7], row[8]) / 255.0).cwiseMax(0.0).cwiseMin(1.0));
     }
-    if (columns == 9) cloud.colors.push_back((Vec3(row[6], row[7], row[8]) / 255.0).cwiseMax(0.0).cwiseMin(1.0));
   }
   if (cloud.positions.empty()) {
     error = name + ": no points";
     return false;
+  }
+  if (columns == 6 || columns == 7) {
+    // x y z and three more: colour when every one is an integer in 0..255
+    // and some exceeds 1 (or there are seven columns: r g b a), normals
+    // otherwise. Said, since it is a guess.
+    bool integers = true, above_one = false, unit = true;
+    for (double v : extra) {
+      integers = integers && v >= 0 && v <= 255 && v == std::floor(v);
+      above_one = above_one || v > 1;
+      unit = unit && std::abs(v) <= 1.0 + 1e-6;
+    }
+    if (columns == 7 && !integers) {
+      error = name + ": 7 columns are read as x y z r g b a, but columns 4-7 are not integers 0..255";
+      return false;
+    }
+    if (columns == 7 || (integers && above_one)) {
+      for (size_t i = 0; i < extra.size(); i += 3) cloud.colors.emplace_back(extra[i] / 255, extra[i + 1] / 255, extra[i + 2] / 255);
+      cloud.warnings.push_back(name + ": columns 4-6 read as r g b (integers 0..255); normals would be unit vectors");
+    } else {
+      for (size_t i = 0; i < extra.size(); i += 3) {
+        const Vec3 n(extra[i], extra[i + 1], extra[i + 2]);
+        const double len = n.norm();
+        cloud.normals.push_back(len > 0 ? Vec3(n / len) : Vec3::Zero());
+      }
+      if (!unit) cloud.warnings.push_back(name + ": columns 4-6 read as normals, though they are not unit vectors (normalized)");
+    }
   }
   return true;
 }
@@ -478,9 +557,29 @@ size_t count_duplicate_positions(const std::vector<Vec3>& points) {
 
 bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
                        std::string& error) {
+  // A UTF-8 byte-order mark before a PLY header, or the magic in capitals
+  // ("PLY", which PLY does not allow but some writers produce): read it as
+  // PLY, and say so.
+  std::vector<uint8_t> fixed;
+  std::string note;
+  if (size >= 3 && std::memcmp(data, "\xEF\xBB\xBF", 3) == 0 && size >= 6 &&
+      (std::memcmp(data + 3, "ply", 3) == 0 || std::memcmp(data + 3, "PLY", 3) == 0)) {
+    data += 3;
+    size -= 3;
+    note = "a UTF-8 byte-order mark before the PLY header: skipped";
+  }
+  if (size >= 4 && std::memcmp(data, "PLY", 3) == 0 && (data[3] == '\n' || data[3] == '\r')) {
+    fixed.assign(data, data + size);
+    std::memcpy(fixed.data(), "ply", 3);
+    data = fixed.data();
+    note += std::string(note.empty() ? "" : "; ") + "the PLY magic in capitals ('PLY'): read as 'ply'";
+  }
   const bool ok = size >= 3 && std::memcmp(data, "ply", 3) == 0 ? parse_ply(name, data, size, cloud, error)
-                                                                 : parse_text(name, data, size, cloud, error);
+                  : looks_like_las(data, size)                    ? parse_las(name, data, size, cloud, error)
+                  : looks_like_pcd(data, size)                    ? parse_pcd(name, data, size, cloud, error)
+                                                                  : parse_text(name, data, size, cloud, error);
   if (!ok) return false;
+  if (!note.empty()) cloud.warnings.insert(cloud.warnings.begin(), name + ": " + note);
   // Many points on one value: float32 coordinates far from the origin round
   // onto a coarse lattice (at 1e7, steps of 1), and the scan collapses.
   const size_t duplicates = count_duplicate_positions(cloud.positions);

@@ -8,9 +8,16 @@
 // fan-triangulated and kept for normal estimation. Other elements and
 // properties are skipped.
 //
-// Plain text (any file not starting with "ply"): one point per line,
-// `x y z`, `x y z nx ny nz` or `x y z nx ny nz r g b` (r g b in 0..255); `#`
-// starts a comment; every line must have the same number of columns.
+// PCD (tools/scan/pcd_io.h) and LAS (tools/scan/las_io.h) are told by their
+// signatures and read by their own readers.
+//
+// Plain text (anything else): one point per line, `x y z`, `x y z nx ny nz`,
+// `x y z r g b` (integers 0..255: told from normals by their values, with a
+// warning), `x y z r g b a` or `x y z nx ny nz r g b`; separators
+// whitespace, ',' or ';', or decimal commas where the first line shows them
+// (a warning says so); `#` starts a comment; every line must have the same
+// number of columns. A binary file or a .spg given as a scan is refused as
+// such, naming the byte.
 //
 // Errors are returned, never thrown, as "<path>: <where>: <what>", where
 // <where> names the header line, element index, property or byte offset.

@@ -20,6 +20,8 @@ struct PointCloud {
   std::vector<Vec3> colors;   // empty, or one RGB per point in [0, 1]
   std::vector<std::array<uint32_t, 3>> triangles;  // faces, fan-triangulated
   std::vector<std::string> warnings;  // what the reader noticed or guessed, "<file>: <what>", for the user
+  bool has_viewpoint = false;         // the file says where its sensor stood (PCD's VIEWPOINT)
+  Vec3 viewpoint = Vec3::Zero();
 
   size_t size() const { return positions.size(); }
   bool has_normals() const { return !normals.empty(); }

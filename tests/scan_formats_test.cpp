@@ -1,0 +1,312 @@
+// PCD and LAS readers and the text reader's guesses: every encoding, the
+// values exact, each hostile header refused naming its field, every
+// truncated prefix refused without a crash.
+#include <gtest/gtest.h>
+
+#include <lzf.h>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "tools/scan/ply_io.h"
+
+namespace stipple {
+namespace {
+
+std::vector<uint8_t> bytes(const std::string& s) { return {s.begin(), s.end()}; }
+template <class T>
+void put(std::vector<uint8_t>& out, T v) {
+  uint8_t b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));
+  out.insert(out.end(), b, b + sizeof(T));
+}
+bool parse(const std::string& name, const std::vector<uint8_t>& data, PointCloud& cloud, std::string& error) {
+  return parse_point_cloud(name, data.data(), data.size(), cloud, error);
+}
+bool any_warning(const PointCloud& c, const std::string& text) {
+  for (const std::string& w : c.warnings)
+    if (w.find(text) != std::string::npos) return true;
+  return false;
+}
+
+// Three points of x y z (float), normal_x..z (float), rgb (PCL's packed float),
+// an intensity the reader skips (count 2); the middle one missing (NaN), as an
+// organized cloud of 3 x 1 marks it.
+const float kXyz[3][3] = {{1.5f, -2.25f, 3}, {NAN, NAN, NAN}, {-4, 5.5f, 0.125f}};
+const float kNormal[3][3] = {{0, 0, 1}, {0, 1, 0}, {NAN, NAN, NAN}};
+const uint32_t kRgb[3] = {0x00FF8000u, 0x0000FF00u, 0x00102030u};
+
+std::string pcd_header(const std::string& data, const std::string& viewpoint = "0 0 0 1 0 0 0") {
+  return "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z normal_x normal_y normal_z rgb intensity\n"
+         "SIZE 4 4 4 4 4 4 4 2\nTYPE F F F F F F F U\nCOUNT 1 1 1 1 1 1 1 2\nWIDTH 3\nHEIGHT 1\nVIEWPOINT " + viewpoint +
+         "\nPOINTS 3\nDATA " + data + "\n";
+}
+
+std::vector<uint8_t> pcd(const std::string& data, const std::string& viewpoint = "0 0 0 1 0 0 0") {
+  std::vector<uint8_t> out = bytes(pcd_header(data, viewpoint));
+  if (data == "ascii") {
+    std::string body;
+    char line[256];
+    for (int i = 0; i < 3; ++i) {
+      float rgb;
+      std::memcpy(&rgb, &kRgb[i], 4);
+      std::snprintf(line, sizeof line, "%.9g %.9g %.9g %.9g %.9g %.9g %.9g 7 8\n", kXyz[i][0], kXyz[i][1], kXyz[i][2],
+                    kNormal[i][0], kNormal[i][1], kNormal[i][2], rgb);
+      body += line;
+    }
+    out.insert(out.end(), body.begin(), body.end());
+    return out;
+  }
+  // Records packed field after field (binary), or fields one after another (compressed).
+  std::vector<uint8_t> aos, soa;
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) put(aos, kXyz[i][k]);
+    for (int k = 0; k < 3; ++k) put(aos, kNormal[i][k]);
+    put(aos, kRgb[i]);
+    put(aos, uint16_t{7});
+    put(aos, uint16_t{8});
+  }
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 3; ++i) put(soa, kXyz[i][k]);
+  for (int k = 0; k < 3; ++k)
+    for (int i = 0; i < 3; ++i) put(soa, kNormal[i][k]);
+  for (int i = 0; i < 3; ++i) put(soa, kRgb[i]);
+  for (int i = 0; i < 3; ++i) {
+    put(soa, uint16_t{7});
+    put(soa, uint16_t{8});
+  }
+  if (data == "binary") {
+    out.insert(out.end(), aos.begin(), aos.end());
+  } else {
+    std::vector<uint8_t> packed(soa.size() + 64);
+    const unsigned n = lzf_compress(soa.data(), static_cast<unsigned>(soa.size()), packed.data(), static_cast<unsigned>(packed.size()));
+    EXPECT_GT(n, 0u);
+    put(out, static_cast<uint32_t>(n));
+    put(out, static_cast<uint32_t>(soa.size()));
+    out.insert(out.end(), packed.begin(), packed.begin() + n);
+  }
+  return out;
+}
+
+TEST(Pcd, AsciiBinaryAndCompressedReadTheSamePoints) {
+  for (const char* data : {"ascii", "binary", "binary_compressed"}) {
+    PointCloud c;
+    std::string error;
+    ASSERT_TRUE(parse("scan.pcd", pcd(data), c, error)) << data << ": " << error;
+    ASSERT_EQ(c.size(), 2u) << data;  // the NaN point dropped
+    EXPECT_TRUE(any_warning(c, "1 of 3 points have NaN")) << data;
+    EXPECT_EQ(c.positions[0], Vec3(1.5, -2.25, 3)) << data;
+    EXPECT_EQ(c.positions[1], Vec3(-4, 5.5, 0.125)) << data;
+    ASSERT_TRUE(c.has_normals());
+    EXPECT_EQ(c.normals[0], Vec3(0, 0, 1));
+    EXPECT_EQ(c.normals[1], Vec3::Zero());  // PCL's NaN normal: kept without one
+    EXPECT_TRUE(any_warning(c, "1 points have NaN or zero normals"));
+    ASSERT_TRUE(c.has_colors());
+    EXPECT_EQ(c.colors[0], Vec3(255, 128, 0) / 255.0);
+    EXPECT_EQ(c.colors[1], Vec3(16, 32, 48) / 255.0);
+    EXPECT_FALSE(c.has_viewpoint);  // PCL's default: the origin
+  }
+}
+
+TEST(Pcd, AViewpointOrientsTheScan) {
+  PointCloud c;
+  std::string error;
+  ASSERT_TRUE(parse("scan.pcd", pcd("binary", "10 -2 0.5 1 0 0 0"), c, error)) << error;
+  EXPECT_TRUE(c.has_viewpoint);
+  EXPECT_EQ(c.viewpoint, Vec3(10, -2, 0.5));
+}
+
+TEST(Pcd, HostileHeadersAreRefusedByField) {
+  const struct {
+    std::string from, to, message;
+  } cases[] = {
+      {"POINTS 3", "POINTS 4294967296", "POINTS 4294967296 is not WIDTH x HEIGHT"},
+      {"WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3", "WIDTH 100000000\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 100000000",
+       "POINTS 100000000 of 32 bytes need more than the"},
+      {"SIZE 4 4 4 4 4 4 4 2", "SIZE 4 4 4 4 4 4 4", "SIZE has 7 entries for 8 fields"},
+      {"TYPE F F F F F F F U", "TYPE F F F F F F F Q", "field intensity: TYPE 'Q' is not F, I or U"},
+      {"SIZE 4 4 4 4 4 4 4 2", "SIZE 4 4 2 4 4 4 4 2", "field z: a float of 2 bytes"},
+      {"FIELDS x y z", "FIELDS x y y", "field y appears twice"},
+      {"DATA binary", "DATA zip", "DATA: expected ascii, binary or binary_compressed"},
+      {"VERSION 0.7", "VERSIONS 0.7", "unknown keyword 'VERSIONS'"},
+  };
+  for (const auto& k : cases) {
+    std::string text(reinterpret_cast<const char*>(pcd("binary").data()), pcd("binary").size());
+    const size_t at = text.find(k.from);
+    ASSERT_NE(at, std::string::npos) << k.from;
+    text.replace(at, k.from.size(), k.to);
+    PointCloud c;
+    std::string error;
+    EXPECT_FALSE(parse("scan.pcd", bytes(text), c, error)) << k.to;
+    EXPECT_NE(error.find("scan.pcd: "), std::string::npos) << error;
+    EXPECT_NE(error.find(k.message), std::string::npos) << "got: " << error;
+  }
+  // A compressed block claiming more than it can hold, or corrupt.
+  std::vector<uint8_t> z = pcd("binary_compressed");
+  const size_t block = pcd_header("binary_compressed").size();
+  std::vector<uint8_t> big = z;
+  big[block + 4] = 0xFF, big[block + 5] = 0xFF, big[block + 6] = 0xFF, big[block + 7] = 0x7F;
+  PointCloud c;
+  std::string error;
+  EXPECT_FALSE(parse("scan.pcd", big, c, error));
+  EXPECT_NE(error.find("the block uncompresses to"), std::string::npos) << error;
+  std::vector<uint8_t> bad = z;
+  for (size_t i = block + 8; i < bad.size(); ++i) bad[i] = 0xE0;  // back references before the start
+  EXPECT_FALSE(parse("scan.pcd", bad, c, error));
+  EXPECT_NE(error.find("the LZF block is corrupt"), std::string::npos) << error;
+}
+
+// A LAS file: version 1.minor, point format `format`, three points with a
+// large offset (a survey's: 5e5 east, 5e6 north), scale 1 mm.
+std::vector<uint8_t> las(int minor, int format, uint16_t rgb_max = 65535) {
+  const uint16_t header = minor >= 4 ? 375 : minor == 3 ? 235 : 227;
+  const uint16_t record[11] = {20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67};
+  const uint16_t rgb_at[11] = {0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30};
+  std::vector<uint8_t> out(header, 0);
+  std::memcpy(out.data(), "LASF", 4);
+  out[24] = 1;
+  out[25] = static_cast<uint8_t>(minor);
+  std::memcpy(&out[94], &header, 2);
+  const uint32_t offset = header;
+  std::memcpy(&out[96], &offset, 4);
+  out[104] = static_cast<uint8_t>(format);
+  std::memcpy(&out[105], &record[format], 2);
+  const uint32_t count = 3;
+  if (minor >= 4 && format >= 6) {
+    const uint64_t count64 = 3;
+    std::memcpy(&out[247], &count64, 8);
+  } else {
+    std::memcpy(&out[107], &count, 4);
+  }
+  const double scale[3] = {0.001, 0.001, 0.001}, shift[3] = {500000, 5000000, 100};
+  std::memcpy(&out[131], scale, 24);
+  std::memcpy(&out[155], shift, 24);
+  const int32_t xyz[3][3] = {{1, 2, 3}, {-1000, 123456789, 0}, {2147483647, -2147483647, 42}};
+  for (int i = 0; i < 3; ++i) {
+    std::vector<uint8_t> r(record[format], 0);
+    std::memcpy(&r[0], xyz[i], 12);
+    if (rgb_at[format]) {
+      const uint16_t rgb[3] = {rgb_max, static_cast<uint16_t>(rgb_max / 2), static_cast<uint16_t>(i)};
+      std::memcpy(&r[rgb_at[format]], rgb, 6);
+    }
+    out.insert(out.end(), r.begin(), r.end());
+  }
+  return out;
+}
+
+TEST(Las, EveryPointFormatWithItsOffsetInDoublePrecision) {
+  for (int minor : {2, 3, 4})
+    for (int format = 0; format <= 10; ++format) {
+      if (minor < 4 && format > 5) continue;
+      PointCloud c;
+      std::string error;
+      ASSERT_TRUE(parse("survey.las", las(minor, format), c, error)) << "1." << minor << " format " << format << ": " << error;
+      ASSERT_EQ(c.size(), 3u);
+      // Millimetres survive the offset: no float32 on the way.
+      EXPECT_LT((c.positions[0] - Vec3(500000.001, 5000000.002, 100.003)).cwiseAbs().maxCoeff(), 1e-8);
+      EXPECT_LT((c.positions[1] - Vec3(499999.0, 5123456.789, 100)).cwiseAbs().maxCoeff(), 1e-8);
+      EXPECT_LT(std::abs(c.positions[2].x() - 2647483.647), 1e-8);
+      const bool rgb = format == 2 || format == 3 || format == 5 || format == 7 || format == 8 || format == 10;
+      ASSERT_EQ(c.has_colors(), rgb) << format;
+      if (rgb) {
+        EXPECT_EQ(c.colors[0], Vec3(1, 32767.0 / 65535, 0));
+        EXPECT_EQ(c.colors[2], Vec3(1, 32767.0 / 65535, 2.0 / 65535));
+      }
+    }
+}
+
+TEST(Las, EightBitColourLazAndHostileHeadersAreSaidSo) {
+  PointCloud c;
+  std::string error;
+  ASSERT_TRUE(parse("survey.las", las(2, 2, 200), c, error)) << error;
+  EXPECT_EQ(c.colors[0], Vec3(200, 100, 0) / 255.0);
+  EXPECT_TRUE(any_warning(c, "read as 8-bit colour"));
+  std::vector<uint8_t> f = las(2, 3);
+  f[104] = 0x83;  // LASzip's compressed format 3
+  EXPECT_FALSE(parse("survey.laz", f, c, error));
+  EXPECT_NE(error.find("survey.laz: this is LAZ (compressed LAS"), std::string::npos) << error;
+  EXPECT_NE(error.find("laszip"), std::string::npos) << error;
+  const struct {
+    size_t at;
+    std::vector<uint8_t> value;
+    std::string message;
+  } cases[] = {
+      {25, {5}, "LAS version 1.5"},
+      {104, {11}, "point data format 11"},
+      {105, {10, 0}, "records of 10 bytes, point format 3 needs 34"},
+      {107, {0xFF, 0xFF, 0xFF, 0xFF}, "header byte 107: 4294967295 points of 34 bytes need more than"},
+      {96, {0xFF, 0xFF, 0, 0}, "header byte 96: point data at byte 65535"},
+      {131, {0, 0, 0, 0, 0, 0, 0, 0}, "header byte 131: scale factor x is 0"},
+      {94, {10, 0}, "header byte 94: a header size of 10 bytes"},
+  };
+  for (const auto& k : cases) {
+    std::vector<uint8_t> g = las(2, 3);
+    std::copy(k.value.begin(), k.value.end(), g.begin() + static_cast<ptrdiff_t>(k.at));
+    EXPECT_FALSE(parse("survey.las", g, c, error)) << k.message;
+    EXPECT_NE(error.find(k.message), std::string::npos) << "got: " << error;
+  }
+}
+
+TEST(ScanFormats, EveryTruncatedPrefixIsRefusedOrReadWithoutACrash) {
+  for (const std::vector<uint8_t>& f : {las(4, 7), pcd("binary"), pcd("binary_compressed"), pcd("ascii")}) {
+    for (size_t n = 0; n < f.size(); ++n) {
+      std::vector<uint8_t> prefix(f.begin(), f.begin() + static_cast<ptrdiff_t>(n));
+      PointCloud c;
+      std::string error;
+      if (parse("cut.pcd", prefix, c, error)) {
+        for (const Vec3& p : c.positions) ASSERT_TRUE(p.allFinite());
+      } else {
+        ASSERT_EQ(error.rfind("cut.pcd: ", 0), 0u) << error;
+      }
+    }
+  }
+}
+
+TEST(TextScan, ColourColumnsDecimalCommasAndBinaryFilesAreTold) {
+  PointCloud c;
+  std::string error;
+  // x y z r g b as integers: colour, said.
+  ASSERT_TRUE(parse("scan.xyz", bytes("0 0 0 255 128 0\n1 0 0 0 0 10\n"), c, error)) << error;
+  EXPECT_FALSE(c.has_normals());
+  ASSERT_TRUE(c.has_colors());
+  EXPECT_EQ(c.colors[0], Vec3(255, 128, 0) / 255.0);
+  EXPECT_TRUE(any_warning(c, "columns 4-6 read as r g b"));
+  // Unit vectors: normals.
+  ASSERT_TRUE(parse("scan.xyz", bytes("0 0 0 0 0 1\n1 0 0 1 0 0\n"), c, error)) << error;
+  EXPECT_TRUE(c.has_normals());
+  EXPECT_FALSE(c.has_colors());
+  // Decimal commas, and semicolons between numbers.
+  ASSERT_TRUE(parse("scan.xyz", bytes("1,5 2,25 3\n-4,5 0 1,125\n"), c, error)) << error;
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.positions[0], Vec3(1.5, 2.25, 3));
+  EXPECT_EQ(c.positions[1], Vec3(-4.5, 0, 1.125));
+  EXPECT_TRUE(any_warning(c, "decimal commas"));
+  ASSERT_TRUE(parse("scan.csv", bytes("1,5;2,25;3\n"), c, error)) << error;
+  EXPECT_EQ(c.positions[0], Vec3(1.5, 2.25, 3));
+  ASSERT_TRUE(parse("scan.csv", bytes("1.5,2.25,3\n"), c, error)) << error;  // plain CSV
+  EXPECT_EQ(c.positions[0], Vec3(1.5, 2.25, 3));
+  // A UTF-8 byte-order mark.
+  ASSERT_TRUE(parse("scan.xyz", bytes("\xEF\xBB\xBF" "1 2 3\n"), c, error)) << error;
+  EXPECT_EQ(c.positions[0], Vec3(1, 2, 3));
+  // PLY behind a byte-order mark, or with its magic in capitals.
+  const std::string ply = "\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n";
+  ASSERT_TRUE(parse("bom.ply", bytes("\xEF\xBB\xBF" "ply" + ply), c, error)) << error;
+  EXPECT_EQ(c.positions[0], Vec3(1, 2, 3));
+  EXPECT_TRUE(any_warning(c, "byte-order mark"));
+  ASSERT_TRUE(parse("caps.ply", bytes("PLY" + ply), c, error)) << error;
+  EXPECT_EQ(c.positions[0], Vec3(1, 2, 3));
+  EXPECT_TRUE(any_warning(c, "the PLY magic in capitals"));
+  // 1e999 is out of range, said as such.
+  EXPECT_FALSE(parse("scan.xyz", bytes("1 2 1e999\n"), c, error));
+  EXPECT_NE(error.find("line 1: '1e999' is beyond the range of a double"), std::string::npos) << error;
+  // A .spg or a binary file given as a scan.
+  EXPECT_FALSE(parse("model.spg", bytes(std::string("STPG\x02\x00\x01\x00", 8)), c, error));
+  EXPECT_NE(error.find("model.spg: byte 4: this is a .spg model, not a scan"), std::string::npos) << error;
+  EXPECT_FALSE(parse("blob.bin", bytes(std::string("12 3\x01\x02", 6)), c, error));
+  EXPECT_NE(error.find("blob.bin: byte 4: a binary byte (1)"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace stipple
