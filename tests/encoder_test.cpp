@@ -2,6 +2,8 @@
 // metrics on synthetic and real scans.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <filesystem>
 #include <fstream>
 
@@ -141,6 +143,23 @@ TEST(Encoder, DecodedNodesMatchTheEncoderWithinQuantization) {
   uint64_t leaf_sum = 0;
   for (const DecodedNode& n : m.nodes) leaf_sum += n.leaf() ? n.point_count : 0;
   EXPECT_EQ(leaf_sum, 3000u);
+}
+
+// The variance floor is a length for positions only: a scan 1e15 units
+// across keeps the normal spreads it has at unit size (they were floored
+// at 1e-15 of the diagonal, which above ~4e12 units turned every sigma_n
+// into radians of noise and destroyed the shading).
+TEST(Encoder, NormalSpreadsDoNotGrowWithTheScansSize) {
+  std::vector<double> sigma_n[2];
+  for (int k = 0; k < 2; ++k) {
+    PointCloud c = test::sphere_cloud(2000);
+    if (k == 1)
+      for (Vec3& p : c.positions) p *= 1e15;  // the old floor: 3.5 rad
+    const DecodedModel m = test::decode(test::encode(c));
+    for (const Vec2& s : m.sigma_n) sigma_n[k].push_back(s[0]);
+  }
+  ASSERT_EQ(sigma_n[0].size(), sigma_n[1].size());
+  for (size_t i = 0; i < sigma_n[0].size(); ++i) EXPECT_NEAR(sigma_n[1][i], sigma_n[0][i], 1e-3) << "class " << i;
 }
 
 TEST(Encoder, SampledLeavesReproduceTheSurface) {

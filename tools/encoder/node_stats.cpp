@@ -99,11 +99,11 @@ NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, con
     g.sigma[2] *= beta;
   }
   for (int k = 0; k < 3; ++k) g.sigma[k] = std::max(g.sigma[k], o.sigma_floor);
-  if (normals) s.sigma_n = s.sigma_n.cwiseMax(o.sigma_floor);
+  if (normals) s.sigma_n = s.sigma_n.cwiseMax(o.spread_floor);
 
   if (o.colors && cloud.has_colors()) {
     s.color = pca3(cloud.colors.data(), ids, n);
-    for (int k = 0; k < 3; ++k) s.color.sigma[k] = std::max(s.color.sigma[k], o.sigma_floor);
+    for (int k = 0; k < 3; ++k) s.color.sigma[k] = std::max(s.color.sigma[k], o.spread_floor);
   }
   return s;
 }

@@ -14,8 +14,10 @@
 //                    average normal (any perpendicular without normals);
 //   three          — f3 along the average normal (z without normals), f1, f2
 //                    any tangent pair.
-// With normals, f3 is always flipped to agree with the mean normal. Every sigma
-// is then floored at `sigma_floor`.
+// With normals, f3 is always flipped to agree with the mean normal. Position
+// sigmas are then floored at `sigma_floor` (a length: the encoder scales it
+// with the scan), normal and colour sigmas at `spread_floor` (radians and
+// colour units, whatever the scan's size).
 //
 // Normals: z = the mean normal m; each normal is mapped to the tangent plane at
 // m by the log map (u, v) = theta (cos phi, sin phi) — theta its angle from m,
@@ -54,7 +56,8 @@ struct NodeStats {
 };
 
 struct StatsOptions {
-  double sigma_floor = 1e-15;
+  double sigma_floor = 1e-15;   // positions: a length
+  double spread_floor = 1e-12;  // normals (radians) and colours (0..1): not a length
   double vanish_ratio = 1e-6;
   bool normals = true;
   bool colors = true;
