@@ -3,7 +3,8 @@
 # Release build by clang (its warnings; the golden images from a second
 # compiler), then the cross builds for ARMv5TE soft-float, ARMv7-A and
 # AArch64 (core, raster, the handheld program and their tests under
-# qemu-user). Exits non-zero on the first failure.
+# qemu-user), then fuzzes every libFuzzer harness for FUZZ_SECONDS (60) each
+# under ASan + UBSan (.ci/fuzz.sh). Exits non-zero on the first failure.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 for preset in release asan clang armv5 armv7 aarch64; do
@@ -12,3 +13,5 @@ for preset in release asan clang armv5 armv7 aarch64; do
   cmake --build --preset "$preset"
   ctest --preset "$preset" -j2
 done
+echo "== fuzz =="
+FUZZ_SECONDS=${FUZZ_SECONDS:-60} bash .ci/fuzz.sh

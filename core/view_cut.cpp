@@ -127,8 +127,11 @@ CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void*
     b.points = 0;
     // The statistical cone for now (its sine, and its cosine in pad0's
     // place until the pass below).
-    const Cone cone = normals_ ? statistical_cone(node.sigma_n[0], b.children ? cones.gamma_q8 : cones.leaf_gamma_q8)
-                               : Cone{kNoCone, 0};
+    // A node of no extent (coincident points) has no surface to face away:
+    // it is never back-face culled (its normal is the estimator's guess).
+    const Cone cone = normals_ && b.radius > 0
+                          ? statistical_cone(node.sigma_n[0], b.children ? cones.gamma_q8 : cones.leaf_gamma_q8)
+                          : Cone{kNoCone, 0};
     b.cone_sin_q14 = static_cast<int16_t>(cone.sin);
     b.pad0 = static_cast<uint16_t>(cone.cos);
   }

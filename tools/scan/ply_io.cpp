@@ -590,7 +590,7 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
     std::snprintf(text, sizeof text,
                   "%s: %zu of %zu points (%.1f %%) repeat another point's position exactly%s", name.c_str(),
                   duplicates, cloud.size(), 100.0 * static_cast<double>(duplicates) / static_cast<double>(cloud.size()),
-                  far > 1e5 * std::max(box.diagonal(), 1e-300)
+                  (box.diagonal() > 0 && far > 1e5 * box.diagonal()) || (box.diagonal() == 0 && far >= 1e5)
                       ? "; the coordinates are far from the origin for their extent: float32 values there round onto a "
                         "coarse lattice (subtract an offset before storing them as float)"
                       : "");
@@ -606,22 +606,33 @@ bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& e
 }
 
 bool write_ply(const std::string& path, const PointCloud& cloud, std::string& error) {
+  // Positions in double: a float32 position loses everything below 1 unit
+  // at 1e7 from the origin (a survey's coordinates), so a sampled model read
+  // back would measure the format, not the model.
+  for (size_t i = 0; i < cloud.size(); ++i)
+    if (!cloud.positions[i].allFinite())
+      return error = path + ": point " + std::to_string(i) + " is not finite: nothing written", false;
   std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by stipple\nelement vertex " +
-                       std::to_string(cloud.size()) + "\nproperty float x\nproperty float y\nproperty float z\n";
+                       std::to_string(cloud.size()) + "\nproperty double x\nproperty double y\nproperty double z\n";
   if (cloud.has_normals()) header += "property float nx\nproperty float ny\nproperty float nz\n";
   if (cloud.has_colors()) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   header += "end_header\n";
   std::vector<uint8_t> out(header.begin(), header.end());
-  const size_t stride = 12 + (cloud.has_normals() ? 12 : 0) + (cloud.has_colors() ? 3 : 0);
+  const size_t stride = 24 + (cloud.has_normals() ? 12 : 0) + (cloud.has_colors() ? 3 : 0);
   out.reserve(out.size() + stride * cloud.size());
   auto put_float = [&](double v) {
-    const float f = static_cast<float>(v);
+    const float f = std::isfinite(v) ? static_cast<float>(std::clamp(v, -1.0, 1.0)) : 0.0f;  // unit normals
     uint8_t b[4];
     std::memcpy(b, &f, 4);  // little-endian host (x86-64, ARM Linux)
     out.insert(out.end(), b, b + 4);
   };
+  auto put_double = [&](double v) {
+    uint8_t b[8];
+    std::memcpy(b, &v, 8);
+    out.insert(out.end(), b, b + 8);
+  };
   for (size_t i = 0; i < cloud.size(); ++i) {
-    for (int k = 0; k < 3; ++k) put_float(cloud.positions[i][k]);
+    for (int k = 0; k < 3; ++k) put_double(cloud.positions[i][k]);
     if (cloud.has_normals())
       for (int k = 0; k < 3; ++k) put_float(cloud.normals[i][k]);
     if (cloud.has_colors())

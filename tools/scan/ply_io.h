@@ -43,8 +43,9 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
 // Points whose position equals an earlier point's (exact comparison).
 size_t count_duplicate_positions(const std::vector<Vec3>& points);
 
-// Writes binary little-endian PLY: float x y z, then float nx ny nz and uchar
-// red green blue when present.
+// Writes binary little-endian PLY: double x y z (no float32 rounding far
+// from the origin), then float nx ny nz and uchar red green blue when
+// present. Refuses (writing nothing) a cloud with a non-finite position.
 bool write_ply(const std::string& path, const PointCloud& cloud, std::string& error);
 
 }  // namespace stipple

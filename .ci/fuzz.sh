@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Fuzzes every libFuzzer harness for a bounded time under ASan + UBSan
+# (clang; every library instrumented): the .spg reader, decoder and client
+# (spg), every scan reader — PLY, PCD, LAS, text (scan), the node stream's
+# frame reader, StreamReceiver and serial deframer (stream). Starts each from
+# its small seeds (tests/fuzz/seeds: under a few KB, so a run makes thousands
+# of executions a second) and the crashes found before, which are regression
+# inputs (tests/fuzz/regressions/HARNESS/, replayed by every build's tests).
+# A crash fails the run; its input is kept under build/fuzz/crashes/ — add it
+# to tests/fuzz/regressions/HARNESS/ with the fix. Prints each harness's
+# executions.
+#   FUZZ_SECONDS=60 (per harness) bash .ci/fuzz.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${FUZZ_SECONDS:-60}
+build=build/fuzz
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DSTIPPLE_FUZZ=ON \
+  -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1 -g" >/dev/null
+cmake --build "$build" -j2 --target spg_fuzz scan_fuzz stream_fuzz
+mkdir -p "$build/crashes"
+status=0
+for harness in spg scan stream; do
+  corpus=$build/corpus/$harness
+  rm -rf "$corpus" && mkdir -p "$corpus"
+  case $harness in
+    spg) cp tests/fuzz/seeds/tiny.spg "$corpus/"; max_len=4096 ;;
+    scan) cp tests/fuzz/seeds/tiny* "$corpus/"; rm -f "$corpus/tiny.spg"; max_len=4096 ;;
+    stream) cp tests/fuzz/seeds/sphere_stream.* "$corpus/"; max_len=8192 ;;
+  esac
+  [ -d "tests/fuzz/regressions/$harness" ] && cp tests/fuzz/regressions/$harness/* "$corpus/" 2>/dev/null || true
+  log=$build/$harness.log
+  if ! "$build/tests/${harness}_fuzz" "$corpus" -max_total_time="$seconds" -max_len="$max_len" -timeout=10 \
+      -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="$build/crashes/$harness-" >"$log" 2>&1; then
+    echo "== fuzz $harness: FAILED (input kept in $build/crashes/) =="
+    tail -40 "$log"
+    status=1
+  fi
+  runs=$(sed -n 's/^stat::number_of_executed_units: *\([0-9]*\)/\1/p' "$log" | tail -1)
+  echo "fuzz $harness: ${runs:-?} executions in ${seconds} s"
+done
+exit $status
