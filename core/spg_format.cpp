@@ -155,6 +155,8 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   using namespace spg_offset;
   h.version = load_u16le(data + kVersion);
   if (h.version < kSpgOldestVersion || h.version > kSpgVersion) return fail(SpgError::kBadVersion, kVersion);
+  const size_t header_bytes = spg_fixed_header_bytes(h.version);
+  if (size < header_bytes) return fail(SpgError::kTruncated, size);
   h.flags = load_u16le(data + kFlags);
   if ((h.flags & ~kAttrKnownMask) != 0) return fail(SpgError::kBadFlags, kFlags);
   h.tree_arity = data[kArity];
@@ -190,7 +192,7 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   // Every node needs a record and every leaf at least one LEB128 byte: bound
   // the counts by the file size before anything is sized from them.
   const uint64_t min_body = static_cast<uint64_t>(h.node_count) * h.layout.record_bytes() + h.leaf_count + 4;
-  if (whole_file && min_body > size - kSpgFixedHeaderBytes) return fail(SpgError::kBadCounts, kNodeCount);
+  if (whole_file && min_body > size - header_bytes) return fail(SpgError::kBadCounts, kNodeCount);
   for (int i = 0; i < 6; ++i) {
     h.bbox_bits[i] = load_u32le(data + kBboxMin + 4 * i);
     if (!f32_finite(h.bbox_bits[i])) return fail(SpgError::kBadFloat, kBboxMin + 4 * static_cast<size_t>(i));
@@ -203,12 +205,18 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   if (!class_field_ok(h.layout.width(Field::kSigmaN), h.class_count[1], normals)) return fail(SpgError::kBadClassCount, kClassCounts + 2);
   if (!class_field_ok(h.layout.width(Field::kSigmaC), h.class_count[2], color)) return fail(SpgError::kBadClassCount, kClassCounts + 4);
   if (load_u16le(data + kReserved) != 0) return fail(SpgError::kBadLayout, kReserved);
-  in.pos = kSpgFixedHeaderBytes;
+  // Version 2's origin: three finite float64.
+  for (int a = 0; a < 3 && h.version >= 2; ++a) {
+    const uint64_t bits = uint64_t{load_u32le(data + kOrigin + 8 * a)} | uint64_t{load_u32le(data + kOrigin + 8 * a + 4)} << 32;
+    if (((bits >> 52) & 0x7FFu) == 0x7FFu) return fail(SpgError::kBadFloat, kOrigin + 8 * static_cast<size_t>(a));
+    h.origin_bits[a] = bits;
+  }
+  in.pos = header_bytes;
 
   // §2 class tables: non-negative finite float32 (version 1) or 16-bit
   // codes, every one of which is a valid value (version 2).
   const size_t value_bytes = spg_class_value_bytes(h.version);
-  const size_t table_bytes = spg_startup_bytes(h.version, h.class_count) - kSpgFixedHeaderBytes;
+  const size_t table_bytes = spg_startup_bytes(h.version, h.class_count) - header_bytes;
   if (in.remaining() < table_bytes) return fail(SpgError::kTruncated, size);
   view.sigma_p = data + in.pos;
   view.sigma_n = view.sigma_p + 3 * value_bytes * h.class_count[0];

@@ -21,10 +21,16 @@ namespace stipple {
 inline constexpr uint8_t kSpgMagic[4] = {'S', 'T', 'P', 'G'};
 // The version written; the reader also takes every version from
 // kSpgOldestVersion. Version 1 stores the class tables as float32, version 2
-// as 16-bit codes (docs/format.md §2); nothing else differs.
+// as 16-bit codes (docs/format.md §2) and adds an origin to the fixed header
+// (§1: the bounding box is stored relative to it, so a survey's coordinates
+// 1e7 from the origin keep their millimetres in the float32 box).
 inline constexpr uint16_t kSpgVersion = 2;
 inline constexpr uint16_t kSpgOldestVersion = 1;
-inline constexpr size_t kSpgFixedHeaderBytes = 76;
+inline constexpr size_t kSpgFixedHeaderBytes = 76;    // version 1's fixed header, the start of every version's
+inline constexpr size_t kSpgOriginBytes = 24;         // version 2: 3 x float64 after it
+inline size_t spg_fixed_header_bytes(uint16_t version) {
+  return version == 1 ? kSpgFixedHeaderBytes : kSpgFixedHeaderBytes + kSpgOriginBytes;
+}
 
 // Byte offsets of the fixed header's fields (docs/format.md §1): the reader,
 // the writer (core/spg_writer.h) and every tool use these names.
@@ -45,6 +51,7 @@ inline constexpr size_t kBboxMax = 56;       // 3 x float32
 inline constexpr size_t kClassCounts = 68;   // 3 x u16: sigma_p, sigma_n, sigma_c
 inline constexpr size_t kReserved = 74;      // u16, 0
 static_assert(kReserved + 2 == kSpgFixedHeaderBytes);
+inline constexpr size_t kOrigin = 76;        // version 2: 3 x float64, what the box is relative to
 }  // namespace spg_offset
 
 // An axis direction as the view hint stores it in 3 bits: 0 none, then
@@ -79,7 +86,7 @@ inline size_t spg_class_value_bytes(uint16_t version) { return version == 1 ? 4 
 // (§1-§2), the prefix a client needs before any node record. Its length for
 // a header's version and class counts.
 inline size_t spg_startup_bytes(uint16_t version, const uint16_t class_count[3]) {
-  return kSpgFixedHeaderBytes + spg_class_value_bytes(version) * (3 * size_t{class_count[0]} + 2 * size_t{class_count[1]} +
+  return spg_fixed_header_bytes(version) + spg_class_value_bytes(version) * (3 * size_t{class_count[0]} + 2 * size_t{class_count[1]} +
                                                                    3 * size_t{class_count[2]});
 }
 
@@ -133,7 +140,8 @@ struct SpgHeader {
   uint32_t point_count = 0;  // original points the tree was built from
   uint16_t depth = 0;        // deepest level; the root is level 0
   SpgViewHint view_hint;     // up axis and sensor side, or none
-  uint32_t bbox_bits[6] = {};  // float32 bit patterns: min x y z, max x y z
+  uint32_t bbox_bits[6] = {};  // float32 bit patterns: min x y z, max x y z, relative to the origin
+  uint64_t origin_bits[3] = {};  // float64 bit patterns (version 2; zero, the origin, in version 1)
   uint16_t class_count[3] = {};  // sigma_p, sigma_n, sigma_c
 
   bool has_normals() const { return (flags & kAttrNormals) != 0; }

@@ -20,12 +20,17 @@ void write_fixed_header(const SpgHeader& h, uint8_t* out) {
   for (int i = 0; i < 6; ++i) store_u32le(out + kBboxMin + 4 * i, h.bbox_bits[i]);
   for (int c = 0; c < 3; ++c) store_u16le(out + kClassCounts + 2 * c, h.class_count[c]);
   store_u16le(out + kReserved, 0);
+  if (h.version >= 2)
+    for (int a = 0; a < 3; ++a) {
+      store_u32le(out + kOrigin + 8 * a, static_cast<uint32_t>(h.origin_bits[a]));
+      store_u32le(out + kOrigin + 8 * a + 4, static_cast<uint32_t>(h.origin_bits[a] >> 32));
+    }
 }
 
 // False when a version-2 code does not fit its 16 bits.
 bool write_startup(const SpgHeader& h, const SpgClassTables& t, uint8_t* out) {
   write_fixed_header(h, out);
-  uint8_t* at = out + kSpgFixedHeaderBytes;
+  uint8_t* at = out + spg_fixed_header_bytes(h.version);
   const uint32_t* tables[3] = {t.sigma_p, t.sigma_n, t.sigma_c};
   const size_t per_class[3] = {3, 2, 3};
   const bool floats = spg_class_value_bytes(h.version) == 4;
@@ -103,7 +108,7 @@ SpgWriteStatus spg_write_startup_le(const SpgHeader& h, const uint8_t* sigma_p, 
   for (int c = 0; c < 3; ++c)
     if (h.class_count[c] > 0 && tables[c] == nullptr) return SpgWriteStatus::kBadHeader;
   write_fixed_header(h, out);
-  uint8_t* at = out + kSpgFixedHeaderBytes;
+  uint8_t* at = out + spg_fixed_header_bytes(h.version);
   const size_t b = spg_class_value_bytes(h.version), per_class[3] = {3 * b, 2 * b, 3 * b};
   for (int c = 0; c < 3; ++c)
     for (size_t i = 0; i < per_class[c] * h.class_count[c]; ++i) *at++ = tables[c][i];
@@ -135,10 +140,10 @@ SpgWriteStatus spg_write(const SpgContent& c, uint8_t* out, size_t capacity, siz
     uint32_t v = c.leaf_points[i];
     do ++leb_bytes; while (v >>= 7);
   }
-  const size_t table_bytes = spg_startup_bytes(h.version, h.class_count) - kSpgFixedHeaderBytes;
+  const size_t table_bytes = spg_startup_bytes(h.version, h.class_count) - spg_fixed_header_bytes(h.version);
   const size_t topology_bytes = static_cast<size_t>((uint64_t{h.node_count} * (h.tree_arity == 8 ? 4 : 1) + 7) / 8);
   const size_t record_bytes = static_cast<size_t>(h.layout.record_bytes());
-  const size_t size = kSpgFixedHeaderBytes + table_bytes + topology_bytes + leb_bytes + size_t{h.node_count} * record_bytes + 4;
+  const size_t size = spg_fixed_header_bytes(h.version) + table_bytes + topology_bytes + leb_bytes + size_t{h.node_count} * record_bytes + 4;
   if (capacity < size) return SpgWriteStatus::kOutputTooSmall;
 
   size_t startup = 0;

@@ -7,13 +7,17 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <random>
 #include <string>
 
 #include "test_util.h"
 #include "tools/embedded/embedded.h"
+#include "tools/reference/metrics.h"
 #include "tools/reference/render.h"
+#include "tools/reference/sampler.h"
+#include "tools/scan/ply_io.h"
 
 namespace stipple {
 namespace {
@@ -44,9 +48,10 @@ std::vector<Case> cases() {
   out.push_back({"scaled 1e6", [] { return transformed(1e6, Vec3::Zero()); }, 0.15, 28});
   out.push_back({"scaled 1e12", [] { return transformed(1e12, Vec3::Zero()); }, 0.15, 28});
   out.push_back({"1 unit at 1e7 from the origin", [] { return transformed(1, Vec3(1e7, -1e7, 1e7)); }, 0.15, 28});
-  // Known limit (docs/robustness.md): the stored box is float32, so 1 cm at
-  // 1e7 is drawn inside a box rounded out to whole units — a speck.
-  out.push_back({"1 cm at 1e7 from the origin (float32 box)", [] { return transformed(0.01, Vec3(1e7, -1e7, 1e7)); }, 0, 0});
+  // The stored box is float32 relative to a float64 origin (format version
+  // 2): 1 cm at 1e7 is drawn as the unit sphere is (in version 1 it was a
+  // speck of two points inside a box rounded out to whole units).
+  out.push_back({"1 cm at 1e7 from the origin", [] { return transformed(0.01, Vec3(1e7, -1e7, 1e7)); }, 0.15, 28});
   out.push_back({"all points identical", [] { return from_points(std::vector<Vec3>(500, Vec3(3, -2, 1))); }, 0, 0});
   out.push_back({"two points", [] { return from_points({Vec3(0, 0, 0), Vec3(1, 2, 3)}); }, 0, 0});
   out.push_back({"collinear", [] {
@@ -119,6 +124,31 @@ TEST(Extremes, EveryCaseEncodesDrawsAndStaysFinite) {
       EXPECT_GE(psnr, k.min_psnr);
     }
   }
+}
+
+// A sampled model written and read back keeps its precision far from the
+// origin: positions are written as doubles (float32 rounded 1 cm at 1e7 to
+// whole units: 17 dB instead of 52).
+TEST(Extremes, SampledPointsFarFromTheOriginKeepTheirPrecision) {
+  const PointCloud original = transformed(0.01, Vec3(1e7, -1e7, 1e7), 20000);
+  const DecodedModel m = test::decode(test::encode(original));
+  const PointCloud leaves = sample_cut(m, leaf_cut(m), 0);
+  const std::string path = "extremes_sample.ply";
+  std::string error;
+  ASSERT_TRUE(write_ply(path, leaves, error)) << error;
+  PointCloud back;
+  ASSERT_TRUE(read_point_cloud(path, back, error)) << error;
+  std::remove(path.c_str());
+  const CloudMetrics before = compare_clouds(original, leaves), after = compare_clouds(original, back);
+  std::printf("1 cm at 1e7: sampled leaves %.2f dB, written and read back %.2f dB\n", before.psnr_one_sided, after.psnr_one_sided);
+  EXPECT_GT(before.psnr_one_sided, 49.5);
+  EXPECT_NEAR(after.psnr_one_sided, before.psnr_one_sided, 0.01);
+  // A non-finite point is refused, nothing written.
+  PointCloud bad = back;
+  bad.positions[5].x() = INFINITY;
+  EXPECT_FALSE(write_ply(path, bad, error));
+  EXPECT_NE(error.find("point 5 is not finite"), std::string::npos) << error;
+  EXPECT_FALSE(std::filesystem::exists(path));
 }
 
 }  // namespace

@@ -104,7 +104,7 @@ TEST(SpgFormat, EveryVariantParses) {
     const size_t b = variant.version == 1 ? 4 : 2;
     EXPECT_EQ(static_cast<size_t>(v.sigma_n - v.sigma_p), 3 * b * v.header.class_count[0]);
     EXPECT_EQ(spg_startup_bytes(v.header.version, v.header.class_count),
-              kSpgFixedHeaderBytes + b * (3u * v.header.class_count[0] + 2u * v.header.class_count[1] + 3u * v.header.class_count[2]));
+              spg_fixed_header_bytes(variant.version) + b * (3u * v.header.class_count[0] + 2u * v.header.class_count[1] + 3u * v.header.class_count[2]));
   }
 }
 
@@ -185,7 +185,7 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
     EXPECT_EQ(r.offset, c.offset);
   }
   std::vector<uint8_t> g = f;
-  for (size_t i = 76; i < 82; ++i) g[i] = 0xFF;  // the largest sigma_p code, thrice
+  for (size_t i = spg_fixed_header_bytes(2); i < spg_fixed_header_bytes(2) + 6; ++i) g[i] = 0xFF;  // the largest sigma_p code, thrice
   fix_crc(g);
   EXPECT_EQ(parse_error(g), SpgError::kOk);
 }

@@ -112,7 +112,7 @@ int cmd_info(int argc, char** argv) {
         .integer("classes_p", h.class_count[0])
         .integer("classes_n", h.class_count[1])
         .integer("classes_c", h.class_count[2])
-        .integer("class_table_bytes", static_cast<long long>(spg_startup_bytes(h.version, h.class_count) - kSpgFixedHeaderBytes))
+        .integer("class_table_bytes", static_cast<long long>(spg_startup_bytes(h.version, h.class_count) - spg_fixed_header_bytes(h.version)))
         .num("apr", ratios.apr)
         .num("capr", ratios.capr)
         .integer("capr_excluded", static_cast<long long>(ratios.capr_excluded))
@@ -133,14 +133,19 @@ int cmd_info(int argc, char** argv) {
   std::printf("  file         %s bytes, %.2f bits per original point\n", cli::with_commas(file.size()).c_str(), bpp);
   std::printf("  classes      sigma_p %u, sigma_n %u, sigma_c %u (tables %s bytes, %s)\n", h.class_count[0],
               h.class_count[1], h.class_count[2],
-              cli::with_commas(spg_startup_bytes(h.version, h.class_count) - kSpgFixedHeaderBytes).c_str(),
+              cli::with_commas(spg_startup_bytes(h.version, h.class_count) - spg_fixed_header_bytes(h.version)).c_str(),
               h.version == 1 ? "float32" : "16-bit codes");
   std::printf("  APR %.3f, cAPR %.3f (TOG05 Table II; cAPR from class-quantized sigma1, %llu of %llu families\n"
               "               with a degenerate child left out)\n",
               ratios.apr, ratios.capr, static_cast<unsigned long long>(ratios.capr_excluded),
               static_cast<unsigned long long>(ratios.families));
-  std::printf("  bbox         (%g, %g, %g) - (%g, %g, %g)\n", f32_value(h.bbox_bits[0]), f32_value(h.bbox_bits[1]),
-              f32_value(h.bbox_bits[2]), f32_value(h.bbox_bits[3]), f32_value(h.bbox_bits[4]), f32_value(h.bbox_bits[5]));
+  double o[3];
+  for (int a = 0; a < 3; ++a) o[a] = spg_origin(h, a);
+  std::printf("  bbox         (%.10g, %.10g, %.10g) - (%.10g, %.10g, %.10g)\n", o[0] + f32_value(h.bbox_bits[0]),
+              o[1] + f32_value(h.bbox_bits[1]), o[2] + f32_value(h.bbox_bits[2]), o[0] + f32_value(h.bbox_bits[3]),
+              o[1] + f32_value(h.bbox_bits[4]), o[2] + f32_value(h.bbox_bits[5]));
+  if (o[0] != 0 || o[1] != 0 || o[2] != 0)
+    std::printf("  origin       (%.17g, %.17g, %.17g): the box is stored relative to it\n", o[0], o[1], o[2]);
   std::printf("  view         up %s, sensor side %s\n", spg_axis_name(h.view_hint.up), spg_axis_name(h.view_hint.sensor_side));
   if (facing >= 0)
     std::printf("  facing       %.1f %% of the leaves' mean normals face %s %s\n", 100.0 * facing,

@@ -51,17 +51,20 @@ int cmd_truth(int argc, char** argv) {
   if (cloud.size() == 0) return cli::fail(files[0] + ": the scan has no points");
   // What the encoder would do: its normals, its frame (view hint), its box.
   const ScanFrame frame = prepare_scan(cloud, EncodeOptions{});
-  float bmin[3], bmax[3];
-  stored_bounding_box(cloud.positions, bmin, bmax);
+  float bmin[3], bmax[3];  // relative to the origin, as the encoder stores them
+  const Vec3 origin = stored_origin(cloud.positions, kSpgVersion);
+  stored_bounding_box(cloud.positions, origin, bmin, bmax);
   SpgHeader header;
+  header.version = kSpgVersion;
   header.view_hint = frame.hint;
   for (int a = 0; a < 3; ++a) {  // the stored box: the default view of a scan taken from inside is placed by it
     std::memcpy(&header.bbox_bits[a], &bmin[a], 4);
     std::memcpy(&header.bbox_bits[3 + a], &bmax[a], 4);
+    std::memcpy(&header.origin_bits[a], &origin[a], 8);
   }
   header.flags = static_cast<uint16_t>((cloud.has_normals() ? kAttrNormals : 0) | (cloud.has_colors() ? kAttrColor : 0));
   TruthStats stats;
-  const Image image = render_truth(cloud, Vec3(bmin[0], bmin[1], bmin[2]), Vec3(bmax[0], bmax[1], bmax[2]), header, o.config,
+  const Image image = render_truth(cloud, origin + Vec3(bmin[0], bmin[1], bmin[2]), origin + Vec3(bmax[0], bmax[1], bmax[2]), header, o.config,
                                    o.view, &stats);
   if (!write_png(output, image, error)) return cli::fail(error);
   std::printf("%s: %s, %zu drawn (%zu behind the near plane) -> %s\n", files[0].c_str(),

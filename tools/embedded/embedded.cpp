@@ -84,8 +84,11 @@ ViewSpec resolve_view(const ViewSpec& spec, const SpgHeader& header, const int32
       const double b[3] = {std::sin(yaw), 0, std::cos(yaw)};  // pitch 0
       v.has_target = true;
       for (int a = 0; a < 3; ++a) {
+        // The sensor at the scan's origin: -origin in the stored box's frame.
+        double origin = 0;
+        std::memcpy(&origin, &header.origin_bits[a], 8);
         const double back = basis[a][0] * b[0] + basis[a][1] * b[1] + basis[a][2] * b[2];
-        v.target_mu[a] = (0.0 - lo[a]) / largest * kMu - v.distance * kMu * back;
+        v.target_mu[a] = (0.0 - origin - lo[a]) / largest * kMu - v.distance * kMu * back;
       }
       return v;
     }

@@ -22,12 +22,21 @@ uint32_t f32_bits(float f) {
 
 }  // namespace
 
-void stored_bounding_box(const std::vector<Vec3>& points, float min[3], float max[3]) {
+Vec3 stored_origin(const std::vector<Vec3>& points, int version) {
+  if (version < 2 || points.empty()) return Vec3::Zero();
+  const Box3 box = bounding_box(points);
+  const double extent = (box.max - box.min).maxCoeff();
+  const double far = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff());
+  return far > 1024 * extent ? Vec3((box.min + box.max) / 2) : Vec3::Zero();
+}
+
+void stored_bounding_box(const std::vector<Vec3>& points, const Vec3& origin, float min[3], float max[3]) {
   const Box3 box = bounding_box(points);
   for (int a = 0; a < 3; ++a) {
-    float lo = static_cast<float>(box.min[a]), hi = static_cast<float>(box.max[a]);
-    if (static_cast<double>(lo) > box.min[a]) lo = std::nextafter(lo, -INFINITY);
-    if (static_cast<double>(hi) < box.max[a]) hi = std::nextafter(hi, INFINITY);
+    const double l = box.min[a] - origin[a], h = box.max[a] - origin[a];
+    float lo = static_cast<float>(l), hi = static_cast<float>(h);
+    if (static_cast<double>(lo) > l) lo = std::nextafter(lo, -INFINITY);
+    if (static_cast<double>(hi) < h) hi = std::nextafter(hi, INFINITY);
     min[a] = lo;
     max[a] = hi;
   }
@@ -77,8 +86,9 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   if (!normals) cloud.normals.clear();
   if (!colors) cloud.colors.clear();
 
-  float bmin[3], bmax[3];
-  stored_bounding_box(cloud.positions, bmin, bmax);
+  float bmin[3], bmax[3];  // relative to the origin
+  const Vec3 origin = stored_origin(cloud.positions, o.format_version);
+  stored_bounding_box(cloud.positions, origin, bmin, bmax);
   double diag = 0;
   for (int a = 0; a < 3; ++a) diag += (double(bmax[a]) - bmin[a]) * (double(bmax[a]) - bmin[a]);
   diag = std::sqrt(diag);
@@ -143,6 +153,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   for (int a = 0; a < 3; ++a) {
     header.bbox_bits[a] = f32_bits(bmin[a]);
     header.bbox_bits[3 + a] = f32_bits(bmax[a]);
+    std::memcpy(&header.origin_bits[a], &origin[a], 8);
   }
   header.class_count[0] = static_cast<uint16_t>(cp.centers.size());
   header.class_count[1] = static_cast<uint16_t>(cn.centers.size());
@@ -176,7 +187,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   for (size_t i = 0; i < n; ++i) {
     const NodeStats& s = tree.nodes[i].stats;
     NodeFields f;
-    for (int a = 0; a < 3; ++a) f.v[a] = quantize_cell(s.position.mean[a], bmin[a], bmax[a], layout.bits[a]);
+    for (int a = 0; a < 3; ++a) f.v[a] = quantize_cell(s.position.mean[a] - origin[a], bmin[a], bmax[a], layout.bits[a]);
     const FrameCode fp = encode_frame(s.position.frame, fp_bits);
     f[Field::kFpTheta] = fp.theta;
     f[Field::kFpPhi] = fp.phi;

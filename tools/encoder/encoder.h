@@ -55,7 +55,14 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& options, std::vector<u
 ScanFrame prepare_scan(PointCloud& cloud, const EncodeOptions& options,
                        const std::function<void(double, const char*)>& progress = {});
 
-// The bounding box as stored: float32, rounded outwards so it contains every point.
-void stored_bounding_box(const std::vector<Vec3>& points, float min[3], float max[3]);
+// The origin a file of `version` stores its box relative to (docs/format.md
+// §1): the origin itself in version 1 and for a scan near it; the box's
+// centre for one far from it for its size (farther than 1024 extents), so
+// the float32 box keeps the scan's precision.
+Vec3 stored_origin(const std::vector<Vec3>& points, int version);
+
+// The bounding box as stored: float32, relative to `origin`, rounded
+// outwards so it contains every point.
+void stored_bounding_box(const std::vector<Vec3>& points, const Vec3& origin, float min[3], float max[3]);
 
 }  // namespace stipple

@@ -27,9 +27,9 @@ bool decode_spg(const std::string& name, const uint8_t* data, size_t size, Decod
   model.file_bytes = size;
   const SpgHeader& h = view.header;
   model.header = h;
-  for (int a = 0; a < 3; ++a) {
-    model.bbox_min[a] = f32_of(h.bbox_bits[a]);
-    model.bbox_max[a] = f32_of(h.bbox_bits[3 + a]);
+  for (int a = 0; a < 3; ++a) {  // absolute: the origin plus the stored box
+    model.bbox_min[a] = spg_origin(h, a) + f32_of(h.bbox_bits[a]);
+    model.bbox_max[a] = spg_origin(h, a) + f32_of(h.bbox_bits[3 + a]);
   }
   for (uint32_t c = 0; c < h.class_count[0]; ++c)
     model.sigma_p.emplace_back(spg_class_value(view, 0, 3 * c), spg_class_value(view, 0, 3 * c + 1),
@@ -92,6 +92,12 @@ bool decode_spg(const std::string& name, const uint8_t* data, size_t size, Decod
 }
 
 double f32_value(uint32_t bits) { return f32_of(bits); }
+
+double spg_origin(const SpgHeader& h, int axis) {
+  double v;
+  std::memcpy(&v, &h.origin_bits[axis], 8);
+  return v;
+}
 
 double spg_largest_extent(const SpgHeader& h) {
   double largest = 0;

@@ -48,6 +48,9 @@ std::vector<uint32_t> spg_point_counts(const SpgView& view);
 // A float32 bit pattern as a double.
 double f32_value(uint32_t bits);
 
+// The origin the stored box is relative to (version 2; 0 in version 1).
+double spg_origin(const SpgHeader& header, int axis);
+
 // The stored bounding box's largest side (1 for a single point, as the
 // client takes it): what version-2 sigma_p codes are relative to.
 double spg_largest_extent(const SpgHeader& header);
