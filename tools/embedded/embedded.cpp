@@ -204,7 +204,9 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
   }
   out.heap_bytes = heap_probe ? heap_probe() : 0;
   if (s != ClientStatus::kOk) {
-    error = std::string("client: ") + client_status_text(s);
+    error = s == ClientStatus::kBadCamera
+                ? std::string("--camera: the view puts the camera out of the client's range (its distance, field of view or the model's size)")
+                : std::string("client: ") + client_status_text(s);
     return false;
   }
   image_from_frame(out.frame.data(), stride, config.raster.width, config.raster.height, config.raster.format, out.image);

@@ -267,6 +267,8 @@ bool RemoteModel::converged() const { return done(Awaited::kUpdateEnd); }
 
 bool RemoteModel::render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats, std::string& error) {
   const ClientStatus s = client_.render(camera, frame, stride, stats);
+  if (s == ClientStatus::kBadCamera)
+    return error = "--camera: the view puts the camera out of the client's range (its distance, field of view or the model's size)", false;
   if (s != ClientStatus::kOk) return error = std::string("client: ") + client_status_text(s), false;
   return true;
 }

@@ -340,10 +340,12 @@ bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointC
         }
         double count_value;
         if (!in.read(p.count_type, count_value)) return read_fail();
-        if (count_value < 0 || count_value > 1e6 ||
-            count_value * (format == Format::kAscii ? 2.0 : static_cast<double>(type_size(p.type))) >
-                static_cast<double>(in.remaining()) + 1.0)
-          return fail("list length " + std::to_string(static_cast<long long>(count_value)) + " is invalid");
+        if (count_value < 0 || count_value > 1e6)
+          return fail("list length " + std::to_string(static_cast<long long>(count_value)) + " is invalid (0 to 1,000,000)");
+        if (count_value * (format == Format::kAscii ? 2.0 : static_cast<double>(type_size(p.type))) >
+            static_cast<double>(in.remaining()) + 1.0)
+          return fail("file is truncated: a list of " + std::to_string(static_cast<long long>(count_value)) + " items, " +
+                      std::to_string(in.remaining()) + " bytes left");
         const auto n = static_cast<size_t>(count_value);
         const bool keep = is_face && static_cast<int>(pi) == face_list;
         face.clear();
