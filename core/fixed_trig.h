@@ -28,7 +28,7 @@ inline constexpr int32_t kQ14One = 1 << 14;
 inline int32_t mul_q14(int32_t a_q14, int32_t b) {
   return static_cast<int32_t>((static_cast<int64_t>(a_q14) * b + (1 << 13)) >> 14);
 }
-inline constexpr int kMaxAngleBits = 12;  // table sizes are 2^bits entries
+inline constexpr int kMaxAngleBits = 16;  // the widest field the format allows; tables are 2^bits entries
 
 struct SinCosQ14 {
   int16_t sin = 0, cos = 0;

@@ -16,7 +16,7 @@ struct Layout {
 
 bool valid(const NodeCacheLimits& l) {
   return l.node_capacity >= 1 && l.node_capacity <= (1u << 24) && l.max_angle_bits >= 1 &&
-         l.max_angle_bits <= kMaxAngleBits && l.max_classes[0] >= 1;
+         l.max_angle_bits <= kMaxAngleBits && l.max_classes[0] >= 1 && l.max_record_bytes <= kMaxRecordBytes;
 }
 
 // The largest startup the limits accept: every angle field at
@@ -37,7 +37,8 @@ SpgHeader worst_header(const NodeCacheLimits& c) {
 Layout layout_of(const NodeCacheLimits& c) {
   Layout l{};
   l.decoder_bytes = node_decoder_bytes(worst_header(c));
-  l.record_stride = c.decoded ? sizeof(FixedNode) : static_cast<size_t>(paper_layout(c.normals, c.color, 2).record_bytes());
+  const size_t paper = static_cast<size_t>(paper_layout(c.normals, c.color, 2).record_bytes());
+  l.record_stride = c.decoded ? sizeof(FixedNode) : c.max_record_bytes > paper ? size_t{c.max_record_bytes} : paper;
   l.hash_entries = 1;
   while (l.hash_entries < c.node_capacity + c.node_capacity / 2) l.hash_entries <<= 1;
   ArenaCarver arena;

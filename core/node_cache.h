@@ -37,6 +37,7 @@ struct NodeCacheLimits {
   bool normals = true, color = true;       // attributes a startup may carry
   uint16_t max_classes[3] = {4096, 4096, 64};  // sigma_p, sigma_n, sigma_c tables
   uint8_t max_angle_bits = 10;             // widest angle field accepted
+  uint8_t max_record_bytes = 0;            // widest record held packed; 0: the paper's layout (13 or 17 bytes)
 };
 
 enum class CacheStatus : uint8_t {

@@ -43,6 +43,7 @@ NodeCacheLimits cache_limits(const ClientConfig& c) {
   l.color = c.color;
   for (int k = 0; k < 3; ++k) l.max_classes[k] = c.max_classes[k];
   l.max_angle_bits = c.max_angle_bits;
+  l.max_record_bytes = c.max_record_bytes;
   return l;
 }
 

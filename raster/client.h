@@ -33,6 +33,7 @@ struct ClientConfig : RendererConfig {
                                            // packed records: no per-frame decode, ~7x the cache memory
   uint16_t max_classes[3] = {4096, 4096, 64};  // sigma_p, sigma_n, sigma_c tables
   uint8_t max_angle_bits = 10;             // widest angle field accepted
+  uint8_t max_record_bytes = 0;            // widest record held packed; 0: the paper's layout
 };
 
 // The two halves of a client configuration.

@@ -180,6 +180,12 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     out.culled_nodes = 0;
   }
 
+  // The arena is sized for this file: angle fields wider than the default
+  // client's (10 bits; the format allows 16) get their tables.
+  for (Field theta : {Field::kFpTheta, Field::kFnTheta, Field::kFcTheta})
+    for (int k = 0; k < 3; ++k)
+      config.max_angle_bits = std::max<uint8_t>(config.max_angle_bits, view.header.layout.bits[static_cast<int>(theta) + k]);
+  config.max_record_bytes = std::max<uint8_t>(config.max_record_bytes, static_cast<uint8_t>(view.record_bytes));
   out.arena_bytes = client_arena_bytes(config);
   if (out.arena_bytes == 0) {
     error = "invalid renderer configuration";
