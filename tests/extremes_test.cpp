@@ -90,8 +90,6 @@ std::vector<Case> cases() {
 TEST(Extremes, EveryCaseEncodesDrawsAndStaysFinite) {
   for (const Case& k : cases()) {
     SCOPED_TRACE(k.name);
-    std::printf("%s ...\n", k.name.c_str());
-    std::fflush(stdout);
     PointCloud cloud = k.make();
     std::vector<uint8_t> spg;
     EncodeReport report;

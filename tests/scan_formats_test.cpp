@@ -152,6 +152,14 @@ TEST(Pcd, HostileHeadersAreRefusedByField) {
   std::string error;
   EXPECT_FALSE(parse("scan.pcd", big, c, error));
   EXPECT_NE(error.find("the block uncompresses to"), std::string::npos) << error;
+  // A POINTS count whose byte size wraps around 64 bits to the block's size:
+  // 2^64 / 32 + 3 points of 32 bytes "need" 96 bytes.
+  std::string wrapped(reinterpret_cast<const char*>(z.data()), z.size());
+  const std::string from = "WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3";
+  const std::string to = "WIDTH 576460752303423491\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 576460752303423491";
+  wrapped.replace(wrapped.find(from), from.size(), to);
+  EXPECT_FALSE(parse("scan.pcd", bytes(wrapped), c, error));
+  EXPECT_NE(error.find("the block uncompresses to 96 bytes, the header's 576460752303423491 points"), std::string::npos) << error;
   std::vector<uint8_t> bad = z;
   for (size_t i = block + 8; i < bad.size(); ++i) bad[i] = 0xE0;  // back references before the start
   EXPECT_FALSE(parse("scan.pcd", bad, c, error));
@@ -240,6 +248,7 @@ TEST(Las, EightBitColourLazAndHostileHeadersAreSaidSo) {
       {96, {0xFF, 0xFF, 0, 0}, "header byte 96: point data at byte 65535"},
       {131, {0, 0, 0, 0, 0, 0, 0, 0}, "header byte 131: scale factor x is 0"},
       {94, {10, 0}, "header byte 94: a header size of 10 bytes"},
+      {131, {0, 0, 0, 0, 0, 0, 0xE0, 0x7F}, "point 1 (byte 261): X * scale + offset is beyond the range of a double"},  // scale 1.3e308: -1000 x it
   };
   for (const auto& k : cases) {
     std::vector<uint8_t> g = las(2, 3);

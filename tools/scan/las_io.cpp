@@ -83,7 +83,11 @@ bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointC
   uint16_t brightest = 0;
   for (uint64_t i = 0; i < count; ++i) {
     const uint8_t* p = data + offset + i * record;
-    cloud.positions.emplace_back(i32(p) * scale[0] + shift[0], i32(p + 4) * scale[1] + shift[1], i32(p + 8) * scale[2] + shift[2]);
+    const Vec3 position(i32(p) * scale[0] + shift[0], i32(p + 4) * scale[1] + shift[1], i32(p + 8) * scale[2] + shift[2]);
+    if (!position.allFinite())  // a scale or offset near the double's range
+      return fail("point " + std::to_string(i) + " (byte " + std::to_string(offset + i * record) +
+                  "): X * scale + offset is beyond the range of a double");
+    cloud.positions.push_back(position);
     if (rgb_at) {
       const uint16_t r = u16(p + rgb_at), g = u16(p + rgb_at + 2), b = u16(p + rgb_at + 4);
       brightest = std::max({brightest, r, g, b});

@@ -188,9 +188,10 @@ bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointC
       raw |= uint32_t{data[pos + 4 + i]} << (8 * i);
     }
     if (packed > remaining - 8) return fail("byte " + std::to_string(pos) + ": a compressed block of " + std::to_string(packed) + " bytes, " + std::to_string(remaining - 8) + " in the file");
-    if (uint64_t{raw} != h.points * h.record)
-      return fail("byte " + std::to_string(pos + 4) + ": the block uncompresses to " + std::to_string(raw) + " bytes, the header says " +
-                  std::to_string(h.points * h.record));
+    // Compared by division: POINTS x the record can wrap around 64 bits.
+    if (raw % h.record != 0 || raw / h.record != h.points)
+      return fail("byte " + std::to_string(pos + 4) + ": the block uncompresses to " + std::to_string(raw) + " bytes, the header's " +
+                  std::to_string(h.points) + " points of " + std::to_string(h.record) + " bytes need another size");
     // LZF expands at most ~100x; refuse what no real block does before allocating.
     if (uint64_t{raw} > 200 * uint64_t{packed} + 1024) return fail("byte " + std::to_string(pos + 4) + ": an uncompressed size of " + std::to_string(raw) + " bytes from " + std::to_string(packed) + " is not LZF");
     unpacked.resize(raw);
