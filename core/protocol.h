@@ -29,7 +29,7 @@ inline constexpr size_t kFrameHeaderBytes = 8;
 inline constexpr size_t kFrameTrailerBytes = 4;
 // The largest payload: a startup message with the default client's largest
 // class tables (4096 + 4096 + 64 classes: 82,764 bytes as format version 1's
-// float32, 41,420 as version 2's codes) fits; node batches
+// float32, 41,444 as version 2's codes) fits; node batches
 // are split to stay below it.
 inline constexpr size_t kMaxPayload = 98304;
 inline constexpr size_t kMaxFrameBytes = kFrameHeaderBytes + kMaxPayload + kFrameTrailerBytes;
