@@ -79,8 +79,8 @@ void fill_row(const Lanes* up, const Lanes* mid, const Lanes* down, uint32_t lo,
 // or `down` is null at the frame's top or bottom. A pixel is kept when every
 // pixel of its 3 x 3 block inside the frame is covered — the covered count
 // of the block equals the block's size there (9 inside, 6 on an edge, 4 in
-// a corner: beyond the frame counts as covered) — and then takes the block's
-// mean. Pixels outside [lo, hi) are uncovered in `mid`, so the frame already
+// a corner: beyond the frame counts as covered) — or when it is part of an
+// isolated speck, and then takes the mean of its block's covered pixels. Pixels outside [lo, hi) are uncovered in `mid`, so the frame already
 // holds the clear colour there.
 void blend_row(const Lanes* up, const Lanes* mid, const Lanes* down, const Lanes* empty, PixelFormat format,
                uint32_t lo, uint32_t hi, uint16_t width, uint32_t clear_rgb, uint8_t* out) {
@@ -93,7 +93,11 @@ void blend_row(const Lanes* up, const Lanes* mid, const Lanes* down, const Lanes
     const Lanes right = x + 1 < width ? u[x + 1] + mid[x + 1] + d[x + 1] : 0;
     const Lanes block = left + here + right;
     const uint32_t columns = 1u + (x > 0) + (x + 1 < width);
-    const bool keep = count_of(block) == rows * columns;
+    // Kept: a pixel inside the surface (its whole block covered), or one of
+    // an isolated speck (at most 3 covered neighbours): a node seen closer
+    // than its points cover stays as dots instead of vanishing.
+    const uint32_t n = count_of(block);
+    const bool keep = mid[x] != 0 && (n == rows * columns || (rows * columns == 9 && n <= 4));
     if (format == PixelFormat::kRgb565) {
       const uint16_t v = keep ? rgb565(mean_rgb(block)) : clear565;
       out[2 * x] = static_cast<uint8_t>(v);

@@ -18,9 +18,12 @@
 //             neighbours (after the fill) is cleared — the fringe; beyond
 //             the frame counts as covered, so a surface running off the
 //             screen is not trimmed (8 neighbours measured better than 4:
-//             docs/results.md);
-//   3. blend: every pixel left covered takes the mean of its 3 x 3 block
-//             (all of it covered, after the fill).
+//             docs/results.md) — except a pixel of an isolated speck (at
+//             most 3 covered neighbours), so that nodes seen closer than
+//             their points cover, and sparse scans, stay dots instead of
+//             vanishing;
+//   3. blend: every pixel left covered takes the mean of the covered
+//             pixels of its 3 x 3 block (after the fill).
 //
 // Integer only, a row at a time through a ring of rows (the frame is
 // rewritten in place), no allocation: `resolve_scratch_bytes` for the rows,

@@ -126,6 +126,51 @@ TEST(Extremes, EveryCaseEncodesDrawsAndStaysFinite) {
   }
 }
 
+// Cameras at the extremes, on the unit sphere: inside the model, close to its
+// surface, a million model sizes away, straight down the up axis, the
+// narrowest and widest fields of view. Each either draws (no crash; zoomed
+// past the leaves it draws their points as dots — the resolve once trimmed
+// them all away, a blank screen — a far one a speck) or is refused with a
+// message naming --camera — never anything else.
+TEST(Extremes, CamerasAtTheExtremesDrawOrAreRefusedByName) {
+  const std::vector<uint8_t> spg = test::encode(test::sphere_cloud(3000));
+  SpgView view;
+  ASSERT_TRUE(spg_parse(spg.data(), spg.size(), &view).ok());
+  const struct {
+    const char* name;
+    double yaw, pitch, distance, fov;
+  } cameras[] = {
+      {"inside the model", 30, 20, 0.001, 35},   {"close to the surface", 30, 20, 0.7, 35},  {"a million sizes away", 30, 20, 1e6, 35},
+      {"along the up axis", 0, 90, 3, 35},       {"along -up", 0, -90, 3, 35},         {"fov 1", 30, 20, 3, 1},
+      {"fov 170", 30, 20, 3, 170},               {"fov 179.9", 30, 20, 3, 179.9},      {"a yaw of 1e9 degrees", 1e9, 20, 3, 35},
+  };
+  for (const auto& k : cameras) {
+    ViewSpec spec;
+    spec.yaw = k.yaw, spec.pitch = k.pitch, spec.distance = k.distance, spec.fov = k.fov;
+    spec.orbit_given = true;
+    ClientConfig config;
+    FixedRender r;
+    std::string error;
+    if (!render_fixed(view, spg.data(), config, CutRule{CutRule::kProjectedSize, 0, 32}, spec, r, error)) {
+      std::printf("%-22s refused: %s\n", k.name, error.c_str());
+      EXPECT_EQ(error.rfind("--camera: ", 0), 0u) << k.name << ": " << error;
+      continue;
+    }
+    size_t covered = 0;
+    for (size_t i = 0; i < r.image.rgb.size(); i += 3) covered += (r.image.rgb[i] | r.image.rgb[i + 1] | r.image.rgb[i + 2]) != 0;
+    std::printf("%-22s %6u nodes, %7u points, covers %5.1f %%\n", k.name, r.stats.nodes, r.stats.points,
+                100.0 * static_cast<double>(covered) / (240 * 320));
+    if (k.distance >= 1e6) {
+      EXPECT_LT(covered, 20u) << k.name;  // a speck
+    }
+    if (k.distance == 0.7 || k.fov == 1) {
+      // Closer than the leaves' points cover: dots (the resolve keeps
+      // isolated specks), never a blank screen.
+      EXPECT_GT(covered, 240u * 320u / 400) << k.name;
+    }
+  }
+}
+
 // Angle fields as wide as the format allows (13 to 16 bits, docs/format.md
 // §5): the same model with every frame angle widened, values scaled to the
 // same angles, draws as the original does.

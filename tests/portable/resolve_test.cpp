@@ -86,7 +86,7 @@ TEST(Resolve, TrimsTheFringeButNotTheFrameBorder) {
   }
 }
 
-TEST(Resolve, ACornerIsNotFilledAndALoneSpeckVanishes) {
+TEST(Resolve, ACornerIsNotFilledAndALoneSpeckStays) {
   Picture p(12, 12);
   // An L-shaped concave corner: rows 0-5 of columns 0-5 and columns 0-11 of rows 6-11.
   for (int y = 0; y < 12; ++y)
@@ -95,7 +95,14 @@ TEST(Resolve, ACornerIsNotFilledAndALoneSpeckVanishes) {
   p.set(10, 1, grey(255));  // a speck far from the rest
   p.resolve();
   EXPECT_EQ(p.at(6, 5), 0u);    // the corner's outside pixel has 5 covered neighbours: not filled
-  EXPECT_EQ(p.at(10, 1), 0u);   // the speck has no covered neighbour: trimmed
+  EXPECT_EQ(p.at(10, 1), grey(255));  // an isolated speck stays: a dot, not nothing
+  // A 2 x 2 point alone (each pixel 3 covered neighbours) stays too.
+  Picture q(8, 8);
+  for (int y = 3; y < 5; ++y)
+    for (int x = 3; x < 5; ++x) q.set(x, y, grey(80));
+  q.resolve();
+  for (int y = 3; y < 5; ++y)
+    for (int x = 3; x < 5; ++x) EXPECT_EQ(q.at(x, y), grey(80)) << x << "," << y;
   EXPECT_EQ(p.at(5, 5), 0u);    // the corner's inside pixel touches the outside: trimmed
   EXPECT_EQ(p.at(2, 2), grey(50));
   EXPECT_EQ(p.at(9, 9), grey(50));
