@@ -153,7 +153,8 @@ struct PointRenderer::FrameSetup {
 };
 
 template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
-void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, FrameStats& stats) {
+void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, uint32_t max_points,
+                              FrameStats& stats) {
   PointSetup setup;  // filled in place: draw_points reads it by reference
   NodeProjection& proj = setup.proj;
   if (!proj.setup(f.camera, node)) {
@@ -179,7 +180,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
   }
   // a, c: (1/16 px)^2 = 1/256 px^2, below 3 * 2^48.
   setup.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
-  if (setup.count > node_cap_) setup.count = node_cap_;
+  if (setup.count > max_points) setup.count = max_points;  // the point cap
   setup.near = f.camera.near_mu;
   setup.shift = f.depth_shift;
   setup.size = config_.point_size;
@@ -347,7 +348,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   const int point_normals = !normals ? 0 : config_.shading == ShadingMode::kPerPoint ? 1 : config_.shading == ShadingMode::kSurface ? 2 : 0;
   const bool color_points = f.model_color && config_.sample_color;
   const bool specular = normals && config_.lighting.specular_q8 > 0;
-  using DrawFn = void (PointRenderer::*)(const FrameSetup&, const SpgHeader&, const FixedNode&, FrameStats&);
+  using DrawFn = void (PointRenderer::*)(const FrameSetup&, const SpgHeader&, const FixedNode&, uint32_t, FrameStats&);
 #define STIPPLE_PICK_N(P, N)                                                                                       \
   (color_points ? (specular ? &PointRenderer::draw_node<P, N, true, true> : &PointRenderer::draw_node<P, N, true, false>) \
                 : (specular ? &PointRenderer::draw_node<P, N, false, true> : &PointRenderer::draw_node<P, N, false, false>))
@@ -371,23 +372,19 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
     return cap_scale == 0 || p == 0 ? 0xFFFFFFFFu : cap_scale * p;
   };
   if (cache.decoded()) {
-    for (uint32_t s = 0; s < count; ++s) {
-      node_cap_ = cap_of(s);
-      (this->*draw)(f, header, cache.decoded_at(s), stats);
-    }
+    for (uint32_t s = 0; s < count; ++s) (this->*draw)(f, header, cache.decoded_at(s), cap_of(s), stats);
   } else {
     FixedNode node;
     for (uint32_t s = 0; s < count; ++s) {
       if (!cache.node_at(s, &node)) continue;  // checked at put
-      node_cap_ = cap_of(s);
-      (this->*draw)(f, header, node, stats);
+      (this->*draw)(f, header, node, cap_of(s), stats);
     }
   }
   uint8_t* const target = n == 1 ? frame : internal_frame_;
   const size_t target_stride = n == 1 ? stride : size_t{internal_.width} * 3;
   raster_.draw(config_.clear_rgb, target, target_stride, coverage_);
   if (n > 1 && coverage_ != nullptr) {
-    // A screen pixel is covered where any pixel of its block is.
+    // The resolve's coverage: a screen pixel is covered where any pixel of its block is.
     const size_t in_row = coverage_row_bytes(internal_.width), out_row = coverage_row_bytes(config_.raster.width);
     const uint32_t block = (1u << n) - 1;
     for (uint32_t y = 0; y < config_.raster.height; ++y) {
@@ -404,14 +401,13 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   }
   if (n > 1) {
     // Each screen pixel is the rounded mean of its n x n block.
-    const size_t in_stride = target_stride;
     const uint32_t half = static_cast<uint32_t>(n * n) / 2, shift = n == 2 ? 2 : 4;
     for (uint32_t y = 0; y < config_.raster.height; ++y) {
       uint8_t* out = frame + y * stride;
       for (uint32_t x = 0; x < config_.raster.width; ++x) {
         uint32_t sum[3] = {half, half, half};
         for (int32_t dy = 0; dy < n; ++dy) {
-          const uint8_t* p = internal_frame_ + (y * n + static_cast<uint32_t>(dy)) * in_stride + size_t{x} * n * 3;
+          const uint8_t* p = internal_frame_ + (y * n + static_cast<uint32_t>(dy)) * target_stride + size_t{x} * n * 3;
           for (int32_t dx = 0; dx < n; ++dx, p += 3) {
             sum[0] += p[0];
             sum[1] += p[1];

@@ -115,7 +115,7 @@ class PointRenderer {
   struct PointSetup;
   // kNormals: 0 the node's normal, 1 sampled per point, 2 following the surface.
   template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
-  void draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, FrameStats& stats);
+  void draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, uint32_t max_points, FrameStats& stats);
   template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
   [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
 
@@ -132,7 +132,6 @@ class PointRenderer {
   ShadingTables* shading_ = nullptr;
   uint16_t* reciprocal_ = nullptr;  // 1024 entries
   const PpnTable* ppn_ = nullptr;
-  uint32_t node_cap_ = 0xFFFFFFFFu;  // render: the node being drawn's point cap
 };
 
 }  // namespace stipple

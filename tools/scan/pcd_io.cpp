@@ -17,6 +17,7 @@ struct Field {
   char type = 'F';  // F float, I signed, U unsigned
   size_t count = 1;
   size_t offset = 0;  // within a packed record
+  int slot = -1;      // what it is read into: 0-2 x y z, 3-5 the normal, 6 rgb/rgba; -1 skipped
 };
 
 struct Header {
@@ -161,6 +162,7 @@ bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointC
       if (*slot >= 0) return fail("field " + f.name + " appears twice");
       if (c != 1) return fail("field " + f.name + ": COUNT must be 1");
       *slot = static_cast<int>(i);
+      f.slot = slot == &ix ? 0 : slot == &iy ? 1 : slot == &iz ? 2 : slot == &inx ? 3 : slot == &iny ? 4 : slot == &inz ? 5 : 6;
     }
   }
   if (ix < 0 || iy < 0 || iz < 0) return fail("no x, y and z fields");
@@ -203,7 +205,8 @@ bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointC
   if (normals) cloud.normals.reserve(n);
   if (irgb >= 0) cloud.colors.reserve(n);
   std::vector<const uint8_t*> at(h.fields.size());
-  std::vector<double> ascii_values;
+  size_t values_per_point = 0;  // ascii: a line's words
+  for (const Field& f : h.fields) values_per_point += f.count;
   size_t dropped = 0, zero_normals = 0;
   const char* text = reinterpret_cast<const char*>(data + pos);
   const char* text_end = reinterpret_cast<const char*>(data + size);
@@ -218,24 +221,19 @@ bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointC
       while (eol < text_end && *eol != '\n') ++eol;
       const std::vector<std::string> w = words(text, eol);
       text = eol;
-      size_t expect = 0;
-      for (const Field& f : h.fields) expect += f.count;
-      if (w.size() != expect)
-        return fail("point " + std::to_string(i) + ": " + std::to_string(w.size()) + " values, expected " + std::to_string(expect));
+      if (w.size() != values_per_point)
+        return fail("point " + std::to_string(i) + ": " + std::to_string(w.size()) + " values, expected " + std::to_string(values_per_point));
       size_t k = 0;
       double v[7] = {};
       for (size_t fi = 0; fi < h.fields.size(); ++fi) {
         const Field& f = h.fields[fi];
         for (size_t c = 0; c < f.count; ++c, ++k) {
-          if (static_cast<int>(fi) != ix && static_cast<int>(fi) != iy && static_cast<int>(fi) != iz &&
-              static_cast<int>(fi) != inx && static_cast<int>(fi) != iny && static_cast<int>(fi) != inz &&
-              static_cast<int>(fi) != irgb)
-            continue;
+          if (f.slot < 0) continue;
           double x = 0;
           const std::string& s = w[k];
           if (s == "nan" || s == "NaN" || s == "-nan") x = std::nan("");
           else if (!parse_f64(s, x)) return fail("point " + std::to_string(i) + ", field " + f.name + ": '" + s.substr(0, 32) + "' is not a number");
-          if (static_cast<int>(fi) == irgb) {
+          if (f.slot == 6) {
             uint32_t bits = 0;
             if (f.type == 'F') {
               const float fl = static_cast<float>(x);
@@ -246,9 +244,7 @@ bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointC
             for (int b = 0; b < 4; ++b) rgb_bytes[b] = static_cast<uint8_t>(bits >> (8 * b));
             col = color_of(rgb_bytes);
           } else {
-            const int slot = static_cast<int>(fi) == ix ? 0 : static_cast<int>(fi) == iy ? 1 : static_cast<int>(fi) == iz ? 2
-                           : static_cast<int>(fi) == inx ? 3 : static_cast<int>(fi) == iny ? 4 : 5;
-            v[slot] = x;
+            v[f.slot] = x;
           }
         }
       }
