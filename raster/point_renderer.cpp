@@ -152,7 +152,7 @@ struct PointRenderer::FrameSetup {
   bool model_color;
 };
 
-template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
+template <Projection P, PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular>
 void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, uint32_t max_points,
                               FrameStats& stats) {
   PointSetup setup;  // filled in place: draw_points reads it by reference
@@ -201,7 +201,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
   setup.h0 = dot_q14(node.normal_frame[2], f.half);
   setup.h1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.half)} * sn0) >> 12);
   setup.h2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.half)} * sn1) >> 12);
-  if constexpr (kNormals == 2) {
+  if constexpr (kNormals == PointNormals::kSurface) {
     // The surface's normal field: a position sample g lands at sum_i g_i
     // axis_i; its offset along the normal frame's tangent f_k, over the
     // node's positional spread along f_k, is how many sigma_n the normal
@@ -247,7 +247,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
 // The per-point path: its own function, never inlined, so that the ARMv5
 // build can be checked symbol by symbol for run-time helper calls
 // (tests/handheld/per_point_helpers.cmake).
-template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
+template <Projection P, PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular>
 uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
   const NodeProjection& proj = s.proj;
   const uint32_t count = s.count;
@@ -256,7 +256,7 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
   const int32_t sn0 = s.sn0, sn1 = s.sn1, l0 = s.l0, l1 = s.l1, l2 = s.l2, h0 = s.h0, h1 = s.h1, h2 = s.h2;
   const int64_t(&ca)[3][3] = s.ca;
   const int32_t(&surface)[2][3] = s.surface;
-  constexpr bool kShadePoints = kNormals != 0;
+  constexpr bool kShadePoints = kNormals != PointNormals::kNode;
   const int32_t near = s.near;
   const int shift = s.shift;
   const int size = s.size;
@@ -280,7 +280,7 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
       uint32_t intensity = node_intensity, specular = node_specular;
       if constexpr (kShadePoints) {
         Gaussian2Q12 n;
-        if constexpr (kNormals == 2) {
+        if constexpr (kNormals == PointNormals::kSurface) {
           const Gaussian3Q12 g = g_position_[j];
           for (int k = 0; k < 2; ++k) {
             const int32_t v = (surface[k][0] * g.v[0] + surface[k][1] * g.v[1] + surface[k][2] * g.v[2]) >> 14;
@@ -345,7 +345,10 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   f.model_color = header.has_color() && !config_.grey;
 
   const bool normals = header.has_normals() && config_.shading != ShadingMode::kNone;
-  const int point_normals = !normals ? 0 : config_.shading == ShadingMode::kPerPoint ? 1 : config_.shading == ShadingMode::kSurface ? 2 : 0;
+  const PointNormals point_normals = !normals                                    ? PointNormals::kNode
+                                    : config_.shading == ShadingMode::kPerPoint ? PointNormals::kSampled
+                                    : config_.shading == ShadingMode::kSurface  ? PointNormals::kSurface
+                                                                                : PointNormals::kNode;
   const bool color_points = f.model_color && config_.sample_color;
   const bool specular = normals && config_.lighting.specular_q8 > 0;
   using DrawFn = void (PointRenderer::*)(const FrameSetup&, const SpgHeader&, const FixedNode&, uint32_t, FrameStats&);
@@ -353,7 +356,9 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   (color_points ? (specular ? &PointRenderer::draw_node<P, N, true, true> : &PointRenderer::draw_node<P, N, true, false>) \
                 : (specular ? &PointRenderer::draw_node<P, N, false, true> : &PointRenderer::draw_node<P, N, false, false>))
 #define STIPPLE_PICK(P) \
-  (point_normals == 1 ? STIPPLE_PICK_N(P, 1) : point_normals == 2 ? STIPPLE_PICK_N(P, 2) : STIPPLE_PICK_N(P, 0))
+  (point_normals == PointNormals::kSampled   ? STIPPLE_PICK_N(P, PointNormals::kSampled) \
+   : point_normals == PointNormals::kSurface ? STIPPLE_PICK_N(P, PointNormals::kSurface) \
+                                             : STIPPLE_PICK_N(P, PointNormals::kNode))
   DrawFn draw = config_.projection == Projection::kAffine       ? STIPPLE_PICK(Projection::kAffine)
                 : config_.projection == Projection::kReciprocal ? STIPPLE_PICK(Projection::kReciprocal)
                                                                 : STIPPLE_PICK(Projection::kExact);

@@ -113,10 +113,11 @@ class PointRenderer {
  private:
   struct FrameSetup;
   struct PointSetup;
-  // kNormals: 0 the node's normal, 1 sampled per point, 2 following the surface.
-  template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
+  // Which normal each point is shaded by.
+  enum class PointNormals : uint8_t { kNode, kSampled, kSurface };
+  template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
   void draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, uint32_t max_points, FrameStats& stats);
-  template <Projection P, int kNormals, bool kColorPoints, bool kSpecular>
+  template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
   [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
 
   RendererConfig config_{};
