@@ -156,6 +156,8 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
       {44, {0, 0, 0xC0, 0x7F}, SpgError::kBadFloat},      // NaN bbox
       {44, {0, 0, 0x80, 0x7F}, SpgError::kBadFloat},      // +inf
       {44, {0, 0, 0x80, 0x4F}, SpgError::kBadBoundingBox},  // min x = 4.3e9 > max x
+      {76, {0, 0, 0, 0, 0, 0, 0xF8, 0x7F}, SpgError::kBadFloat},  // version 2's origin x: NaN
+      {92, {0, 0, 0, 0, 0, 0, 0xF0, 0xFF}, SpgError::kBadFloat},  // origin z: -inf
       {68, {0, 0}, SpgError::kBadClassCount},
       {68, {0x01, 0x10}, SpgError::kBadClassCount},       // 4097 classes in 12 bits
   };
