@@ -317,5 +317,61 @@ TEST(TextScan, ColourColumnsDecimalCommasAndBinaryFilesAreTold) {
   EXPECT_NE(error.find("blob.bin: byte 4: a binary byte (1)"), std::string::npos) << error;
 }
 
+TEST(TextScan, NamedColumnsAreReadAsNamed) {
+  PointCloud c;
+  std::string error;
+  ScanOptions o;
+  // x y z intensity r g b: seven columns, which the guess would refuse (not
+  // r g b a: the intensity is not a byte).
+  const std::vector<uint8_t> scan = bytes("1 2 3 0.5 255 0 51\n4 5 6 1.25 0 10 0\n");
+  EXPECT_FALSE(parse("scan.xyz", scan, c, error));
+  ASSERT_TRUE(parse_text_columns("x,y,z,-,r,g,b", o.columns, error)) << error;
+  ASSERT_TRUE(parse_point_cloud("scan.xyz", scan.data(), scan.size(), c, error, o)) << error;
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.positions[1], Vec3(4, 5, 6));
+  ASSERT_TRUE(c.has_colors());
+  EXPECT_FALSE(c.has_normals());
+  EXPECT_EQ(c.colors[0], Vec3(255, 0, 51) / 255.0);
+  EXPECT_EQ(c.colors[1], Vec3(0, 10, 0) / 255.0);
+  EXPECT_TRUE(c.warnings.empty());  // named, not guessed
+  // Any order, spaces as separators in the list: normals first, then the position.
+  ASSERT_TRUE(parse_text_columns("nx ny nz z y x", o.columns, error)) << error;
+  const std::vector<uint8_t> flipped = bytes("0 0 2 3 2 1\n");
+  ASSERT_TRUE(parse_point_cloud("scan.xyz", flipped.data(), flipped.size(), c, error, o)) << error;
+  EXPECT_EQ(c.positions[0], Vec3(1, 2, 3));
+  ASSERT_TRUE(c.has_normals());
+  EXPECT_EQ(c.normals[0], Vec3(0, 0, 1));  // normalized
+  // A row of another width, and a colour outside 0..255, named by line and column.
+  ASSERT_TRUE(parse_text_columns("x,y,z,r,g,b", o.columns, error)) << error;
+  const std::vector<uint8_t> short_row = bytes("1 2 3 4 5 6\n1 2 3 4 5\n");
+  EXPECT_FALSE(parse_point_cloud("scan.xyz", short_row.data(), short_row.size(), c, error, o));
+  EXPECT_EQ(error, "scan.xyz: line 2: expected 6 columns (as --columns names them), got 5");
+  const std::vector<uint8_t> wide = bytes("1 2 3 4 5 6\n1 2 3 4 65535 6\n");
+  EXPECT_FALSE(parse_point_cloud("scan.xyz", wide.data(), wide.size(), c, error, o));
+  EXPECT_EQ(error, "scan.xyz: line 2: column 5 (g) is 65535, but --columns reads r g b as 0..255");
+  // A file whose header names its fields.
+  const std::vector<uint8_t> ply =
+      bytes("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n");
+  EXPECT_FALSE(parse_point_cloud("scan.ply", ply.data(), ply.size(), c, error, o));
+  EXPECT_EQ(error, "scan.ply: --columns names a text scan's columns, but this is PLY, whose header names them");
+}
+
+TEST(TextScan, ColumnListsAreCheckedByName) {
+  TextColumns columns;
+  std::string error;
+  EXPECT_FALSE(parse_text_columns("x,y,z,intensity", columns, error));
+  EXPECT_EQ(error, "--columns: unknown column 'intensity' (x y z, nx ny nz, r g b, or - to skip)");
+  EXPECT_FALSE(parse_text_columns("x,y,x,z", columns, error));
+  EXPECT_EQ(error, "--columns: 'x' named twice");
+  EXPECT_FALSE(parse_text_columns("x,y,-", columns, error));
+  EXPECT_EQ(error, "--columns: x, y and z are required (got 'x,y,-')");
+  EXPECT_FALSE(parse_text_columns("x,y,z,nx,ny", columns, error));
+  EXPECT_EQ(error, "--columns: name all of nx, ny, nz or none");
+  EXPECT_FALSE(parse_text_columns("x,y,z,r,g", columns, error));
+  EXPECT_EQ(error, "--columns: name all of r, g, b or none");
+  ASSERT_TRUE(parse_text_columns("-,x,-,y,z,-", columns, error)) << error;
+  EXPECT_EQ(columns.fields.size(), 6u);  // skips may repeat
+}
+
 }  // namespace
 }  // namespace stipple

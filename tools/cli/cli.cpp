@@ -4,6 +4,8 @@
 #include <cmath>
 #include <filesystem>
 
+#include "tools/scan/ply_io.h"
+
 namespace stipple::cli {
 
 void Json::key(const char* k) {
@@ -72,6 +74,19 @@ bool output_is_input(const std::string& input, const std::string& output, std::s
     return true;
   }
   return false;
+}
+
+const char kScanOptionsHelp[] =
+    "scan options (PLY, PCD and LAS headers name their fields; text is told by\n"
+    "its column count and values, with a warning where that is a guess):\n"
+    "  --columns LIST        a text scan's columns, in order: x y z (required),\n"
+    "                        nx ny nz, r g b (0..255), - to skip one; for example\n"
+    "                        --columns x,y,z,-,r,g,b for x y z intensity r g b\n";
+
+bool parse_scan_options(Args& args, ScanOptions& options, std::string& error) {
+  std::string spec;
+  if (args.value("--columns", spec) && !parse_text_columns(spec, options.columns, error)) return false;
+  return true;
 }
 
 int fail(const std::string& message) {

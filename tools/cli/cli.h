@@ -7,6 +7,10 @@
 
 #include "tools/embedded/options.h"
 
+namespace stipple {
+struct ScanOptions;
+}
+
 namespace stipple::cli {
 
 // A flat JSON object writer: {"key": value, ...}.
@@ -32,7 +36,11 @@ int fail(const std::string& message);  // prints "stipple: <message>" to stderr,
 // True (and `error` says so) when writing `output` would replace `input`:
 // the same path or the same file by another name.
 bool output_is_input(const std::string& input, const std::string& output, std::string& error);
-void warn(const std::vector<std::string>& messages);  // prints "stipple: warning: <message>" for each
+void warn(const std::vector<std::string>& messages);
+
+// The options of every verb that reads a scan (--columns), and their help.
+extern const char kScanOptionsHelp[];
+bool parse_scan_options(Args& args, ScanOptions& options, std::string& error);  // prints "stipple: warning: <message>" for each
 
 }  // namespace stipple::cli
 

@@ -34,6 +34,7 @@ int cmd_demo(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) {
     std::fputs(kDemoHelp, stdout);
+    std::fputs(cli::kScanOptionsHelp, stdout);
     return 0;
   }
   EncodeOptions options;
@@ -45,12 +46,14 @@ int cmd_demo(int argc, char** argv) {
   if (!parse_encode_options(args, options, quiet, json, error)) return cli::fail(error);
   RenderOptions render;
   if (!parse_render_options(args, render, error)) return cli::fail("demo: " + error);
+  ScanOptions scan_options;
+  if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("demo: " + e);
   if (!args.unknown_option().empty()) return cli::fail("demo: unknown option '" + args.unknown_option() + "'");
 
   const double start = monotonic_seconds();
   ProgressBar progress("encode", !quiet);
   PointCloud cloud;
-  if (!read_point_cloud(scan, cloud, error)) return cli::fail(error);
+  if (!read_point_cloud(scan, cloud, error, scan_options)) return cli::fail(error);
   cli::warn(cloud.warnings);
   std::vector<uint8_t> spg;
   EncodeReport report;

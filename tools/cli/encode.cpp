@@ -21,8 +21,9 @@ namespace {
 const char kEncodeHelp[] =
     "usage: stipple encode SCAN -o MODEL.spg [options]\n"
     "\n"
-    "Builds the hierarchy of Gaussians of a scan (PLY ascii/binary, or x y z\n"
-    "[nx ny nz] [r g b] text) and writes it as a .spg file (docs/format.md).\n"
+    "Builds the hierarchy of Gaussians of a scan (PLY, PCD, LAS 1.0-1.4 or\n"
+    "x y z [nx ny nz] [r g b] text; docs/robustness.md) and writes it as a .spg\n"
+    "file (docs/format.md).\n"
     "\n"
     "options:\n"
     "  -o, --output FILE     the .spg to write (required)\n"
@@ -60,6 +61,7 @@ int cmd_encode(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) {
     std::fputs(kEncodeHelp, stdout);
+    std::fputs(cli::kScanOptionsHelp, stdout);
     return 0;
   }
   EncodeOptions options;
@@ -71,6 +73,8 @@ int cmd_encode(int argc, char** argv) {
   unsigned long long every = 1;
   if (args.value("--every", every_text) && (!cli::parse_uint(every_text, 1u << 30, every) || every == 0))
     return cli::fail("encode: --every: expected a positive integer, got '" + every_text + "'");
+  ScanOptions scan_options;
+  if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("encode: " + e);
   const std::vector<std::string> inputs = args.positionals();
   if (!args.unknown_option().empty()) return cli::fail("encode: unknown option '" + args.unknown_option() + "'");
   if (inputs.size() != 1) return cli::fail("encode: expected one scan file (see stipple encode --help)");
@@ -81,7 +85,7 @@ int cmd_encode(int argc, char** argv) {
   ProgressBar progress("encode", !quiet);
   progress.update(0.0, "reading");
   PointCloud cloud;
-  if (!read_point_cloud(inputs[0], cloud, error)) return cli::fail(error);
+  if (!read_point_cloud(inputs[0], cloud, error, scan_options)) return cli::fail(error);
   if (!cloud.warnings.empty()) progress.finish();  // the warnings get lines of their own
   cli::warn(cloud.warnings);
   if (every > 1) keep_every(cloud, every, options);

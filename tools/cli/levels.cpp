@@ -37,12 +37,15 @@ int cmd_levels(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) {
     std::fputs(kLevelsHelp, stdout);
+    std::fputs(cli::kScanOptionsHelp, stdout);
     return 0;
   }
   std::string levels_text, plot_path;
   const bool has_levels = args.value("--levels", levels_text);
   args.value("--plot", plot_path);
   const bool json = args.flag("--json");
+  ScanOptions scan_options;
+  if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("levels: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("levels: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("levels: unknown option '" + args.unknown_option() + "'");
@@ -50,7 +53,7 @@ int cmd_levels(int argc, char** argv) {
   DecodedModel model;
   PointCloud original;
   std::string error;
-  if (!load_spg(files[0], model, error) || !read_point_cloud(files[1], original, error)) return cli::fail(error);
+  if (!load_spg(files[0], model, error) || !read_point_cloud(files[1], original, error, scan_options)) return cli::fail(error);
   std::vector<int> levels;
   if (has_levels) {
     size_t start = 0;

@@ -27,18 +27,22 @@ int cmd_metrics(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) {
     std::fputs(kMetricsHelp, stdout);
+    std::fputs("(--columns applies to ORIGINAL)\n", stdout);
+    std::fputs(cli::kScanOptionsHelp, stdout);
     return 0;
   }
   std::string spg_path;
   const bool has_spg = args.value("--spg", spg_path);
   const bool json = args.flag("--json");
+  ScanOptions scan_options;
+  if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("metrics: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("metrics: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("metrics: unknown option '" + args.unknown_option() + "'");
   if (files.size() != 2) return cli::fail("metrics: expected ORIGINAL and GENERATED (see stipple metrics --help)");
   PointCloud original, generated;
   std::string error;
-  if (!read_point_cloud(files[0], original, error) || !read_point_cloud(files[1], generated, error))
+  if (!read_point_cloud(files[0], original, error, scan_options) || !read_point_cloud(files[1], generated, error))
     return cli::fail(error);
   cli::warn(original.warnings);
   cli::warn(generated.warnings);

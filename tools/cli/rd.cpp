@@ -63,12 +63,15 @@ int cmd_rd(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) {
     std::fputs(kRdHelp, stdout);
+    std::fputs(cli::kScanOptionsHelp, stdout);
     return 0;
   }
   std::string output, chosen, extra, error;
   args.value("--extra", extra);
   if (!args.value("-o", output)) args.value("--output", output);
   args.value("--settings", chosen);
+  ScanOptions scan_options;
+  if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("rd: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("rd: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("rd: unknown option '" + args.unknown_option() + "'");
@@ -91,7 +94,7 @@ int cmd_rd(int argc, char** argv) {
     }
   }
   PointCloud scan;
-  if (!read_point_cloud(files[0], scan, error)) return cli::fail(error);
+  if (!read_point_cloud(files[0], scan, error, scan_options)) return cli::fail(error);
   std::error_code ec;
   std::filesystem::create_directories(output, ec);
   if (ec) return cli::fail("rd: " + output + ": " + ec.message());

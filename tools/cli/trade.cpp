@@ -156,6 +156,7 @@ int cmd_trade(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) {
     std::fputs(kTradeHelp, stdout);
+    std::fputs(cli::kScanOptionsHelp, stdout);
     return 0;
   }
   std::string scan_path, output, v, error;
@@ -174,6 +175,8 @@ int cmd_trade(int argc, char** argv) {
   }
   base.config.raster.format = PixelFormat::kRgb888;
   base.config.raster.max_points = 1u << 20;
+  ScanOptions scan_options;
+  if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("trade: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("trade: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("trade: unknown option '" + args.unknown_option() + "'");
@@ -189,7 +192,7 @@ int cmd_trade(int argc, char** argv) {
   if (!decode_spg(files[0], file.data(), file.size(), model, error)) return cli::fail(error);
   PointCloud scan;
   if (!scan_path.empty()) {
-    if (!read_point_cloud(scan_path, scan, error)) return cli::fail(error);
+    if (!read_point_cloud(scan_path, scan, error, scan_options)) return cli::fail(error);
     prepare_scan(scan, EncodeOptions{});
   }
   std::error_code ec;

@@ -33,6 +33,7 @@ int cmd_truth(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) {
     std::fputs(kTruthHelp, stdout);
+    std::fputs(cli::kScanOptionsHelp, stdout);
     std::fputs(kRenderOptionsHelp, stdout);
     return 0;
   }
@@ -40,6 +41,8 @@ int cmd_truth(int argc, char** argv) {
   std::string output, error;
   if (!args.value("-o", output)) args.value("--output", output);
   if (!parse_render_options(args, o, error)) return cli::fail("truth: " + error);
+  ScanOptions scan_options;
+  if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("truth: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("truth: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("truth: unknown option '" + args.unknown_option() + "'");
@@ -47,7 +50,7 @@ int cmd_truth(int argc, char** argv) {
   if (output.empty()) return cli::fail("truth: -o TRUTH.png is required");
   if (cli::output_is_input(files[0], output, error)) return cli::fail("truth: " + error);
   PointCloud cloud;
-  if (!read_point_cloud(files[0], cloud, error)) return cli::fail(error);
+  if (!read_point_cloud(files[0], cloud, error, scan_options)) return cli::fail(error);
   if (cloud.size() == 0) return cli::fail(files[0] + ": the scan has no points");
   // What the encoder would do: its normals, its frame (view hint), its box.
   const ScanFrame frame = prepare_scan(cloud, EncodeOptions{});

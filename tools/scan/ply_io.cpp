@@ -153,6 +153,12 @@ class Input {
 
 std::string at_byte(size_t pos) { return "byte " + std::to_string(pos); }
 
+std::string word_of(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
+
 bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
                std::string& error) {
   // Header: text lines up to and including "end_header".
@@ -406,8 +412,14 @@ bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointC
 // numbers use decimal commas (European spreadsheets: "1,5 2,25 3"), which is
 // told by its first data line: three or more whitespace- or ';'-separated
 // words, none with a '.', at least one with a single ','.
-bool parse_text(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error) {
+bool parse_text(const std::string& name, const uint8_t* data, size_t size, const TextColumns& layout,
+                PointCloud& cloud, std::string& error) {
   cloud = PointCloud{};
+  // Where each field sits in a row, when the user named the columns.
+  int at[10];
+  std::fill(at, at + 10, -1);
+  for (size_t i = 0; i < layout.fields.size(); ++i) at[layout.fields[i]] = static_cast<int>(i);
+  const bool named = !layout.fields.empty();
   const auto is_space = [](char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; };
   // A binary file or a .spg given as a scan: say so instead of quoting its bytes.
   const size_t probe = std::min<size_t>(size, 4096);
@@ -487,6 +499,33 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, Point
       p = stop;
     }
     if (row.empty()) continue;
+    if (named) {
+      if (row.size() != layout.fields.size()) {
+        error = name + ": line " + std::to_string(line_no) + ": expected " + std::to_string(layout.fields.size()) +
+                " columns (as --columns names them), got " + std::to_string(row.size());
+        return false;
+      }
+      cloud.positions.emplace_back(row[at[TextColumns::kX]], row[at[TextColumns::kY]], row[at[TextColumns::kZ]]);
+      if (at[TextColumns::kNx] >= 0) {
+        const Vec3 n(row[at[TextColumns::kNx]], row[at[TextColumns::kNy]], row[at[TextColumns::kNz]]);
+        const double len = n.norm();
+        cloud.normals.push_back(len > 0 ? Vec3(n / len) : Vec3::Zero());
+      }
+      if (at[TextColumns::kR] >= 0) {
+        Vec3 c;
+        for (int k = 0; k < 3; ++k) {
+          const int column = at[TextColumns::kR + k];
+          c[k] = row[static_cast<size_t>(column)];
+          if (!(c[k] >= 0 && c[k] <= 255)) {
+            error = name + ": line " + std::to_string(line_no) + ": column " + std::to_string(column + 1) + " (" +
+                    "rgb"[k] + ") is " + word_of(c[k]) + ", but --columns reads r g b as 0..255";
+            return false;
+          }
+        }
+        cloud.colors.push_back(c / 255.0);
+      }
+      continue;
+    }
     if (columns == 0) {
       columns = row.size();
       if (columns != 3 && columns != 6 && columns != 7 && columns != 9) {
@@ -557,8 +596,40 @@ size_t count_duplicate_positions(const std::vector<Vec3>& points) {
   return duplicates;
 }
 
+bool parse_text_columns(const std::string& spec, TextColumns& columns, std::string& error) {
+  static const struct {
+    const char* name;
+    TextColumns::Field field;
+  } kNames[] = {{"x", TextColumns::kX},   {"y", TextColumns::kY},   {"z", TextColumns::kZ},
+                {"nx", TextColumns::kNx}, {"ny", TextColumns::kNy}, {"nz", TextColumns::kNz},
+                {"r", TextColumns::kR},   {"g", TextColumns::kG},   {"b", TextColumns::kB},
+                {"-", TextColumns::kSkip}};
+  columns.fields.clear();
+  int seen[10] = {};
+  for (size_t at = 0; at <= spec.size();) {
+    size_t stop = spec.find_first_of(", ", at);
+    if (stop == std::string::npos) stop = spec.size();
+    const std::string word = spec.substr(at, stop - at);
+    at = stop + 1;
+    if (word.empty()) continue;
+    const auto* hit = std::find_if(std::begin(kNames), std::end(kNames), [&](const auto& n) { return word == n.name; });
+    if (hit == std::end(kNames))
+      return error = "--columns: unknown column '" + word + "' (x y z, nx ny nz, r g b, or - to skip)", false;
+    if (hit->field != TextColumns::kSkip && seen[hit->field]++)
+      return error = "--columns: '" + word + "' named twice", false;
+    columns.fields.push_back(hit->field);
+  }
+  if (!seen[TextColumns::kX] || !seen[TextColumns::kY] || !seen[TextColumns::kZ])
+    return error = "--columns: x, y and z are required (got '" + spec + "')", false;
+  const int normals = seen[TextColumns::kNx] + seen[TextColumns::kNy] + seen[TextColumns::kNz];
+  const int colours = seen[TextColumns::kR] + seen[TextColumns::kG] + seen[TextColumns::kB];
+  if (normals != 0 && normals != 3) return error = "--columns: name all of nx, ny, nz or none", false;
+  if (colours != 0 && colours != 3) return error = "--columns: name all of r, g, b or none", false;
+  return true;
+}
+
 bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
-                       std::string& error) {
+                       std::string& error, const ScanOptions& options) {
   // A UTF-8 byte-order mark before a PLY header, or the magic in capitals
   // ("PLY", which PLY does not allow but some writers produce): read it as
   // PLY, and say so.
@@ -576,10 +647,23 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
     data = fixed.data();
     note += std::string(note.empty() ? "" : "; ") + "the PLY magic in capitals ('PLY'): read as 'ply'";
   }
-  const bool ok = size >= 3 && std::memcmp(data, "ply", 3) == 0 ? parse_ply(name, data, size, cloud, error)
-                  : looks_like_las(data, size)                    ? parse_las(name, data, size, cloud, error)
-                  : looks_like_pcd(data, size)                    ? parse_pcd(name, data, size, cloud, error)
-                                                                  : parse_text(name, data, size, cloud, error);
+  enum class Format { kPly, kLas, kPcd, kText };
+  const Format format = size >= 3 && std::memcmp(data, "ply", 3) == 0 ? Format::kPly
+                        : looks_like_las(data, size)                    ? Format::kLas
+                        : looks_like_pcd(data, size)                    ? Format::kPcd
+                                                                        : Format::kText;
+  if (format != Format::kText && !options.columns.fields.empty()) {
+    error = name + ": --columns names a text scan's columns, but this is " +
+            (format == Format::kPly ? "PLY" : format == Format::kLas ? "LAS" : "PCD") + ", whose header names them";
+    return false;
+  }
+  bool ok = false;
+  switch (format) {
+    case Format::kPly: ok = parse_ply(name, data, size, cloud, error); break;
+    case Format::kLas: ok = parse_las(name, data, size, cloud, error); break;
+    case Format::kPcd: ok = parse_pcd(name, data, size, cloud, error); break;
+    case Format::kText: ok = parse_text(name, data, size, options.columns, cloud, error); break;
+  }
   if (!ok) return false;
   if (!note.empty()) cloud.warnings.insert(cloud.warnings.begin(), name + ": " + note);
   // Many points on one value: float32 coordinates far from the origin round
@@ -601,10 +685,10 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
   return true;
 }
 
-bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& error) {
+bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& error, const ScanOptions& options) {
   std::vector<uint8_t> bytes;
   if (!read_file(path, bytes, error)) return false;
-  return parse_point_cloud(path, bytes.data(), bytes.size(), cloud, error);
+  return parse_point_cloud(path, bytes.data(), bytes.size(), cloud, error, options);
 }
 
 bool write_ply(const std::string& path, const PointCloud& cloud, std::string& error) {

@@ -13,7 +13,8 @@
 //
 // Plain text (anything else): one point per line, `x y z`, `x y z nx ny nz`,
 // `x y z r g b` (integers 0..255: told from normals by their values, with a
-// warning), `x y z r g b a` or `x y z nx ny nz r g b`; separators
+// warning), `x y z r g b a` or `x y z nx ny nz r g b` — or any layout the
+// user names (`--columns x,y,z,-,r,g,b`, ScanOptions::columns); separators
 // whitespace, ',' or ';', or decimal commas where the first line shows them
 // (a warning says so); `#` starts a comment; every line must have the same
 // number of columns. A binary file or a .spg given as a scan is refused as
@@ -29,16 +30,33 @@
 // origin is the usual cause).
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "tools/scan/point_cloud.h"
 
 namespace stipple {
 
-bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& error);
+// A text scan's columns as the user names them, instead of the guess from
+// the column count and values: x y z (required), nx ny nz and r g b (0..255;
+// each group all or none), `-` for a column to skip (intensity, alpha, time).
+struct TextColumns {
+  enum Field : uint8_t { kSkip, kX, kY, kZ, kNx, kNy, kNz, kR, kG, kB };
+  std::vector<Field> fields;  // in file order; empty: told from the file
+};
+// Parses "x,y,z,-,r,g,b" (commas or spaces). On failure `error` says which name.
+bool parse_text_columns(const std::string& spec, TextColumns& columns, std::string& error);
+
+struct ScanOptions {
+  TextColumns columns;  // text scans only: a PLY, PCD or LAS file is refused with them
+};
+
+bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& error,
+                      const ScanOptions& options = {});
 // Parses an in-memory file; `name` is used in error messages.
 bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
-                       std::string& error);
+                       std::string& error, const ScanOptions& options = {});
 
 // Points whose position equals an earlier point's (exact comparison).
 size_t count_duplicate_positions(const std::vector<Vec3>& points);
