@@ -2,7 +2,9 @@
 # Fuzzes every libFuzzer harness for a bounded time under ASan + UBSan
 # (clang; every library instrumented): the .spg reader, decoder and client
 # (spg), every scan reader — PLY, PCD, LAS, text (scan), the node stream's
-# frame reader, StreamReceiver and serial deframer (stream). Starts each from
+# frame reader, StreamReceiver and serial deframer (stream), the node decoder
+# alone under every layout the format allows (decoder), the serial line's
+# receiving end as the server runs it (serial). Starts each from
 # its small seeds (tests/fuzz/seeds: under a few KB, so a run makes thousands
 # of executions a second) and the crashes found before, which are regression
 # inputs (tests/fuzz/regressions/HARNESS/, replayed by every build's tests).
@@ -14,18 +16,20 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${FUZZ_SECONDS:-60}
 build=build/fuzz
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DSTIPPLE_FUZZ=ON \
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DSTIPPLE_FUZZ=ON -DSTIPPLE_CHECK_RANGES=ON \
   -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1 -g" >/dev/null
-cmake --build "$build" -j2 --target spg_fuzz scan_fuzz stream_fuzz
+cmake --build "$build" -j2 --target spg_fuzz scan_fuzz stream_fuzz decoder_fuzz serial_fuzz
 mkdir -p "$build/crashes"
 status=0
-for harness in spg scan stream; do
+for harness in spg scan stream decoder serial; do
   corpus=$build/corpus/$harness
   rm -rf "$corpus" && mkdir -p "$corpus"
   case $harness in
     spg) cp tests/fuzz/seeds/tiny.spg "$corpus/"; max_len=4096 ;;
     scan) cp tests/fuzz/seeds/tiny* "$corpus/"; rm -f "$corpus/tiny.spg"; max_len=4096 ;;
     stream) cp tests/fuzz/seeds/sphere_stream.* "$corpus/"; max_len=8192 ;;
+    decoder) cp tests/fuzz/seeds/decoder_* "$corpus/"; max_len=1024 ;;
+    serial) cp tests/fuzz/seeds/sphere_stream.cobs "$corpus/"; max_len=16384 ;;
   esac
   [ -d "tests/fuzz/regressions/$harness" ] && cp tests/fuzz/regressions/$harness/* "$corpus/" 2>/dev/null || true
   log=$build/$harness.log

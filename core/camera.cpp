@@ -1,6 +1,7 @@
 // stipple core — fixed-point camera. See camera.h.
 #include "core/camera.h"
 
+#include "core/fixed_range.h"
 #include "core/fixed_trig.h"
 
 namespace stipple {
@@ -8,7 +9,7 @@ namespace {
 
 int32_t dot_q14(const int32_t row[3], const int64_t v[3]) {
   const int64_t s = row[0] * v[0] + row[1] * v[1] + row[2] * v[2];
-  return static_cast<int32_t>((s + (1 << 13)) >> 14);
+  return narrow<int32_t>((s + (1 << 13)) >> 14);
 }
 
 }  // namespace
@@ -56,11 +57,11 @@ bool orbit_camera(const OrbitView& view, uint16_t width, uint16_t height, Camera
     c.rotation[1][a] = -uw[a];
     c.rotation[2][a] = -bw[a];
     c.eye[a] = view.target_mu[a] +
-               static_cast<int32_t>((static_cast<int64_t>(view.distance_mu) * bw[a] + (1 << 13)) >> 14);
+               narrow<int32_t>((static_cast<int64_t>(view.distance_mu) * bw[a] + (1 << 13)) >> 14);
   }
   // f = (height / 2) / tan(fov / 2), in Q4: 8 h cos / sin. One division per camera.
   const SinCosQ14 half = sincos_q14(view.fov / 2);
-  c.focal_q4 = static_cast<int32_t>((int64_t{8} * height * half.cos + half.sin / 2) / half.sin);
+  c.focal_q4 = narrow<int32_t>((int64_t{8} * height * half.cos + half.sin / 2) / half.sin);
   if (c.focal_q4 < 1) c.focal_q4 = 1;
   c.center_q4[0] = 8 * width;
   c.center_q4[1] = 8 * height;

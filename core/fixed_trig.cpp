@@ -2,6 +2,8 @@
 // binary32-to-fixed conversion. See fixed_trig.h.
 #include "core/fixed_trig.h"
 
+#include "core/fixed_range.h"
+
 namespace stipple {
 namespace {
 
@@ -94,14 +96,14 @@ FrameQ14 decode_frame_q14(const FrameTables& t, uint32_t theta, uint32_t phi, ui
   // Rodrigues rotation of x and y by theta about a = (-sin phi, cos phi, 0).
   const int64_t x[3] = {(ct << 28) + sp * sp * omc, -spcp, -(cp * st) << 14};
   const int64_t y[3] = {-spcp, (ct << 28) + cp * cp * omc, -(sp * st) << 14};
-  auto round56 = [](int64_t v) { return clamp_q14(static_cast<int32_t>((v + (int64_t{1} << 41)) >> 42)); };
+  auto round56 = [](int64_t v) { return clamp_q14(narrow<int32_t>((v + (int64_t{1} << 41)) >> 42)); };
   FrameQ14 f;
   for (int k = 0; k < 3; ++k) {
     f.axis[0][k] = round56(cs * x[k] + ss * y[k]);
     f.axis[1][k] = round56(cs * y[k] - ss * x[k]);
   }
-  f.axis[2][0] = clamp_q14(static_cast<int32_t>((cp * st + (1 << 13)) >> 14));
-  f.axis[2][1] = clamp_q14(static_cast<int32_t>((sp * st + (1 << 13)) >> 14));
+  f.axis[2][0] = clamp_q14(narrow<int32_t>((cp * st + (1 << 13)) >> 14));
+  f.axis[2][1] = clamp_q14(narrow<int32_t>((sp * st + (1 << 13)) >> 14));
   f.axis[2][2] = static_cast<int16_t>(ct);
   return f;
 }

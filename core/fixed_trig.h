@@ -20,13 +20,15 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "core/fixed_range.h"
+
 namespace stipple {
 
 inline constexpr int32_t kQ14One = 1 << 14;
 
 // a * b with a in Q14, rounded half up: b's format scaled by a.
 inline int32_t mul_q14(int32_t a_q14, int32_t b) {
-  return static_cast<int32_t>((static_cast<int64_t>(a_q14) * b + (1 << 13)) >> 14);
+  return narrow<int32_t>((static_cast<int64_t>(a_q14) * b + (1 << 13)) >> 14);
 }
 inline constexpr int kMaxAngleBits = 16;  // the widest field the format allows; tables are 2^bits entries
 

@@ -17,23 +17,22 @@ uint32_t xorshift32(uint32_t x) {
   return x;
 }
 
-// tau in Q24 from the 0.32 fraction u of r0 = (u + 1/2) / 2^32:
-// tau^2 = -2 ln r0 = 2 ln 2 (33 - log2(2u + 1)).
-int64_t tau_q24(uint32_t u, bool scale_three_halves) {
-  const int64_t t = (int64_t{33} << 24) - log2_q24(2 * static_cast<uint64_t>(u) + 1);  // Q24, in (0, 33]
-  const int64_t tau2 = (t * kTwoLn2Q30) >> 30;                                          // Q24
-  int64_t tau = static_cast<int64_t>(isqrt64(static_cast<uint64_t>(tau2) << 24));       // Q24
-  if (scale_three_halves) tau = (tau * kSqrtThreeHalvesQ30) >> 30;
-  const int64_t clip = int64_t{7} << 23;  // 3.5
-  return tau > clip ? clip : tau;
-}
-
 int16_t to_q12(int64_t v_q24) {
   const int64_t r = (v_q24 + (v_q24 >= 0 ? (1 << 11) : -(1 << 11))) / (1 << 12);
   return static_cast<int16_t>(r > kGaussianClip ? kGaussianClip : r < -kGaussianClip ? -kGaussianClip : r);
 }
 
 }  // namespace
+
+// tau^2 = -2 ln r0 = 2 ln 2 (33 - log2(2u + 1)).
+int64_t box_muller_radius_q24(uint32_t u, bool three_d) {
+  const int64_t t = (int64_t{33} << 24) - log2_q24(2 * static_cast<uint64_t>(u) + 1);  // Q24, in [0, 33]
+  const int64_t tau2 = (t * kTwoLn2Q30) >> 30;                                          // Q24, <= 22.9 * 2^24
+  int64_t tau = static_cast<int64_t>(isqrt64(static_cast<uint64_t>(tau2) << 24));       // Q24, < 2^27
+  if (three_d) tau = (tau * kSqrtThreeHalvesQ30) >> 30;
+  const int64_t clip = int64_t{7} << 23;  // 3.5
+  return tau > clip ? clip : tau;
+}
 
 int64_t log2_q24(uint64_t x) {
   if (x == 0) return 0;
@@ -84,7 +83,7 @@ void build_gaussian3_table(GaussianSource source, Gaussian3Q12* out, size_t coun
   for (size_t j = 0; j < count; ++j) {
     uint32_t u[3];
     gaussian_uniforms(source, static_cast<uint32_t>(j), u, first_dim);
-    const int64_t tau = tau_q24(u[0], true);
+    const int64_t tau = box_muller_radius_q24(u[0], true);
     const SinCosQ14 sc = sincos_q14(u[1]);  // 2 pi r1: u is already a binary angle
     // r2 = 2 r - 1 = (2u + 1) / 2^32 - 1, Q31; ring = sqrt(1 - r2^2), Q31.
     const int64_t r2 = static_cast<int64_t>(2 * static_cast<uint64_t>(u[2]) + 1) - (int64_t{1} << 32);  // Q32
@@ -109,7 +108,7 @@ void build_gaussian2_table(GaussianSource source, Gaussian2Q12* out, size_t coun
       u[0] = all[0];
       u[1] = all[1];
     }
-    const int64_t tau = tau_q24(u[0], false);
+    const int64_t tau = box_muller_radius_q24(u[0], false);
     const SinCosQ14 sc = sincos_q14(u[1]);
     out[j].v[0] = to_q12((tau * sc.cos) >> 14);
     out[j].v[1] = to_q12((tau * sc.sin) >> 14);

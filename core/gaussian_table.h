@@ -44,6 +44,14 @@ void build_gaussian2_table(GaussianSource source, Gaussian2Q12* out, size_t coun
 // The 32-bit uniform inputs (r0, r1, r2 as 0.32 fractions) of sample j.
 void gaussian_uniforms(GaussianSource source, uint32_t sample, uint32_t out[3], int first_dim = 0);
 
+// The Box–Muller radius tau, Q24, of the 0.32 fraction u of
+// r0 = (u + 1/2) / 2^32: sqrt(-2 ln r0), times sqrt(3/2) for the 3-D tables,
+// clipped at 3.5. Bounded at both ends: u = 0 (r0 = 2^-33, the smallest; the
+// unclipped radius would be 6.8) gives exactly 3.5, u = 2^32 - 1 (r0 -> 1)
+// under 1.5 Q12 LSB (the square root of one Q24 unit), never a negative or
+// a wrapped value.
+int64_t box_muller_radius_q24(uint32_t u, bool three_d);
+
 // log2(x) for x >= 1, in Q24. Integer only.
 int64_t log2_q24(uint64_t x);
 // floor(sqrt(x)).

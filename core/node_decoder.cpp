@@ -3,6 +3,8 @@
 
 #include <initializer_list>
 
+#include "core/fixed_range.h"
+
 namespace stipple {
 namespace {
 
@@ -152,7 +154,7 @@ DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
     // Cell centre: (q + 1/2) * extent / 2^b = (2q + 1) * extent / 2^(b+1).
     const int64_t v = (2 * static_cast<int64_t>(f.v[a]) + 1) * axis_scale_q8_[a];
     const int shift = l.bits[a] + 1 + 8;
-    n.mean[a] = static_cast<int32_t>((v + (int64_t{1} << (shift - 1))) >> shift);
+    n.mean[a] = narrow<int32_t>((v + (int64_t{1} << (shift - 1))) >> shift);
   }
   const FrameQ14 fp = decode_frame_q14(fp_, f[Field::kFpTheta], f[Field::kFpPhi], f[Field::kFpPsi]);
   const int32_t* sp = sigma_p_mu(ClassId{f[Field::kSigmaP]});

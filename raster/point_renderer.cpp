@@ -5,6 +5,7 @@
 #include "raster/resolve.h"
 
 #include "core/arena.h"
+#include "core/fixed_range.h"
 
 namespace stipple {
 namespace {
@@ -51,7 +52,7 @@ Layout layout_of(const RendererConfig& c) {
 }
 
 inline int32_t dot_q14(const int16_t a[3], const int16_t b[3]) {
-  return static_cast<int32_t>((int64_t{a[0]} * b[0] + int64_t{a[1]} * b[1] + int64_t{a[2]} * b[2]) >> 14);
+  return narrow<int32_t>((int64_t{a[0]} * b[0] + int64_t{a[1]} * b[1] + int64_t{a[2]} * b[2]) >> 14);
 }
 
 
@@ -196,11 +197,11 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
   setup.sn0 = sn0;
   setup.sn1 = sn1;
   setup.l0 = dot_q14(node.normal_frame[2], f.light);
-  setup.l1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.light)} * sn0) >> 12);
-  setup.l2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.light)} * sn1) >> 12);
+  setup.l1 = narrow<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.light)} * sn0) >> 12);
+  setup.l2 = narrow<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.light)} * sn1) >> 12);
   setup.h0 = dot_q14(node.normal_frame[2], f.half);
-  setup.h1 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.half)} * sn0) >> 12);
-  setup.h2 = static_cast<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.half)} * sn1) >> 12);
+  setup.h1 = narrow<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.half)} * sn0) >> 12);
+  setup.h2 = narrow<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.half)} * sn1) >> 12);
   if constexpr (kNormals == PointNormals::kSurface) {
     // The surface's normal field: a position sample g lands at sum_i g_i
     // axis_i; its offset along the normal frame's tangent f_k, over the
@@ -273,9 +274,9 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
       uint32_t r = base_r, gg = base_g, bb = base_b;
       if constexpr (kColorPoints) {
         const Gaussian3Q12 q = g_color_[j];
-        r = clamp255(static_cast<int32_t>(base_r) + static_cast<int32_t>((ca[0][0] * q.v[0] + ca[1][0] * q.v[1] + ca[2][0] * q.v[2]) >> 20));
-        gg = clamp255(static_cast<int32_t>(base_g) + static_cast<int32_t>((ca[0][1] * q.v[0] + ca[1][1] * q.v[1] + ca[2][1] * q.v[2]) >> 20));
-        bb = clamp255(static_cast<int32_t>(base_b) + static_cast<int32_t>((ca[0][2] * q.v[0] + ca[1][2] * q.v[1] + ca[2][2] * q.v[2]) >> 20));
+        r = clamp255(static_cast<int32_t>(base_r) + narrow<int32_t>((ca[0][0] * q.v[0] + ca[1][0] * q.v[1] + ca[2][0] * q.v[2]) >> 20));
+        gg = clamp255(static_cast<int32_t>(base_g) + narrow<int32_t>((ca[0][1] * q.v[0] + ca[1][1] * q.v[1] + ca[2][1] * q.v[2]) >> 20));
+        bb = clamp255(static_cast<int32_t>(base_b) + narrow<int32_t>((ca[0][2] * q.v[0] + ca[1][2] * q.v[1] + ca[2][2] * q.v[2]) >> 20));
       }
       uint32_t intensity = node_intensity, specular = node_specular;
       if constexpr (kShadePoints) {
@@ -292,10 +293,10 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
         const int64_t al = (int64_t{sn0} * n.v[0]) >> 12, be = (int64_t{sn1} * n.v[1]) >> 12;  // Q12 radians
         const uint64_t t2 = static_cast<uint64_t>(al * al + be * be) >> kCosSincShift;          // theta^2 cell
         const CosSincQ14 cs = shading_->cos_sinc[t2 < kCosSincEntries ? t2 : kCosSincEntries - 1];
-        const int32_t l = static_cast<int32_t>((cs.cos * int64_t{l0} + cs.sinc * ((n.v[0] * int64_t{l1} + n.v[1] * int64_t{l2}) >> 12)) >> 14);
+        const int32_t l = narrow<int32_t>((cs.cos * int64_t{l0} + cs.sinc * ((n.v[0] * int64_t{l1} + n.v[1] * int64_t{l2}) >> 12)) >> 14);
         intensity = shading_->diffuse[intensity_index(l)];
         if constexpr (kSpecular) {
-          const int32_t h = static_cast<int32_t>((cs.cos * int64_t{h0} + cs.sinc * ((n.v[0] * int64_t{h1} + n.v[1] * int64_t{h2}) >> 12)) >> 14);
+          const int32_t h = narrow<int32_t>((cs.cos * int64_t{h0} + cs.sinc * ((n.v[0] * int64_t{h1} + n.v[1] * int64_t{h2}) >> 12)) >> 14);
           specular = shading_->specular[intensity_index(h)];
         }
       }

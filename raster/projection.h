@@ -23,6 +23,7 @@
 
 #include "core/camera.h"
 #include "core/divide.h"
+#include "core/fixed_range.h"
 #include "core/gaussian_table.h"
 #include "core/node_decoder.h"
 
@@ -66,8 +67,8 @@ struct NodeProjection {
     cy_q4 = camera.center_q4[1];
     const int64_t u = (int64_t{1} << 46) / Z;
     const int64_t xr = (X * u) >> 30, yr = (Y * u) >> 30;  // X/Z, Y/Z in Q16
-    x0_q4 = cx_q4 + static_cast<int32_t>((focal_q4 * xr) >> 16);
-    y0_q4 = cy_q4 + static_cast<int32_t>((focal_q4 * yr) >> 16);
+    x0_q4 = cx_q4 + narrow<int32_t>((focal_q4 * xr) >> 16);
+    y0_q4 = cy_q4 + narrow<int32_t>((focal_q4 * yr) >> 16);
     for (int k = 0; k < 3; ++k) {
       // (A - (X/Z) A_z) / Z in Q26: below 2^28.2 * 2^34 before the shift, 2^42.2 after;
       // times f (<= 2^20) below 2^62.2.
@@ -90,8 +91,8 @@ struct NodeProjection {
     if (z < near_mu) return false;
     out->z = z;
     if constexpr (P == Projection::kAffine) {
-      out->x_q4 = x0_q4 + static_cast<int32_t>((mx[0] * g0 + mx[1] * g1 + mx[2] * g2) >> 16);
-      out->y_q4 = y0_q4 + static_cast<int32_t>((my[0] * g0 + my[1] * g1 + my[2] * g2) >> 16);
+      out->x_q4 = x0_q4 + narrow<int32_t>((mx[0] * g0 + mx[1] * g1 + mx[2] * g2) >> 16);
+      out->y_q4 = y0_q4 + narrow<int32_t>((my[0] * g0 + my[1] * g1 + my[2] * g2) >> 16);
       return true;
     } else {
       const int64_t xp = X + ((A[0][0] * g0 + A[1][0] * g1 + A[2][0] * g2) >> 12);
@@ -104,8 +105,8 @@ struct NodeProjection {
         // z = (1024 + i + frac) 2^(e-10) with e >= 12 (z >= near >= 2^12).
         const int e = 63 - __builtin_clzll(static_cast<uint64_t>(z));
         const int64_t r = reciprocal[(z >> (e - kReciprocalBits)) & ((1 << kReciprocalBits) - 1)];
-        out->x_q4 = cx_q4 + static_cast<int32_t>((((xp * r) >> 16) * focal_q4) >> e);
-        out->y_q4 = cy_q4 + static_cast<int32_t>((((yp * r) >> 16) * focal_q4) >> e);
+        out->x_q4 = cx_q4 + narrow<int32_t>((((xp * r) >> 16) * focal_q4) >> e);
+        out->y_q4 = cy_q4 + narrow<int32_t>((((yp * r) >> 16) * focal_q4) >> e);
       }
       return true;
     }

@@ -8,7 +8,9 @@
 
 #include <sys/socket.h>
 
+#include <algorithm>
 #include <atomic>
+#include <functional>
 #include <chrono>
 #include <mutex>
 #include <random>
@@ -480,6 +482,115 @@ TEST(Server, ACorruptFrameIsAnsweredWithItsFaultAndClosed) {
   EXPECT_TRUE(got_error);
   EXPECT_TRUE(closed);
   EXPECT_TRUE(s.logged("frame 0: frame CRC-32 mismatch"));
+}
+
+// Hostile peers beside a good client, on one server: a serial line that
+// babbles without ever sending a packet delimiter, a serial peer that says
+// hello over and over and never reads, a socket peer that floods keep-alives
+// and cameras and never reads, one that says hello twice, and one whose cable
+// is pulled mid-frame. The good client's frames are still the local render's;
+// every queue stays bounded (one startup and one update, not the floods'
+// sum), and each hostile peer is dropped, refused or removed by name.
+TEST(Server, HostilePeersAreBoundedAndTheOthersServed) {
+  const Local local;
+  Server server;
+  std::string error;
+  std::vector<std::string> log;
+  ServerOptions o;
+  o.log = [&](const std::string& line) { log.push_back(line); };
+  ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
+  LoopbackPipe good, babbler, hello_flood, keepalive_flood, twice, pulled;
+  server.add_client(std::make_unique<TransportRef>(good.server()), -1, "good");
+  server.add_client(std::make_unique<TransportRef>(babbler.server()), -1, "babbler", true);
+  server.add_client(std::make_unique<TransportRef>(hello_flood.server()), -1, "hello-flood", true);
+  server.add_client(std::make_unique<TransportRef>(keepalive_flood.server()), -1, "keepalive-flood");
+  server.add_client(std::make_unique<TransportRef>(twice.server()), -1, "twice");
+  server.add_client(std::make_unique<TransportRef>(pulled.server()), -1, "pulled");
+
+  uint8_t hello[kHelloBytes];
+  write_hello(hello_for(device()), hello);
+  auto frame_of = [](MessageType type, uint16_t sequence, const uint8_t* payload, size_t bytes) {
+    std::vector<uint8_t> f(kFrameHeaderBytes + bytes + 8);
+    f.resize(write_frame(type, sequence, payload, bytes, f.data(), f.size()));
+    return f;
+  };
+  auto put = [](LoopbackPipe& p, const std::vector<uint8_t>& bytes) {
+    size_t moved = 0;
+    (void)p.client().write(bytes.data(), bytes.size(), &moved);
+  };
+  // The socket peers' openings: a hello each; then the pulled one half a frame, gone.
+  put(keepalive_flood, frame_of(MessageType::kHello, 0, hello, kHelloBytes));
+  put(twice, frame_of(MessageType::kHello, 0, hello, kHelloBytes));
+  put(twice, frame_of(MessageType::kHello, 1, hello, kHelloBytes));
+  std::vector<uint8_t> half = frame_of(MessageType::kHello, 0, hello, kHelloBytes);
+  half.resize(half.size() / 2);
+  put(pulled, half);
+  pulled.client().close();
+
+  uint16_t keepalive_sequence = 1;
+  uint64_t babbled = 0, hellos = 0, keepalives = 0, worst_queue = 0;
+  uint8_t camera[kCameraUpdateBytes];
+  CameraUpdate update;
+  {
+    std::vector<uint32_t> storage(node_decoder_bytes(local.view.header) / 4 + 1);
+    NodeDecoder decoder;
+    ASSERT_EQ(decoder.init(local.view, storage.data(), storage.size() * 4), DecodeStatus::kOk);
+    ASSERT_TRUE(orbit_camera(orbit_view(decoder.extent_mu(), resolve_view(local.spec(30), local.view.header, decoder.extent_mu())),
+                             240, 320, &update.camera));
+  }
+  write_camera_update(update, camera);
+  struct Pump {
+    std::function<void()> each;
+  } pump{[&] {
+    // Each pass of the good client's loop, every hostile peer sends more.
+    put(babbler, std::vector<uint8_t>(4096, 0x55));
+    babbled += 4096;
+    std::vector<uint8_t> h = frame_of(MessageType::kHello, 0, hello, kHelloBytes);
+    std::vector<uint8_t> packet(cobs_bound(h.size()) + 1);
+    packet.resize(cobs_encode(h.data(), h.size(), packet.data(), packet.size()));
+    put(hello_flood, packet);
+    ++hellos;
+    for (int i = 0; i < 16; ++i) {
+      put(keepalive_flood, frame_of(i & 1 ? MessageType::kKeepAlive : MessageType::kCamera, keepalive_sequence++,
+                                    camera, i & 1 ? 0 : kCameraUpdateBytes));
+      ++keepalives;
+    }
+    server.step(0);
+    for (const ClientReport& r : server.report()) worst_queue = std::max(worst_queue, r.queued_bytes);
+  }};
+  RemoteModel remote;
+  RemoteModel::Options ro;
+  ro.pump = [](void* p) {
+    static_cast<Pump*>(p)->each();
+    return true;
+  };
+  ro.pump_context = &pump;
+  ASSERT_TRUE(remote.connect(good.client(), device(), ro, error)) << error;
+  for (double yaw : {30.0, 120.0, 250.0}) {
+    const std::vector<uint8_t> frame = remote_frame(remote, local, yaw, error);
+    ASSERT_FALSE(frame.empty()) << error;
+    EXPECT_EQ(frame, local.render(yaw).frame) << "yaw " << yaw;
+  }
+  for (int i = 0; i < 300; ++i) pump.each();  // the floods go on after the good client is done
+  std::printf("hostile peers: %llu bytes babbled, %llu hellos, %llu keep-alives and cameras; largest queue %llu bytes "
+              "(the startup and one cut are %llu)\n",
+              static_cast<unsigned long long>(babbled), static_cast<unsigned long long>(hellos),
+              static_cast<unsigned long long>(keepalives), static_cast<unsigned long long>(worst_queue),
+              static_cast<unsigned long long>(remote.bytes_received()));
+  // Bounded: no queue beyond what the good client was sent in all (its
+  // startup and three cuts), while the floods sent far more than that.
+  EXPECT_LE(worst_queue, remote.bytes_received());
+  EXPECT_GT(babbled, 4 * worst_queue);
+  const auto logged = [&](const std::string& text) {
+    return std::any_of(log.begin(), log.end(), [&](const std::string& l) { return l.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(logged("(twice): closing: a second hello on a stream socket"));
+  EXPECT_TRUE(logged("(pulled): disconnected mid-frame"));
+  EXPECT_TRUE(logged("(hello-flood): hello again (resynchronising)"));
+  // The babbler is still connected, its packets dropped (each overflow one).
+  bool babbler_there = false;
+  for (const ClientReport& r : server.report()) babbler_there = babbler_there || r.name.find("(babbler)") != std::string::npos;
+  EXPECT_TRUE(babbler_there);
 }
 
 // A serial client's resends, at the frame level: the server writes again

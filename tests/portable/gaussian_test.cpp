@@ -38,6 +38,47 @@ TEST(GaussianTable, IntegerLog2AndSqrt) {
   EXPECT_EQ(isqrt64(uint64_t{1} << 62), uint64_t{1} << 31);
 }
 
+// The tail: r0 -> 0 (u = 0: tau^2 = 2 ln 2 * 33, the largest radius the
+// 32-bit inputs can ask for) is clipped to exactly 3.5 sigma, r0 -> 1 gives a
+// radius of nearly zero; in between tau falls monotonically and follows the
+// double formula, and no table entry leaves the +-3.5 sigma ball.
+TEST(GaussianTable, BoxMullerTailIsBoundedAtBothEnds) {
+  const int64_t clip = int64_t{7} << 23;
+  for (bool three_d : {false, true}) {
+    EXPECT_EQ(box_muller_radius_q24(0, three_d), clip);
+    EXPECT_EQ(box_muller_radius_q24(1, three_d), clip);
+    const int64_t top = box_muller_radius_q24(0xFFFFFFFFu, three_d);
+    EXPECT_GE(top, 0);
+    // sqrt(2^-32) = 2^-16, but one Q24 unit of tau^2 is already 2^-12 of tau:
+    // the radius is below 1.5 Q12 LSB (6144 in Q24), never negative.
+    EXPECT_LE(top, 6144);
+    const double scale = three_d ? std::sqrt(1.5) : 1.0;
+    int64_t previous = clip;
+    double worst = 0;
+    for (uint64_t u = 0; u <= 0xFFFFFFFFu; u += 4099) {
+      const int64_t tau = box_muller_radius_q24(static_cast<uint32_t>(u), three_d);
+      ASSERT_LE(tau, previous) << u;
+      ASSERT_GE(tau, 0) << u;
+      previous = tau;
+      const double r0 = (static_cast<double>(u) + 0.5) * 0x1.0p-32;
+      const double want = std::min(std::sqrt(-2 * std::log(r0)) * scale, 3.5);
+      worst = std::max(worst, std::abs(static_cast<double>(tau) * 0x1.0p-24 - want));
+    }
+    EXPECT_LT(worst, 1.0 / kGaussianOne) << three_d;  // under one Q12 LSB everywhere
+  }
+  // Every entry of long tables, both sources: within the 3.5-sigma ball.
+  for (GaussianSource source : {GaussianSource::kSobol, GaussianSource::kPseudo}) {
+    std::vector<Gaussian3Q12> t3(1 << 16);
+    std::vector<Gaussian2Q12> t2(1 << 16);
+    build_gaussian3_table(source, t3.data(), t3.size());
+    build_gaussian2_table(source, t2.data(), t2.size());
+    const int64_t ball = int64_t{kGaussianClip} * kGaussianClip + 3 * kGaussianClip;  // rounding of three Q12 terms
+    for (const Gaussian3Q12& g : t3)
+      ASSERT_LE(int64_t{g.v[0]} * g.v[0] + int64_t{g.v[1]} * g.v[1] + int64_t{g.v[2]} * g.v[2], ball);
+    for (const Gaussian2Q12& g : t2) ASSERT_LE(int64_t{g.v[0]} * g.v[0] + int64_t{g.v[1]} * g.v[1], ball);
+  }
+}
+
 // The reference sampler's formula in doubles (docs/sampling.md).
 void reference3(uint32_t j, double out[3]) {
   auto unit = [](uint32_t s) { return (static_cast<double>(s) + 0.5) * 0x1.0p-32; };

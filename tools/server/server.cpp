@@ -148,6 +148,10 @@ void Server::close_client(Client& c, CloseReason reason, FrameStatus status, uin
 void Server::handle(Client& c, const Frame& f) {
   switch (f.type) {
     case MessageType::kHello: {
+      // A second hello on a socket: the stream cannot start over mid-byte-stream
+      // (and a peer repeating it without reading would grow the queue).
+      if (c.hello && !c.serial)
+        return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "a second hello on a stream socket");
       if (c.hello && c.serial) {  // a serial client resynchronising: the stream starts over
         c.out.clear();
         c.out_at = 0;
@@ -181,7 +185,12 @@ void Server::handle(Client& c, const Frame& f) {
       c.pending = true;
       return;
     }
-    case MessageType::kKeepAlive: (void)c.sender.send(MessageType::kKeepAlive, nullptr, 0, Client::sink, &c); return;
+    case MessageType::kKeepAlive:
+      // Answered when nothing else is on its way (which tells the peer the
+      // link is alive as well): a peer that repeats it without reading
+      // cannot grow the queue.
+      if (c.idle()) (void)c.sender.send(MessageType::kKeepAlive, nullptr, 0, Client::sink, &c);
+      return;
     case MessageType::kAck:
     case MessageType::kResend: {
       uint16_t sequence = 0;
@@ -318,6 +327,7 @@ size_t Server::step(int timeout_ms) {
       }
     }
     if (c.closing && c.idle()) c.gone = true;
+    c.report.queued_bytes = c.out.size();
   }
   for (size_t i = 0; i < clients_.size();) {
     if (clients_[i]->gone) {

@@ -39,6 +39,7 @@ struct ClientReport {
   bool hello = false;
   uint32_t updates = 0, cut_nodes = 0;
   uint64_t bytes_in = 0, bytes_out = 0;
+  uint64_t queued_bytes = 0;  // the outgoing queue after the last step: bounded whatever the peer does
 };
 
 class Server {
