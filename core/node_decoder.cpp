@@ -89,6 +89,7 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
     for (int k = 0; k < 3; ++k)  // theta, phi, psi
       if (l.bits[static_cast<int>(theta) + k] > kMaxAngleBits) return DecodeStatus::kBadLayout;
   if (bytes < node_decoder_bytes(header_)) return DecodeStatus::kStorageTooSmall;
+  unpacker_.init(l);
   uint8_t* at = static_cast<uint8_t*>(storage);
 
   // Angle tables.
@@ -144,7 +145,7 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
 
 DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
   const RecordLayout& l = header_.layout;
-  const NodeFields f = unpack_record(l, record);
+  const NodeFields f = unpacker_.unpack(record);
   const bool normals = header_.has_normals(), color = header_.has_color();
   if (f[Field::kSigmaP] >= header_.class_count[0] || (normals && f[Field::kSigmaN] >= header_.class_count[1]) ||
       (color && f[Field::kSigmaC] >= header_.class_count[2]))

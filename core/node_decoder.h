@@ -62,6 +62,7 @@ class NodeDecoder {
 
  private:
   SpgHeader header_{};
+  RecordUnpacker unpacker_;
   int64_t axis_scale_q8_[3] = {};  // extent_a / E * 2^32
   int32_t extent_mu_[3] = {};
   FrameTables fp_{}, fn_{}, fc_{};

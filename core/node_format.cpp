@@ -6,14 +6,24 @@
 // shifted and masked — no per-bit loop, no read past the record.
 #include "core/node_format.h"
 
+#include <cstring>
+
 namespace stipple {
 namespace {
 
 constexpr int kPaddedBytes = kMaxRecordBytes + 4;
 
-inline uint32_t window32(const uint8_t* p) {
+// Four bytes, little-endian: one load on little-endian targets (every
+// supported one), byte by byte elsewhere.
+inline uint32_t load_window32(const uint8_t* p) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+#else
   return static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) | (static_cast<uint32_t>(p[2]) << 16) |
          (static_cast<uint32_t>(p[3]) << 24);
+#endif
 }
 
 }  // namespace
@@ -36,15 +46,57 @@ void pack_record(const RecordLayout& layout, const NodeFields& fields, uint8_t* 
 }
 
 NodeFields unpack_record(const RecordLayout& layout, const uint8_t* in) {
-  uint8_t buf[kPaddedBytes] = {};
+  // The record and four zero bytes, so that every field's window is inside.
+  uint8_t buf[kPaddedBytes];
   const int bytes = layout.record_bytes();
-  for (int i = 0; i < bytes; ++i) buf[i] = in[i];
+  std::memcpy(buf, in, static_cast<size_t>(bytes));
+  std::memset(buf + bytes, 0, 4);
   NodeFields fields;
   int bit = 0;
   for (int f = 0; f < kFieldCount; ++f) {
     const int w = layout.bits[f];
-    fields.v[f] = static_cast<uint16_t>((window32(buf + (bit >> 3)) >> (bit & 7)) & ((1u << w) - 1u));
+    fields.v[f] = static_cast<uint16_t>((load_window32(buf + (bit >> 3)) >> (bit & 7)) & ((1u << w) - 1u));
     bit += w;
+  }
+  return fields;
+}
+
+void RecordUnpacker::init(const RecordLayout& layout) {
+  *this = RecordUnpacker{};
+  bytes_ = static_cast<uint8_t>(layout.record_bytes());
+  tail_at_ = bytes_;
+  Slot tail[kFieldCount];
+  uint8_t tails = 0;
+  int bit = 0;
+  for (int f = 0; f < kFieldCount; ++f) {
+    const int w = layout.bits[f];
+    if (w == 0) continue;
+    const Slot s{static_cast<uint8_t>(f), static_cast<uint8_t>(bit >> 3), static_cast<uint8_t>(bit & 7),
+                 static_cast<uint16_t>((1u << w) - 1u)};
+    if (s.byte + 4 <= bytes_) {
+      slots_[direct_++] = s;
+    } else {
+      tail[tails++] = s;
+      if (s.byte < tail_at_) tail_at_ = s.byte;
+    }
+    bit += w;
+  }
+  for (uint8_t i = 0; i < tails; ++i) slots_[direct_ + i] = tail[i];
+  count_ = static_cast<uint8_t>(direct_ + tails);
+}
+
+NodeFields RecordUnpacker::unpack(const uint8_t* in) const {
+  NodeFields fields;
+  for (uint8_t i = 0; i < direct_; ++i) {
+    const Slot& s = slots_[i];
+    fields.v[s.field] = static_cast<uint16_t>((load_window32(in + s.byte) >> s.shift) & s.mask);
+  }
+  // The tail: at most 4 bytes (a window starts within 3 of the end), then zeros.
+  uint8_t tail[8] = {};
+  for (int i = 0; tail_at_ + i < bytes_; ++i) tail[i] = in[tail_at_ + i];
+  for (uint8_t i = direct_; i < count_; ++i) {
+    const Slot& s = slots_[i];
+    fields.v[s.field] = static_cast<uint16_t>((load_window32(tail + (s.byte - tail_at_)) >> s.shift) & s.mask);
   }
   return fields;
 }

@@ -107,6 +107,24 @@ void pack_record(const RecordLayout& layout, const NodeFields& fields, uint8_t* 
 // `in[layout.record_bytes() - 1]`. Fields of width 0 come back as 0.
 NodeFields unpack_record(const RecordLayout& layout, const uint8_t* in);
 
+// unpack_record from positions worked out once per layout: the client's
+// per-frame path. Fields whose 4-byte window lies inside the record are read
+// from it in place; the last few through a zero-padded copy of the record's
+// tail. Never reads past the record; the same fields as unpack_record.
+class RecordUnpacker {
+ public:
+  void init(const RecordLayout& layout);
+  NodeFields unpack(const uint8_t* in) const;
+
+ private:
+  struct Slot {
+    uint8_t field, byte, shift;
+    uint16_t mask;
+  };
+  Slot slots_[kFieldCount] = {};
+  uint8_t direct_ = 0, count_ = 0, bytes_ = 0, tail_at_ = 0;
+};
+
 // True when every field value fits its width.
 bool fields_fit(const RecordLayout& layout, const NodeFields& fields);
 

@@ -43,7 +43,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace stipple;
   Input in{data, size};
   SpgHeader h;
-  const uint8_t mode = in.byte();
+  const uint8_t mode = in.byte();  // bit 0 normals, 1 colour, 2 version 1, 3 wide angles
   h.version = (mode & 4) ? 1 : 2;
   h.flags = mode & kAttrKnownMask;
   h.tree_arity = 2;
@@ -51,7 +51,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const bool normal_field = f >= static_cast<int>(Field::kFnTheta) && f <= static_cast<int>(Field::kSigmaN);
     const bool color_field = f >= static_cast<int>(Field::kColorR);
     const bool present = (!normal_field || h.has_normals()) && (!color_field || h.has_color());
-    h.layout.bits[f] = present ? static_cast<uint8_t>(1 + in.byte() % kMaxFieldBits) : 0;
+    // Angle tables have 2^bits entries each: wide angles (13-16 bits) only
+    // when the mode asks, so most inputs stay fast.
+    const bool angle = f != static_cast<int>(Field::kSigmaP) && f != static_cast<int>(Field::kSigmaN) &&
+                       f != static_cast<int>(Field::kSigmaC) && (f >= static_cast<int>(Field::kFcTheta) ||
+                                                                 (f >= static_cast<int>(Field::kFpTheta) && f < static_cast<int>(Field::kColorR)));
+    const int widest = angle && !(mode & 8) ? 12 : kMaxFieldBits;
+    h.layout.bits[f] = present ? static_cast<uint8_t>(1 + in.byte() % widest) : 0;
   }
   h.node_count = h.leaf_count = h.point_count = 1;
   for (uint32_t& b : h.bbox_bits) b = in.u32();
