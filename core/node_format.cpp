@@ -26,6 +26,38 @@ inline uint32_t load_window32(const uint8_t* p) {
 #endif
 }
 
+// unpack_record for one of the paper's layouts: every field's position a
+// constant, the loop unrolled, the record copied by a fixed-size copy.
+template <bool kNormals, bool kColor, int kThin>
+NodeFields unpack_paper(const uint8_t* in) {
+  constexpr RecordLayout kLayout = paper_layout(kNormals, kColor, kThin);
+  constexpr int kBytes = kLayout.record_bytes();
+  uint8_t buf[kBytes + 4];
+  std::memcpy(buf, in, kBytes);
+  std::memset(buf + kBytes, 0, 4);
+  NodeFields fields;
+  int bit = 0;
+#pragma GCC unroll 18
+  for (int f = 0; f < kFieldCount; ++f) {
+    const int w = kLayout.bits[f];
+    if (w == 0) continue;
+    fields.v[f] = static_cast<uint16_t>((load_window32(buf + (bit >> 3)) >> (bit & 7)) & ((1u << w) - 1u));
+    bit += w;
+  }
+  return fields;
+}
+
+using UnpackFn = NodeFields (*)(const uint8_t*);
+template <bool kNormals, bool kColor>
+constexpr UnpackFn kPaperUnpack[3] = {unpack_paper<kNormals, kColor, 0>, unpack_paper<kNormals, kColor, 1>,
+                                      unpack_paper<kNormals, kColor, 2>};
+
+bool same_layout(const RecordLayout& a, const RecordLayout& b) {
+  for (int f = 0; f < kFieldCount; ++f)
+    if (a.bits[f] != b.bits[f]) return false;
+  return true;
+}
+
 }  // namespace
 
 void pack_record(const RecordLayout& layout, const NodeFields& fields, uint8_t* out) {
@@ -63,6 +95,12 @@ NodeFields unpack_record(const RecordLayout& layout, const uint8_t* in) {
 
 void RecordUnpacker::init(const RecordLayout& layout) {
   *this = RecordUnpacker{};
+  const bool normals = layout.bits[static_cast<int>(Field::kSigmaN)] != 0;
+  const bool color = layout.bits[static_cast<int>(Field::kSigmaC)] != 0;
+  for (int thin = 0; thin < 3; ++thin)
+    if (same_layout(layout, paper_layout(normals, color, thin)))
+      fixed_ = normals ? (color ? kPaperUnpack<true, true>[thin] : kPaperUnpack<true, false>[thin])
+                       : (color ? kPaperUnpack<false, true>[thin] : kPaperUnpack<false, false>[thin]);
   bytes_ = static_cast<uint8_t>(layout.record_bytes());
   tail_at_ = bytes_;
   Slot tail[kFieldCount];
@@ -85,7 +123,7 @@ void RecordUnpacker::init(const RecordLayout& layout) {
   count_ = static_cast<uint8_t>(direct_ + tails);
 }
 
-NodeFields RecordUnpacker::unpack(const uint8_t* in) const {
+NodeFields RecordUnpacker::unpack_any(const uint8_t* in) const {
   NodeFields fields;
   for (uint8_t i = 0; i < direct_; ++i) {
     const Slot& s = slots_[i];

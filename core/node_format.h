@@ -110,13 +110,17 @@ NodeFields unpack_record(const RecordLayout& layout, const uint8_t* in);
 // unpack_record from positions worked out once per layout: the client's
 // per-frame path. Fields whose 4-byte window lies inside the record are read
 // from it in place; the last few through a zero-padded copy of the record's
-// tail. Never reads past the record; the same fields as unpack_record.
+// tail. The paper's layouts (any attributes, any thin axis) have their own
+// unrolled unpack, every position a constant. Never reads past the record;
+// the same fields as unpack_record.
 class RecordUnpacker {
  public:
   void init(const RecordLayout& layout);
-  NodeFields unpack(const uint8_t* in) const;
+  NodeFields unpack(const uint8_t* in) const { return fixed_ ? fixed_(in) : unpack_any(in); }
 
  private:
+  NodeFields unpack_any(const uint8_t* in) const;
+  NodeFields (*fixed_)(const uint8_t*) = nullptr;
   struct Slot {
     uint8_t field, byte, shift;
     uint16_t mask;
