@@ -9,13 +9,13 @@ namespace {
 constexpr uint32_t kChunk = 64;
 
 struct Layout {
-  size_t entries, chunk_next, tile_head, tile_tail, tile_fill, tile_words, total;
+  size_t entries, chunk_next, tile_head, tile_tail, tile_fill, tile_words, tile_nodes, node_item, node_next, total;
   uint32_t chunks;
 };
 
 bool valid(const RasterConfig& c) {
   return c.width > 0 && c.height > 0 && c.tile_log2 >= 3 && c.tile_log2 <= 7 && c.max_points > 0 &&
-         c.max_points <= (1u << 26);
+         c.max_points <= (1u << 26) && c.max_nodes <= (1u << 26);
 }
 
 uint32_t tile_count(const RasterConfig& c) {
@@ -46,19 +46,14 @@ Layout layout_of(const RasterConfig& c, size_t entry_size) {
   at += align8(4 * tiles);
   l.tile_words = at;
   at += align8(word << (2 * c.tile_log2));
+  l.tile_nodes = at;
+  at += c.max_nodes ? align8(4 * tiles) : 0;
+  l.node_item = at;
+  at += align8(4 * size_t{c.max_nodes});
+  l.node_next = at;
+  at += align8(4 * size_t{c.max_nodes});
   l.total = at;
   return l;
-}
-
-template <class Word>
-constexpr Word pack(uint32_t depth, uint32_t color);
-template <>
-constexpr uint32_t pack<uint32_t>(uint32_t depth, uint32_t color) {
-  return (depth & 0xFFFF0000u) | (color & 0xFFFFu);
-}
-template <>
-constexpr uint64_t pack<uint64_t>(uint32_t depth, uint32_t color) {
-  return (static_cast<uint64_t>(depth) << 32) | (color & 0xFFFFFFu);
 }
 
 void store(uint8_t* p, uint32_t word) {  // RGB565, little-endian
@@ -92,6 +87,9 @@ RasterStatus PointRaster::init(const RasterConfig& config, void* arena, size_t b
   tile_tail_ = reinterpret_cast<uint32_t*>(base + l.tile_tail);
   tile_fill_ = reinterpret_cast<uint32_t*>(base + l.tile_fill);
   tile_words_ = base + l.tile_words;
+  tile_nodes_ = config.max_nodes ? reinterpret_cast<uint32_t*>(base + l.tile_nodes) : nullptr;
+  node_item_ = reinterpret_cast<uint32_t*>(base + l.node_item);
+  node_next_ = reinterpret_cast<uint32_t*>(base + l.node_next);
   chunk_count_ = l.chunks;
   begin_frame();
   return RasterStatus::kOk;
@@ -100,7 +98,10 @@ RasterStatus PointRaster::init(const RasterConfig& config, void* arena, size_t b
 void PointRaster::begin_frame() {
   count_ = 0;
   free_chunk_ = 0;
+  node_count_ = 0;
   for (int t = 0; t < tiles_x_ * tiles_y_; ++t) tile_fill_[t] = 0;
+  if (tile_nodes_)
+    for (int t = 0; t < tiles_x_ * tiles_y_; ++t) tile_nodes_[t] = kNoLink;
 }
 
 // A point on tile edges or the screen's: clipped to the screen, then one
@@ -122,16 +123,20 @@ void PointRaster::split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t
   }
 }
 
-void PointRaster::draw(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage) const {
-  if (config_.format == PixelFormat::kRgb565) draw_tiles<uint32_t>(rgb565(clear_rgb), frame, stride, coverage);
-  else draw_tiles<uint64_t>(clear_rgb & 0xFFFFFFu, frame, stride, coverage);
+void PointRaster::draw(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage, TileFn tile_fn,
+                       void* context) const {
+  if (config_.format == PixelFormat::kRgb565)
+    draw_tiles<uint32_t>(rgb565(clear_rgb), frame, stride, coverage, tile_fn, context);
+  else
+    draw_tiles<uint64_t>(clear_rgb & 0xFFFFFFu, frame, stride, coverage, tile_fn, context);
 }
 
 template <class Word>
-void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride, uint8_t* coverage) const {
+void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride, uint8_t* coverage, TileFn tile_fn,
+                             void* context) const {
   const int sh = config_.tile_log2, tile = 1 << sh;
   Word* words = static_cast<Word*>(tile_words_);
-  const Word clear = pack<Word>(0xFFFFFFFFu, clear_color);
+  const Word clear = pack_word<Word>(0xFFFFFFFFu, clear_color);
   const int bpp = bytes_per_pixel(config_.format);
   for (int ty = 0; ty < tiles_y_; ++ty) {
     for (int tx = 0; tx < tiles_x_; ++tx) {
@@ -145,7 +150,7 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
       for (uint32_t k = 0; k < fill; ++k) {
         if (k != 0 && (k & (kChunk - 1)) == 0) chunk = chunk_next_[chunk];
         const Entry& e = entries_[(chunk << kChunkLog2) + (k & (kChunk - 1))];
-        const Word w = pack<Word>(e.depth, e.color_wh);
+        const Word w = pack_word<Word>(e.depth, e.color_wh);
         Word* at = words + e.offset;
         const uint32_t wh = e.color_wh >> 24;
         if (wh == 0x11u) {  // 1 x 1
@@ -162,6 +167,8 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
               if (w < at[x]) at[x] = w;
         }
       }
+      const bool items = tile_nodes_ != nullptr && tile_nodes_[t] != kNoLink;
+      if (items && tile_fn != nullptr) tile_fn(context, static_cast<uint32_t>(t), px0, py0, words);
       for (int y = 0; y < ph; ++y) {
         uint8_t* out = frame + static_cast<size_t>(py0 + y) * stride + static_cast<size_t>(px0) * bpp;
         const Word* row = words + (y << sh);
@@ -178,7 +185,7 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
           const Word* row = words + (y << sh);
           for (int x = 0; x < pw; x += 8) {
             uint32_t b = 0;
-            if (fill != 0)  // a tile without points covers nothing
+            if (fill != 0 || items)  // a tile without points covers nothing
               for (int k = 0; k < 8 && x + k < pw; ++k) b |= static_cast<uint32_t>((row[x + k] >> kDepthShift) != kFar) << k;
             bits[x >> 3] = static_cast<uint8_t>(b);
           }

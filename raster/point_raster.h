@@ -8,6 +8,10 @@
 // a single pass with no sort. `draw` walks the tiles, keeping one tile's
 // depth+colour words hot, draws its bins and writes the finished tile out.
 //
+// Items a caller draws itself (the renderer's small nodes, whose points it
+// generates inside the tile pass) are filed per tile by `add_node` and
+// handed back, with the tile's words, to the caller's function in `draw`.
+//
 // Depth and colour share one word — depth in the high bits, colour in the
 // low — so a point costs one load, one compare and one store, and equal
 // depths resolve deterministically to the smaller colour value whatever the
@@ -35,6 +39,9 @@ struct RasterConfig {
   uint8_t tile_log2 = 5;  // 32 x 32 tiles
   PixelFormat format = PixelFormat::kRgb565;
   uint32_t max_points = 1u << 16;  // points per frame; more are refused by add()
+  // Items (the renderer's nodes) filed per tile by add_node, drawn by the
+  // caller's tile function inside the tile pass: 0 for none.
+  uint32_t max_nodes = 0;
 };
 
 struct ScreenPoint {
@@ -56,6 +63,19 @@ constexpr uint16_t rgb565(uint32_t rgb) {
 constexpr uint32_t rgb888_from_565(uint16_t v) {
   const uint32_t r = v >> 11, g = (v >> 5) & 63u, b = v & 31u;
   return (((r << 3) | (r >> 2)) << 16) | (((g << 2) | (g >> 4)) << 8) | ((b << 3) | (b >> 2));
+}
+
+// The tile words: depth above colour. RGB565 frames: 32-bit words, the
+// depth's top 16 bits above the 565 colour; RGB888: 64-bit, 32 above 24.
+template <class Word>
+constexpr Word pack_word(uint32_t depth, uint32_t color);
+template <>
+constexpr uint32_t pack_word<uint32_t>(uint32_t depth, uint32_t color) {
+  return (depth & 0xFFFF0000u) | (color & 0xFFFFu);
+}
+template <>
+constexpr uint64_t pack_word<uint64_t>(uint32_t depth, uint32_t color) {
+  return (static_cast<uint64_t>(depth) << 32) | (color & 0xFFFFFFu);
 }
 
 class PointRaster {
@@ -90,13 +110,46 @@ class PointRaster {
     split(x0, y0, x1, y1, p.depth, color);
     return true;
   }
+  // Files item `item` (the caller's index: a node whose points all fall in
+  // one tile) in `tile`'s list; false when max_nodes are filed.
+  bool add_node(uint32_t tile, uint32_t item) {
+    if (node_count_ >= config_.max_nodes) return false;
+    const uint32_t link = node_count_++;
+    node_item_[link] = item;
+    node_next_[link] = tile_nodes_[tile];
+    tile_nodes_[tile] = link;
+    return true;
+  }
+  // Counts n points against the frame's budget without filing them (the
+  // points of an item drawn in the tile pass); false, nothing counted, when
+  // they do not fit. reserve_undo takes them back.
+  bool reserve(uint32_t n) {
+    if (n > config_.max_points - count_) return false;
+    count_ += n;
+    return true;
+  }
+  void reserve_undo(uint32_t n) { count_ -= n; }
+  static constexpr uint32_t kNoLink = 0xFFFFFFFFu;
+  // A tile's filed items: first link, then next_link(link) until kNoLink.
+  uint32_t first_link(uint32_t tile) const { return tile_nodes_[tile]; }
+  uint32_t next_link(uint32_t link) const { return node_next_[link]; }
+  uint32_t item_of(uint32_t link) const { return node_item_[link]; }
+
+  // Called once per tile during draw, after its binned points, with the
+  // tile's depth+colour words (2^tile_log2 a row; uint32_t for RGB565,
+  // uint64_t for RGB888: pack_word's) for its filed items to be drawn into.
+  using TileFn = void (*)(void* context, uint32_t tile, int px0, int py0, void* words);
+
   // Draws the binned points over `clear_rgb` into `frame` (height rows of
   // `stride` bytes, pixels in the configured format, little-endian RGB565).
   // With `coverage`, also writes which pixels a point covered: one bit a
   // pixel, LSB first, rows of (width + 7) / 8 bytes (raster/resolve.h).
-  void draw(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage = nullptr) const;
+  void draw(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage = nullptr, TileFn tile_fn = nullptr,
+            void* context = nullptr) const;
 
   uint32_t points() const { return count_; }
+  const RasterConfig& config() const { return config_; }
+  int tiles_x() const { return tiles_x_; }
 
  private:
   static constexpr uint32_t kChunkLog2 = 6;  // 64 entries a chunk
@@ -118,7 +171,8 @@ class PointRaster {
   }
   void split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t depth, uint32_t color);
   template <class Word>
-  void draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage) const;
+  void draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage, TileFn tile_fn,
+                  void* context) const;
 
   RasterConfig config_{};
   int tiles_x_ = 0, tiles_y_ = 0;
@@ -128,7 +182,10 @@ class PointRaster {
   uint32_t* tile_tail_ = nullptr;
   uint32_t* tile_fill_ = nullptr;
   void* tile_words_ = nullptr;     // one tile of depth+colour words
-  uint32_t count_ = 0, free_chunk_ = 0, chunk_count_ = 0;
+  uint32_t* tile_nodes_ = nullptr; // per tile: its last filed item's link
+  uint32_t* node_item_ = nullptr;  // per link: the item, the tile's previous link
+  uint32_t* node_next_ = nullptr;
+  uint32_t count_ = 0, free_chunk_ = 0, chunk_count_ = 0, node_count_ = 0;
 };
 
 }  // namespace stipple

@@ -15,7 +15,8 @@ constexpr int32_t kMaxDepthMu = 1 << 30;
 constexpr int32_t kMaxSigmaN = 4 << 12;       // theta table covers theta <= 4 rad
 
 struct Layout {
-  size_t raster, internal_frame, coverage, screen_coverage, resolve, g_position, g_normal, g_color, shading, reciprocal, total;
+  size_t raster, internal_frame, coverage, screen_coverage, resolve, g_position, g_normal, g_color, shading, reciprocal,
+      tile_setups, total;
 };
 
 // The raster's configuration: the screen, times the supersampling, in
@@ -27,8 +28,11 @@ RasterConfig internal_raster(const RendererConfig& c) {
     r.height = static_cast<uint16_t>(r.height * c.supersample);
     r.format = PixelFormat::kRgb888;
   }
+  r.max_nodes = c.tile_nodes;
   return r;
 }
+
+size_t point_setup_bytes();
 
 Layout layout_of(const RendererConfig& c) {
   Layout l{};
@@ -47,6 +51,7 @@ Layout layout_of(const RendererConfig& c) {
   l.g_color = take(c.color ? sizeof(Gaussian3Q12) * c.samples : 0);
   l.shading = take(sizeof(ShadingTables));
   l.reciprocal = take(sizeof(uint16_t) << kReciprocalBits);
+  l.tile_setups = take(point_setup_bytes() * size_t{c.tile_nodes});
   l.total = arena.total();
   return l;
 }
@@ -63,6 +68,59 @@ inline uint32_t shade(uint32_t r, uint32_t g, uint32_t b, uint32_t intensity, ui
   const uint32_t rr = ((r * intensity) >> 8) + specular, gg = ((g * intensity) >> 8) + specular,
                  bb = ((b * intensity) >> 8) + specular;
   return ((rr > 255 ? 255 : rr) << 16) | ((gg > 255 ? 255 : gg) << 8) | (bb > 255 ? 255 : bb);
+}
+
+// Where draw_points puts a point: filed in the raster's bins (any node) ...
+struct RasterSink {
+  PointRaster& raster;
+  int size;
+  bool put(int32_t x_q4, int32_t y_q4, uint32_t depth, uint32_t rgb) {
+    return raster.add(ScreenPoint{x_q4, y_q4, depth, rgb}, size);
+  }
+};
+
+// ... or straight into the hot tile's words (a node whose points all fall
+// in that tile: PointRenderer::draw_node proved it, the checked build traps
+// otherwise). The same square and the same word as the bins would give.
+template <class Word>
+struct TileSink {
+  Word* words;
+  int tile_log2, px0, py0, size;
+  bool put(int32_t x_q4, int32_t y_q4, uint32_t depth, uint32_t rgb) {
+    const uint32_t color = sizeof(Word) == 4 ? rgb565(rgb) : (rgb & 0xFFFFFFu);
+    const Word w = pack_word<Word>(depth, color);
+    const int x = ((x_q4 - (size - 1) * 8) >> 4) - px0, y = ((y_q4 - (size - 1) * 8) >> 4) - py0;
+    const int tile = 1 << tile_log2;
+#if STIPPLE_CHECK_RANGES
+    if (x < 0 || y < 0 || x + size > tile || y + size > tile) __builtin_trap();
+#endif
+    Word* at = words + (y << tile_log2) + x;
+    if (size == 2) {
+      if (w < at[0]) at[0] = w;
+      if (w < at[1]) at[1] = w;
+      if (w < at[tile]) at[tile] = w;
+      if (w < at[tile + 1]) at[tile + 1] = w;
+      return true;
+    }
+    for (int dy = 0; dy < size; ++dy, at += tile)
+      for (int dx = 0; dx < size; ++dx)
+        if (w < at[dx]) at[dx] = w;
+    return true;
+  }
+};
+
+// The pixels [lo, hi] a node's point squares can cover along one axis, from
+// the mean's screen position p0 (Q4) and the slopes m (1/256 px per sigma):
+// every sample is within the table's clip per component, so its offset
+// (m . g) >> 16 lies in [-(c sum|m|) / 2^16 - 1, (c sum|m|) / 2^16].
+struct Span {
+  int32_t lo, hi;
+};
+inline Span pixel_span(int32_t p0_q4, const int32_t m[3], int size) {
+  const int64_t sum = abs64(m[0]) + abs64(m[1]) + abs64(m[2]);
+  const int64_t d = (sum * kGaussianClip) >> 16;
+  const int64_t lo = p0_q4 - d - 1 - (size - 1) * 8, hi = p0_q4 + d - (size - 1) * 8;
+  return Span{static_cast<int32_t>(lo >> 4), static_cast<int32_t>((hi >> 4) + size - 1)};
 }
 
 }  // namespace
@@ -125,6 +183,7 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   g_color_ = config.color ? reinterpret_cast<Gaussian3Q12*>(base + l.g_color) : nullptr;
   shading_ = reinterpret_cast<ShadingTables*>(base + l.shading);
   reciprocal_ = reinterpret_cast<uint16_t*>(base + l.reciprocal);
+  tile_setups_ = config.tile_nodes ? reinterpret_cast<PointSetup*>(base + l.tile_setups) : nullptr;
   build_gaussian3_table(config.source, g_position_, config.samples);
   if (g_normal_) build_gaussian2_table(config.source, g_normal_, config.samples);
   if (g_color_) build_gaussian3_table(config.source, g_color_, config.samples, kColorSobolDim);
@@ -145,6 +204,10 @@ struct PointRenderer::PointSetup {
   int64_t ca[3][3];  // colour axes, 8-bit levels per sigma in Q8
 };
 
+namespace {
+size_t point_setup_bytes() { return (sizeof(PointRenderer::PointSetup) + 7) & ~size_t{7}; }
+}  // namespace
+
 struct PointRenderer::FrameSetup {
   Camera camera;
   int32_t width_q4, height_q4;
@@ -156,7 +219,12 @@ struct PointRenderer::FrameSetup {
 template <Projection P, PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular>
 void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, uint32_t max_points,
                               FrameStats& stats) {
-  PointSetup setup;  // filled in place: draw_points reads it by reference
+  // Filled in place — in the tile pass's next free record when there is one,
+  // so a node that waits for its tile is not copied: draw_points reads it by
+  // reference either way.
+  PointSetup local;
+  const bool pooled = P == Projection::kAffine && tile_setups_ != nullptr && tile_setup_count_ < config_.tile_nodes;
+  PointSetup& setup = pooled ? tile_setups_[tile_setup_count_] : local;
   NodeProjection& proj = setup.proj;
   if (!proj.setup(f.camera, node)) {
     ++stats.nodes_culled;
@@ -241,15 +309,51 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
         const int64_t v = (int64_t{node.color_axis[k][ch]} * 255) >> 4;
         setup.ca[k][ch] = v > (1 << 24) ? (1 << 24) : v < -(1 << 24) ? -(1 << 24) : v;
       }
-  stats.points += draw_points<P, kNormals, kColorPoints, kSpecular>(setup, stats);
   ++stats.nodes_drawn;
+  if constexpr (P == Projection::kAffine) {
+    // A node inside one tile (and the screen) waits for that tile's pass,
+    // where its points go straight into the tile's words; its points count
+    // against the frame's budget now.
+    if (pooled) {
+      const Span sx = pixel_span(proj.x0_q4, proj.mx, setup.size), sy = pixel_span(proj.y0_q4, proj.my, setup.size);
+      const int sh = internal_.tile_log2;
+      if (sx.lo >= 0 && sy.lo >= 0 && sx.hi < internal_.width && sy.hi < internal_.height && (sx.lo >> sh) == (sx.hi >> sh) &&
+          (sy.lo >> sh) == (sy.hi >> sh) && raster_.reserve(setup.count)) {
+        const uint32_t tile = static_cast<uint32_t>((sy.lo >> sh) * raster_.tiles_x() + (sx.lo >> sh));
+        if (raster_.add_node(tile, tile_setup_count_)) {
+          ++tile_setup_count_;
+          return;
+        }
+        raster_.reserve_undo(setup.count);
+      }
+    }
+  }
+  RasterSink sink{raster_, setup.size};
+  stats.points += draw_points<P, kNormals, kColorPoints, kSpecular>(setup, stats, sink);
+}
+
+template <PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
+void PointRenderer::draw_tile_nodes(uint32_t tile, int px0, int py0, Word* words, FrameStats& stats) {
+  TileSink<Word> sink{words, internal_.tile_log2, px0, py0, config_.point_size};
+  for (uint32_t link = raster_.first_link(tile); link != PointRaster::kNoLink; link = raster_.next_link(link))
+    stats.points += draw_points<Projection::kAffine, kNormals, kColorPoints, kSpecular>(tile_setups_[raster_.item_of(link)],
+                                                                                         stats, sink);
+}
+
+template <PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular>
+void PointRenderer::tile_nodes_of(void* context, uint32_t tile, int px0, int py0, void* words) {
+  TileContext& c = *static_cast<TileContext*>(context);
+  if (c.renderer->internal_.format == PixelFormat::kRgb565)
+    c.renderer->draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint32_t*>(words), *c.stats);
+  else
+    c.renderer->draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint64_t*>(words), *c.stats);
 }
 
 // The per-point path: its own function, never inlined, so that the ARMv5
 // build can be checked symbol by symbol for run-time helper calls
 // (tests/handheld/per_point_helpers.cmake).
-template <Projection P, PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular>
-uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
+template <Projection P, PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular, class Sink>
+uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats, Sink& sink) {
   const NodeProjection& proj = s.proj;
   const uint32_t count = s.count;
   const uint32_t base_r = s.base_r, base_g = s.base_g, base_b = s.base_b;
@@ -260,7 +364,6 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
   constexpr bool kShadePoints = kNormals != PointNormals::kNode;
   const int32_t near = s.near;
   const int shift = s.shift;
-  const int size = s.size;
   uint32_t drawn = 0;
   for (uint32_t j = 0; j < count; ++j) {
     ScreenSample p;
@@ -303,7 +406,7 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
       rgb = (kShadePoints || config_.shading != ShadingMode::kNone) ? shade(r, gg, bb, intensity, specular)
                                                                     : (r << 16) | (gg << 8) | bb;
     }
-    if (raster_.add(ScreenPoint{x, y, depth, rgb}, size)) ++drawn;
+    if (sink.put(x, y, depth, rgb)) ++drawn;
     else ++stats.points_dropped;
   }
   return drawn;
@@ -353,6 +456,15 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   const bool color_points = f.model_color && config_.sample_color;
   const bool specular = normals && config_.lighting.specular_q8 > 0;
   using DrawFn = void (PointRenderer::*)(const FrameSetup&, const SpgHeader&, const FixedNode&, uint32_t, FrameStats&);
+  const PointRaster::TileFn tile_fn =
+      point_normals == PointNormals::kSampled
+          ? (color_points ? (specular ? &tile_nodes_of<PointNormals::kSampled, true, true> : &tile_nodes_of<PointNormals::kSampled, true, false>)
+                          : (specular ? &tile_nodes_of<PointNormals::kSampled, false, true> : &tile_nodes_of<PointNormals::kSampled, false, false>))
+      : point_normals == PointNormals::kSurface
+          ? (color_points ? (specular ? &tile_nodes_of<PointNormals::kSurface, true, true> : &tile_nodes_of<PointNormals::kSurface, true, false>)
+                          : (specular ? &tile_nodes_of<PointNormals::kSurface, false, true> : &tile_nodes_of<PointNormals::kSurface, false, false>))
+          : (color_points ? (specular ? &tile_nodes_of<PointNormals::kNode, true, true> : &tile_nodes_of<PointNormals::kNode, true, false>)
+                          : (specular ? &tile_nodes_of<PointNormals::kNode, false, true> : &tile_nodes_of<PointNormals::kNode, false, false>));
 #define STIPPLE_PICK_N(P, N)                                                                                       \
   (color_points ? (specular ? &PointRenderer::draw_node<P, N, true, true> : &PointRenderer::draw_node<P, N, true, false>) \
                 : (specular ? &PointRenderer::draw_node<P, N, false, true> : &PointRenderer::draw_node<P, N, false, false>))
@@ -370,6 +482,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   const uint32_t count = cache.count();
   stats.nodes = count;
   raster_.begin_frame();
+  tile_setup_count_ = 0;
   // The point cap: a node draws at most point_cap times the original points
   // under it (times the supersampling's n^2, so it means the same on screen).
   const uint32_t cap_scale = uint32_t{config_.point_cap} * static_cast<uint32_t>(n * n);
@@ -388,7 +501,8 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   }
   uint8_t* const target = n == 1 ? frame : internal_frame_;
   const size_t target_stride = n == 1 ? stride : size_t{internal_.width} * 3;
-  raster_.draw(config_.clear_rgb, target, target_stride, coverage_);
+  TileContext tile_context{this, &stats};
+  raster_.draw(config_.clear_rgb, target, target_stride, coverage_, tile_fn, &tile_context);
   if (n > 1 && coverage_ != nullptr) {
     // The resolve's coverage: a screen pixel is covered where any pixel of its block is.
     const size_t in_row = coverage_row_bytes(internal_.width), out_row = coverage_row_bytes(config_.raster.width);

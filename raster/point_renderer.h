@@ -70,6 +70,12 @@ struct RendererConfig {
   // under it (the counts the stream carries with each node; 0: no cap), so
   // sparse returns stay sparse (docs/results.md).
   uint8_t point_cap = 0;
+  // Nodes drawn inside the tile pass per frame (affine projection): a node
+  // whose points all fall in one tile keeps its per-point set-up here and
+  // generates its points straight into the hot tile, instead of filing each
+  // point in the bins and reading it back (docs/fixed_point.md, "Speed").
+  // Each takes a set-up record of the arena; 0: every point through the bins.
+  uint32_t tile_nodes = 0;
 };
 
 enum class RenderStatus : uint8_t {
@@ -110,15 +116,25 @@ class PointRenderer {
   [[nodiscard]] bool set_view(ShadingMode shading, bool grey, uint16_t quality_q8);
   const RendererConfig& config() const { return config_; }
 
- private:
+ // Per frame and per node: defined in point_renderer.cpp.
   struct FrameSetup;
   struct PointSetup;
+
+ private:
   // Which normal each point is shaded by.
   enum class PointNormals : uint8_t { kNode, kSampled, kSurface };
   template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
   void draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, uint32_t max_points, FrameStats& stats);
-  template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
-  [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
+  template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular, class Sink>
+  [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats, Sink& sink);
+  template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
+  void draw_tile_nodes(uint32_t tile, int px0, int py0, Word* words, FrameStats& stats);
+  template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
+  static void tile_nodes_of(void* context, uint32_t tile, int px0, int py0, void* words);
+  struct TileContext {
+    PointRenderer* renderer;
+    FrameStats* stats;
+  };
 
   RendererConfig config_{};
   PointRaster raster_;
@@ -133,6 +149,8 @@ class PointRenderer {
   ShadingTables* shading_ = nullptr;
   uint16_t* reciprocal_ = nullptr;  // 1024 entries
   const PpnTable* ppn_ = nullptr;
+  PointSetup* tile_setups_ = nullptr;  // tile_nodes of them
+  uint32_t tile_setup_count_ = 0;      // this frame's
 };
 
 }  // namespace stipple

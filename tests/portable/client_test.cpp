@@ -219,6 +219,67 @@ TEST(Client, DrawsNothingBehindTheCameraAndCountsCulls) {
   EXPECT_TRUE(std::all_of(frame.begin(), frame.end(), [](uint8_t v) { return v == 0; }));  // cleared to black
 }
 
+// The tile pass (RendererConfig::tile_nodes: a node inside one tile has its
+// points generated straight into that tile's words) draws exactly the
+// picture of the bins, byte for byte and point for point: both pixel
+// formats, every point size, every shading, per-point colour, supersampling,
+// the resolve, and a pool that fills up mid-frame (the rest through the
+// bins). Models: the bunny (every node of its tree held, so large nodes
+// spanning many tiles are drawn beside small ones) and the coloured sphere.
+TEST(Client, TilePassDrawsTheBinsPicture) {
+  struct Case {
+    const char* model;
+    PixelFormat format;
+    uint8_t point_size;
+    ShadingMode shading;
+    uint8_t supersample;
+    bool resolve;
+    uint32_t tile_nodes;
+  };
+  const Case cases[] = {
+      {"tests/golden/bunny_v1.spg", PixelFormat::kRgb565, 2, ShadingMode::kSurface, 1, true, 1u << 16},
+      {"tests/golden/bunny_v1.spg", PixelFormat::kRgb888, 1, ShadingMode::kPerPoint, 1, false, 1u << 16},
+      {"tests/golden/bunny_v1.spg", PixelFormat::kRgb888, 3, ShadingMode::kPerNode, 2, true, 1u << 16},
+      {"tests/golden/bunny_v1.spg", PixelFormat::kRgb565, 2, ShadingMode::kNone, 1, false, 300},  // the pool fills
+      {"tests/data/sphere600_colour.spg", PixelFormat::kRgb888, 2, ShadingMode::kSurface, 1, true, 1u << 16},
+      {"tests/data/sphere600_colour.spg", PixelFormat::kRgb565, 1, ShadingMode::kPerPoint, 4, false, 50},
+  };
+  for (const Case& k : cases) {
+    const std::vector<uint8_t> file = test::fixture(k.model);
+    SpgView view;
+    ASSERT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
+    std::vector<uint8_t> frames[2];
+    FrameStats stats[2];
+    for (int pass = 0; pass < 2; ++pass) {
+      ClientConfig c = small_config(view.header.node_count);
+      c.raster.format = k.format;
+      c.point_size = k.point_size;
+      c.shading = k.shading;
+      c.supersample = k.supersample;
+      c.resolve = k.resolve;
+      c.tile_nodes = pass == 0 ? 0 : k.tile_nodes;
+      c.raster.max_points = 1u << 21;
+      c.quality_q8 = 64;  // every node of the tree at a quarter of its points: none dropped
+      Harness h(c);
+      ASSERT_EQ(h.client.load_startup(file.data(), spg_startup_bytes(view.header.version, view.header.class_count)),
+                ClientStatus::kOk);
+      for (uint32_t id = 0; id < view.header.node_count; ++id)
+        ASSERT_EQ(h.client.put_node(NodeId{id}, view.records + size_t{id} * view.record_bytes, view.record_bytes),
+                  ClientStatus::kOk);
+      Camera cam;
+      ASSERT_TRUE(orbit_camera(test::orbit(h.client.decoder().extent_mu(), 40, 15), 240, 320, &cam));
+      frames[pass].assign(240 * 320 * 3, 0xAB);
+      ASSERT_EQ(h.client.render(cam, frames[pass].data(), 240 * 3, &stats[pass]), ClientStatus::kOk);
+    }
+    EXPECT_EQ(frames[0], frames[1]) << k.model << " " << int(k.point_size) << " px, tile_nodes " << k.tile_nodes;
+    EXPECT_EQ(stats[0].points, stats[1].points);
+    EXPECT_EQ(stats[0].nodes_drawn, stats[1].nodes_drawn);
+    EXPECT_EQ(stats[0].points_dropped, 0u);
+    EXPECT_EQ(stats[1].points_dropped, 0u);
+    EXPECT_GT(stats[0].points, 1000u);
+  }
+}
+
 TEST(Client, FrameBudgetDropsPointsAndSaysSo) {
   ClientConfig c = small_config(bunny().view.header.node_count);
   c.raster.max_points = 1000;

@@ -62,6 +62,9 @@ const char kRenderOptionsHelp[] =
     "  --pseudo               pseudo-random instead of Sobol samples\n"
     "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
     "  --max-points N         frame budget (default 1048576)\n"
+    "  --tile-nodes N         nodes drawn inside the tile pass, their points written\n"
+    "                         straight into the tile (default 65536; 0: every point\n"
+    "                         through the bins; the same picture either way)\n"
     "  --cache-decoded        cache decoded nodes (no per-frame decode; ~7x the memory)\n"
     "  --cache N              nodes the client's cache holds (default 30000): the\n"
     "                         cut is coarser rather than larger (--level: raised to\n"
@@ -81,6 +84,7 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
   c.raster.width = 240;
   c.raster.height = 320;
   c.raster.max_points = 1u << 20;
+  c.tile_nodes = 1u << 16;
   if (args.value("--size", v)) {
     if (!parse_size(v, c.raster.width, c.raster.height))
       return error = "--size: expected WIDTHxHEIGHT within 1..4096, got '" + v + "'", false;
@@ -160,6 +164,10 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
   if (args.value("--max-points", v)) {
     if (!cli::parse_uint(v, 1u << 26, u) || u < 1) return error = "--max-points: expected 1..67108864, got '" + v + "'", false;
     c.raster.max_points = static_cast<uint32_t>(u);
+  }
+  if (args.value("--tile-nodes", v)) {
+    if (!cli::parse_uint(v, 1u << 24, u)) return error = "--tile-nodes: expected 0..16777216, got '" + v + "'", false;
+    c.tile_nodes = static_cast<uint32_t>(u);
   }
   if (args.flag("--no-cull")) o.rule.cull = false;
   if (args.value("--leaf-cone", v) && !parse_leaf_cone(v, o.rule.leaf_cone_q8, error)) return false;
