@@ -63,8 +63,9 @@ const char kRenderOptionsHelp[] =
     "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
     "  --max-points N         frame budget (default 1048576)\n"
     "  --tile-nodes N         nodes drawn inside the tile pass, their points written\n"
-    "                         straight into the tile (default 65536; 0: every point\n"
-    "                         through the bins; the same picture either way)\n"
+    "                         straight into the tile (default 65536, on the handheld\n"
+    "                         0: its arena; 0: every point through the bins; the\n"
+    "                         same picture either way)\n"
     "  --cache-decoded        cache decoded nodes (no per-frame decode; ~7x the memory)\n"
     "  --cache N              nodes the client's cache holds (default 30000): the\n"
     "                         cut is coarser rather than larger (--level: raised to\n"
@@ -168,6 +169,7 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
   if (args.value("--tile-nodes", v)) {
     if (!cli::parse_uint(v, 1u << 24, u)) return error = "--tile-nodes: expected 0..16777216, got '" + v + "'", false;
     c.tile_nodes = static_cast<uint32_t>(u);
+    o.tile_nodes_given = true;
   }
   if (args.flag("--no-cull")) o.rule.cull = false;
   if (args.value("--leaf-cone", v) && !parse_leaf_cone(v, o.rule.leaf_cone_q8, error)) return false;
