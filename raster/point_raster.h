@@ -36,7 +36,7 @@ inline constexpr int bytes_per_pixel(PixelFormat f) { return f == PixelFormat::k
 
 struct RasterConfig {
   uint16_t width = 240, height = 320;
-  uint8_t tile_log2 = 5;  // 32 x 32 tiles
+  uint8_t tile_log2 = 6;  // 64 x 64 tiles (docs/fixed_point.md, "Speed")
   PixelFormat format = PixelFormat::kRgb565;
   uint32_t max_points = 1u << 16;  // points per frame; more are refused by add()
   // Items (the renderer's nodes) filed per tile by add_node, drawn by the

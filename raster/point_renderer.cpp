@@ -322,6 +322,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
         const uint32_t tile = static_cast<uint32_t>((sy.lo >> sh) * raster_.tiles_x() + (sx.lo >> sh));
         if (raster_.add_node(tile, tile_setup_count_)) {
           ++tile_setup_count_;
+          ++stats.nodes_in_tiles;
           return;
         }
         raster_.reserve_undo(setup.count);

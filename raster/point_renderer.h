@@ -94,6 +94,7 @@ struct FrameStats {
   uint32_t nodes_culled = 0;  // behind the near plane or off screen
   uint32_t points = 0;        // points generated and binned
   uint32_t points_dropped = 0;  // refused by a full frame budget
+  uint32_t nodes_in_tiles = 0;  // of nodes_drawn: drawn inside the tile pass (RendererConfig::tile_nodes)
 };
 
 bool renderer_config_valid(const RendererConfig& config);

@@ -57,13 +57,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                        f != static_cast<int>(Field::kSigmaC) && (f >= static_cast<int>(Field::kFcTheta) ||
                                                                  (f >= static_cast<int>(Field::kFpTheta) && f < static_cast<int>(Field::kColorR)));
     const int widest = angle && !(mode & 8) ? 12 : kMaxFieldBits;
-    h.layout.bits[f] = present ? static_cast<uint8_t>(1 + in.byte() % widest) : 0;
+    h.layout.bits[f] = static_cast<uint8_t>(present ? 1 + in.byte() % widest : 0);
   }
   h.node_count = h.leaf_count = h.point_count = 1;
   for (uint32_t& b : h.bbox_bits) b = in.u32();
   h.class_count[0] = static_cast<uint16_t>(1 + in.byte() % 8);
-  h.class_count[1] = h.has_normals() ? static_cast<uint16_t>(1 + in.byte() % 8) : 0;
-  h.class_count[2] = h.has_color() ? static_cast<uint16_t>(1 + in.byte() % 8) : 0;
+  h.class_count[1] = static_cast<uint16_t>(h.has_normals() ? 1 + in.byte() % 8 : 0);
+  h.class_count[2] = static_cast<uint16_t>(h.has_color() ? 1 + in.byte() % 8 : 0);
   std::vector<uint32_t> tables[3];
   const int per_class[3] = {3, 2, 3};
   for (int t = 0; t < 3; ++t) {

@@ -87,8 +87,13 @@ TEST(Client, ArenaSizeIsExactAndChecked) {
 TEST(Client, HandheldArenaAt240x320With30KNodes) {
   // The configuration docs/fixed_point.md reports: normals, no colour (the
   // bunny and dragon scans), 30 K cached nodes, a 60 K-point frame budget.
+  // The raster's default tiles (the handheld's), the tile pass off (its default).
   ClientConfig c;
-  c.raster = RasterConfig{240, 320, 5, PixelFormat::kRgb565, 60000};
+  c.raster = RasterConfig{};
+  c.raster.width = 240;
+  c.raster.height = 320;
+  c.raster.format = PixelFormat::kRgb565;
+  c.raster.max_points = 60000;
   c.node_capacity = 30000;
   c.color = false;
   const size_t bytes = client_arena_bytes(c);
@@ -235,14 +240,15 @@ TEST(Client, TilePassDrawsTheBinsPicture) {
     uint8_t supersample;
     bool resolve;
     uint32_t tile_nodes;
+    double distance = 3;  // model extents: the sphere's 600 points make large nodes, seen from far to be small
   };
   const Case cases[] = {
       {"tests/golden/bunny_v1.spg", PixelFormat::kRgb565, 2, ShadingMode::kSurface, 1, true, 1u << 16},
       {"tests/golden/bunny_v1.spg", PixelFormat::kRgb888, 1, ShadingMode::kPerPoint, 1, false, 1u << 16},
-      {"tests/golden/bunny_v1.spg", PixelFormat::kRgb888, 3, ShadingMode::kPerNode, 2, true, 1u << 16},
+      {"tests/golden/bunny_v1.spg", PixelFormat::kRgb888, 3, ShadingMode::kPerNode, 4, true, 1u << 16},
       {"tests/golden/bunny_v1.spg", PixelFormat::kRgb565, 2, ShadingMode::kNone, 1, false, 300},  // the pool fills
-      {"tests/data/sphere600_colour.spg", PixelFormat::kRgb888, 2, ShadingMode::kSurface, 1, true, 1u << 16},
-      {"tests/data/sphere600_colour.spg", PixelFormat::kRgb565, 1, ShadingMode::kPerPoint, 4, false, 50},
+      {"tests/data/sphere600_colour.spg", PixelFormat::kRgb888, 2, ShadingMode::kSurface, 1, true, 1u << 16, 12},
+      {"tests/data/sphere600_colour.spg", PixelFormat::kRgb565, 1, ShadingMode::kPerPoint, 2, false, 50, 12},
   };
   for (const Case& k : cases) {
     const std::vector<uint8_t> file = test::fixture(k.model);
@@ -267,7 +273,7 @@ TEST(Client, TilePassDrawsTheBinsPicture) {
         ASSERT_EQ(h.client.put_node(NodeId{id}, view.records + size_t{id} * view.record_bytes, view.record_bytes),
                   ClientStatus::kOk);
       Camera cam;
-      ASSERT_TRUE(orbit_camera(test::orbit(h.client.decoder().extent_mu(), 40, 15), 240, 320, &cam));
+      ASSERT_TRUE(orbit_camera(test::orbit(h.client.decoder().extent_mu(), 40, 15, k.distance), 240, 320, &cam));
       frames[pass].assign(240 * 320 * 3, 0xAB);
       ASSERT_EQ(h.client.render(cam, frames[pass].data(), 240 * 3, &stats[pass]), ClientStatus::kOk);
     }
@@ -276,7 +282,10 @@ TEST(Client, TilePassDrawsTheBinsPicture) {
     EXPECT_EQ(stats[0].nodes_drawn, stats[1].nodes_drawn);
     EXPECT_EQ(stats[0].points_dropped, 0u);
     EXPECT_EQ(stats[1].points_dropped, 0u);
-    EXPECT_GT(stats[0].points, 1000u);
+    EXPECT_GT(stats[0].points, 500u);
+    EXPECT_EQ(stats[0].nodes_in_tiles, 0u);
+    EXPECT_GT(stats[1].nodes_in_tiles, 0u) << k.model << " " << int(k.supersample);  // the tile pass was taken
+    EXPECT_LT(stats[1].nodes_in_tiles, stats[1].nodes_drawn);  // and the bins too
   }
 }
 
