@@ -51,6 +51,16 @@ struct Local {
     EXPECT_TRUE(parse_view(std::to_string(yaw) + ",20", s, error));
     return s;
   }
+  // The device's camera for the view `render` resolves for the file.
+  Camera camera(double yaw) const {
+    std::vector<uint32_t> storage(node_decoder_bytes(view.header) / 4 + 1);
+    NodeDecoder decoder;
+    EXPECT_EQ(decoder.init(view, storage.data(), storage.size() * 4), DecodeStatus::kOk);
+    Camera c;
+    EXPECT_TRUE(orbit_camera(orbit_view(decoder.extent_mu(), resolve_view(spec(yaw), view.header, decoder.extent_mu())),
+                             240, 320, &c));
+    return c;
+  }
   FixedRender render(double yaw) const {
     FixedRender out;
     std::string error;
@@ -531,13 +541,7 @@ TEST(Server, HostilePeersAreBoundedAndTheOthersServed) {
   uint64_t babbled = 0, hellos = 0, keepalives = 0, worst_queue = 0;
   uint8_t camera[kCameraUpdateBytes];
   CameraUpdate update;
-  {
-    std::vector<uint32_t> storage(node_decoder_bytes(local.view.header) / 4 + 1);
-    NodeDecoder decoder;
-    ASSERT_EQ(decoder.init(local.view, storage.data(), storage.size() * 4), DecodeStatus::kOk);
-    ASSERT_TRUE(orbit_camera(orbit_view(decoder.extent_mu(), resolve_view(local.spec(30), local.view.header, decoder.extent_mu())),
-                             240, 320, &update.camera));
-  }
+  update.camera = local.camera(30);
   write_camera_update(update, camera);
   struct Pump {
     std::function<void()> each;
@@ -632,12 +636,8 @@ TEST(Server, SerialResendsWhatIsKeptAndStartsOverWhenItIsNot) {
   write_hello(Hello{}, payload);
   send(MessageType::kHello, payload, kHelloBytes);
   CameraUpdate u;
-  Local local;
-  std::vector<uint32_t> storage(node_decoder_bytes(local.view.header) / 4 + 1);
-  NodeDecoder decoder;
-  ASSERT_EQ(decoder.init(local.view, storage.data(), storage.size() * 4), DecodeStatus::kOk);
-  ASSERT_TRUE(orbit_camera(orbit_view(decoder.extent_mu(), resolve_view(local.spec(30), local.view.header, decoder.extent_mu())),
-                           240, 320, &u.camera));
+  const Local local;
+  u.camera = local.camera(30);
   write_camera_update(u, payload);
   send(MessageType::kCamera, payload, kCameraUpdateBytes);
   const auto first = received();
