@@ -12,6 +12,7 @@
 #include <random>
 #include <string>
 
+#include "core/node_decoder.h"
 #include "core/spg_writer.h"
 #include "tests/portable/test_files.h"
 #include "test_util.h"
@@ -250,6 +251,78 @@ TEST(Extremes, SampledPointsFarFromTheOriginKeepTheirPrecision) {
   EXPECT_FALSE(write_ply(path, bad, error));
   EXPECT_NE(error.find("point 5 is not finite"), std::string::npos) << error;
   EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+// Normals at theta = 0 and pi (the sphere's caps, set to exactly +-z) and
+// across the phi seam (the +x meridian), colours at exactly 0 and 255: the
+// fixed decoder's normal frames stay unit and point where the reference's
+// do (within a few Q14 LSB), leaves of pure white or black decode to 255 or
+// 0 exactly, and a white model drawn unlit is pure white wherever it covers
+// (per-point colours saturate at 255, never wrap to dark).
+TEST(Extremes, NormalsAtThePolesAndTheSeamAndColoursAtTheirEnds) {
+  PointCloud c = test::sphere_cloud(4000);
+  for (size_t i = 0; i < c.size(); ++i) {
+    Vec3& n = c.normals[i];
+    if (n.z() > 0.95) n = Vec3(0, 0, 1);
+    if (n.z() < -0.95) n = Vec3(0, 0, -1);
+    if (std::abs(n.y()) < 0.05 && n.x() > 0) n = Vec3(n.x(), 0, n.z()).normalized();  // on the seam
+    c.colors.push_back(c.positions[i].x() > 0 ? Vec3(1, 1, 1) : Vec3(0, 0, 0));
+  }
+  const std::vector<uint8_t> spg = test::encode(c);
+  const DecodedModel model = test::decode(spg);
+  SpgView view;
+  ASSERT_TRUE(spg_parse(spg.data(), spg.size(), &view).ok());
+  std::vector<uint32_t> storage(node_decoder_bytes(view.header) / 4 + 1);
+  NodeDecoder decoder;
+  ASSERT_EQ(decoder.init(view, storage.data(), storage.size() * 4), DecodeStatus::kOk);
+  int poles = 0, seam = 0, white = 0, black = 0, worst = 0;
+  for (uint32_t i = 0; i < view.header.node_count; ++i) {
+    FixedNode f;
+    ASSERT_EQ(decoder.decode(view.records + size_t{i} * view.record_bytes, &f), DecodeStatus::kOk);
+    const DecodedNode& r = model.nodes[i];
+    const Vec3 normal = r.normal_frame.col(2);
+    for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(f.normal_frame[2][k] - static_cast<int>(std::lround(normal[k] * 16384))));
+    int64_t len2 = 0;
+    for (int k = 0; k < 3; ++k) len2 += int64_t{f.normal_frame[2][k]} * f.normal_frame[2][k];
+    EXPECT_NEAR(std::sqrt(static_cast<double>(len2)), 16384, 8) << "node " << i;
+    poles += std::abs(normal.z()) > 1 - 1e-9;
+    seam += std::abs(normal.y()) < 1e-9 && normal.x() > 0;
+    if (!r.leaf()) continue;
+    const Vec3 mean = r.color.mean;
+    if (mean.minCoeff() > 0.999) {
+      ++white;
+      EXPECT_EQ(f.color[0] + f.color[1] + f.color[2], 3 * 255) << "node " << i;
+    }
+    if (mean.maxCoeff() < 0.001) {
+      ++black;
+      EXPECT_EQ(f.color[0] + f.color[1] + f.color[2], 0) << "node " << i;
+    }
+  }
+  std::printf("poles %d, seam %d, white leaves %d, black leaves %d, worst normal %d Q14 LSB\n", poles, seam, white, black, worst);
+  EXPECT_GT(poles, 0);
+  EXPECT_GT(white, 10);
+  EXPECT_GT(black, 10);
+  EXPECT_LE(worst, 8);
+  // All white, unlit: every covered pixel is exactly white.
+  for (Vec3& col : c.colors) col = Vec3(1, 1, 1);
+  const std::vector<uint8_t> all_white = test::encode(c);
+  ASSERT_TRUE(spg_parse(all_white.data(), all_white.size(), &view).ok());
+  ClientConfig config;
+  config.shading = ShadingMode::kNone;
+  config.resolve = false;
+  config.raster.format = PixelFormat::kRgb888;
+  FixedRender fixed;
+  std::string error;
+  ASSERT_TRUE(render_fixed(view, all_white.data(), config, CutRule{CutRule::kProjectedSize, 0, 32}, ViewSpec{}, fixed, error))
+      << error;
+  size_t covered = 0, off_white = 0;
+  for (size_t i = 0; i < fixed.image.rgb.size(); i += 3) {
+    const int sum = fixed.image.rgb[i] + fixed.image.rgb[i + 1] + fixed.image.rgb[i + 2];
+    covered += sum != 0;
+    off_white += sum != 0 && sum != 3 * 255;
+  }
+  EXPECT_GT(covered, 10000u);
+  EXPECT_EQ(off_white, 0u);
 }
 
 }  // namespace
