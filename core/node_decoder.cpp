@@ -150,7 +150,9 @@ DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
   if (f[Field::kSigmaP] >= header_.class_count[0] || (normals && f[Field::kSigmaN] >= header_.class_count[1]) ||
       (color && f[Field::kSigmaC] >= header_.class_count[2]))
     return DecodeStatus::kBadClass;
-  FixedNode n{};
+  // Straight into *out (the record is valid: nothing below fails); the
+  // attributes the model lacks are zero.
+  FixedNode& n = *out;
   for (int a = 0; a < 3; ++a) {
     // Cell centre: (q + 1/2) * extent / 2^b = (2q + 1) * extent / 2^(b+1).
     const int64_t v = (2 * static_cast<int64_t>(f.v[a]) + 1) * axis_scale_q8_[a];
@@ -161,7 +163,10 @@ DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
   const int32_t* sp = sigma_p_mu(ClassId{f[Field::kSigmaP]});
   for (int k = 0; k < 3; ++k)
     for (int c = 0; c < 3; ++c) n.axis[k][c] = mul_q14(fp.axis[k][c], sp[k]);
-  if (normals) {
+  if (!normals) {
+    for (auto& row : n.normal_frame) row[0] = row[1] = row[2] = 0;
+    n.sigma_n[0] = n.sigma_n[1] = 0;
+  } else {
     const FrameQ14 fn = decode_frame_q14(fn_, f[Field::kFnTheta], f[Field::kFnPhi], f[Field::kFnPsi]);
     for (int k = 0; k < 3; ++k)
       for (int c = 0; c < 3; ++c) n.normal_frame[k][c] = fn.axis[k][c];
@@ -169,7 +174,10 @@ DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
     n.sigma_n[0] = sn[0];
     n.sigma_n[1] = sn[1];
   }
-  if (color) {
+  if (!color) {
+    n.color[0] = n.color[1] = n.color[2] = 0;
+    for (auto& row : n.color_axis) row[0] = row[1] = row[2] = 0;
+  } else {
     for (int c = 0; c < 3; ++c) {
       const uint32_t max = (1u << l.bits[static_cast<int>(Field::kColorR) + c]) - 1;
       n.color[c] = static_cast<uint8_t>((f.v[static_cast<int>(Field::kColorR) + c] * 255u + max / 2) / max);
@@ -179,7 +187,6 @@ DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
     for (int k = 0; k < 3; ++k)
       for (int c = 0; c < 3; ++c) n.color_axis[k][c] = mul_q14(fc.axis[k][c], sc[k]);
   }
-  *out = n;
   return DecodeStatus::kOk;
 }
 
