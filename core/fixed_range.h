@@ -7,11 +7,11 @@
 // does not, so the extreme-input tests, the hostile-file tests and the
 // fuzzers verify each bound rather than trust it; other builds convert
 // plainly. A value whose bound depends on the input's data and is not
-// proven is `saturate<T>(v)` instead: clamped to T's range in every build.
+// proven is clamped where it is formed instead (σ from the file, colour
+// offsets, depth words), in every build.
 #pragma once
 
 #include <cstdint>
-#include <limits>
 #include <utility>
 
 #ifndef STIPPLE_CHECK_RANGES
@@ -26,13 +26,6 @@ constexpr To narrow(From v) {
   if (!std::in_range<To>(v)) __builtin_trap();  // a bound in docs/fixed_point.md does not hold
 #endif
   return static_cast<To>(v);
-}
-
-template <class To, class From>
-constexpr To saturate(From v) {
-  return std::cmp_less(v, std::numeric_limits<To>::min())      ? std::numeric_limits<To>::min()
-         : std::cmp_greater(v, std::numeric_limits<To>::max()) ? std::numeric_limits<To>::max()
-                                                               : static_cast<To>(v);
 }
 
 }  // namespace stipple
