@@ -151,21 +151,8 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
         if (k != 0 && (k & (kChunk - 1)) == 0) chunk = chunk_next_[chunk];
         const Entry& e = entries_[(chunk << kChunkLog2) + (k & (kChunk - 1))];
         const Word w = pack_word<Word>(e.depth, e.color_wh);
-        Word* at = words + e.offset;
         const uint32_t wh = e.color_wh >> 24;
-        if (wh == 0x11u) {  // 1 x 1
-          if (w < at[0]) at[0] = w;
-        } else if (wh == 0x22u) {  // 2 x 2
-          if (w < at[0]) at[0] = w;
-          if (w < at[1]) at[1] = w;
-          if (w < at[tile]) at[tile] = w;
-          if (w < at[tile + 1]) at[tile + 1] = w;
-        } else {
-          const int ew = static_cast<int>(wh & 15u), eh = static_cast<int>(wh >> 4);
-          for (int y = 0; y < eh; ++y, at += tile)
-            for (int x = 0; x < ew; ++x)
-              if (w < at[x]) at[x] = w;
-        }
+        ztest_square(words + e.offset, tile, static_cast<int>(wh & 15u), static_cast<int>(wh >> 4), w);
       }
       const bool items = tile_nodes_ != nullptr && tile_nodes_[t] != kNoLink;
       if (items && tile_fn != nullptr) tile_fn(context, static_cast<uint32_t>(t), px0, py0, words);

@@ -94,17 +94,7 @@ struct TileSink {
 #if STIPPLE_CHECK_RANGES
     if (x < 0 || y < 0 || x + size > tile || y + size > tile) __builtin_trap();
 #endif
-    Word* at = words + (y << tile_log2) + x;
-    if (size == 2) {
-      if (w < at[0]) at[0] = w;
-      if (w < at[1]) at[1] = w;
-      if (w < at[tile]) at[tile] = w;
-      if (w < at[tile + 1]) at[tile + 1] = w;
-      return true;
-    }
-    for (int dy = 0; dy < size; ++dy, at += tile)
-      for (int dx = 0; dx < size; ++dx)
-        if (w < at[dx]) at[dx] = w;
+    ztest_square(words + (y << tile_log2) + x, tile, size, size, w);
     return true;
   }
 };
