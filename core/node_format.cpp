@@ -26,25 +26,32 @@ inline uint32_t load_window32(const uint8_t* p) {
 #endif
 }
 
-// unpack_record for one of the paper's layouts: every field's position a
-// constant, the loop unrolled, the record copied by a fixed-size copy.
-template <bool kNormals, bool kColor, int kThin>
-NodeFields unpack_paper(const uint8_t* in) {
-  constexpr RecordLayout kLayout = paper_layout(kNormals, kColor, kThin);
-  constexpr int kBytes = kLayout.record_bytes();
-  uint8_t buf[kBytes + 4];
-  std::memcpy(buf, in, kBytes);
-  std::memset(buf + kBytes, 0, 4);
+// The fields of a record from `buf`, a copy of it followed by four zero
+// bytes (every field's window inside). Inlined into unpack_record and, with
+// a constant layout, into each paper layout's unrolled unpack.
+__attribute__((always_inline)) inline NodeFields read_fields(const RecordLayout& layout, const uint8_t* buf) {
   NodeFields fields;
   int bit = 0;
 #pragma GCC unroll 18
   for (int f = 0; f < kFieldCount; ++f) {
-    const int w = kLayout.bits[f];
+    const int w = layout.bits[f];
     if (w == 0) continue;
     fields.v[f] = static_cast<uint16_t>((load_window32(buf + (bit >> 3)) >> (bit & 7)) & ((1u << w) - 1u));
     bit += w;
   }
   return fields;
+}
+
+// unpack_record for one of the paper's layouts: every field's position a
+// constant, the record copied by a fixed-size copy.
+template <bool kNormals, bool kColor, int kThin>
+NodeFields unpack_paper(const uint8_t* in) {
+  static constexpr RecordLayout kLayout = paper_layout(kNormals, kColor, kThin);
+  constexpr int kBytes = kLayout.record_bytes();
+  uint8_t buf[kBytes + 4];
+  std::memcpy(buf, in, kBytes);
+  std::memset(buf + kBytes, 0, 4);
+  return read_fields(kLayout, buf);
 }
 
 using UnpackFn = NodeFields (*)(const uint8_t*);
@@ -78,19 +85,11 @@ void pack_record(const RecordLayout& layout, const NodeFields& fields, uint8_t* 
 }
 
 NodeFields unpack_record(const RecordLayout& layout, const uint8_t* in) {
-  // The record and four zero bytes, so that every field's window is inside.
   uint8_t buf[kPaddedBytes];
   const int bytes = layout.record_bytes();
   std::memcpy(buf, in, static_cast<size_t>(bytes));
   std::memset(buf + bytes, 0, 4);
-  NodeFields fields;
-  int bit = 0;
-  for (int f = 0; f < kFieldCount; ++f) {
-    const int w = layout.bits[f];
-    fields.v[f] = static_cast<uint16_t>((load_window32(buf + (bit >> 3)) >> (bit & 7)) & ((1u << w) - 1u));
-    bit += w;
-  }
-  return fields;
+  return read_fields(layout, buf);
 }
 
 void RecordUnpacker::init(const RecordLayout& layout) {
