@@ -40,6 +40,19 @@ ClientConfig device() {
   return c;
 }
 
+// A server of the bunny that keeps what it logs, for the tests that read it.
+class ServerWithLog : public testing::Test {
+ protected:
+  void SetUp() override {
+    ServerOptions o;
+    o.log = [this](const std::string& line) { log.push_back(line); };
+    ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
+  }
+  Server server;
+  std::string error;
+  std::vector<std::string> log;
+};
+
 // The camera `stipple render --camera yaw,20` uses for the bunny, and its frame.
 struct Local {
   std::vector<uint8_t> file = bunny_file();
@@ -84,14 +97,8 @@ std::vector<uint8_t> remote_frame(RemoteModel& remote, const Local& local, doubl
   return frame;
 }
 
-TEST(Server, LoopbackFramesEqualTheLocalRender) {
+TEST_F(ServerWithLog, LoopbackFramesEqualTheLocalRender) {
   const Local local;
-  Server server;
-  std::string error;
-  std::vector<std::string> log;
-  ServerOptions o;
-  o.log = [&](const std::string& line) { log.push_back(line); };
-  ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
   LoopbackPipe pipe;
   server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
   RemoteModel remote;
@@ -181,14 +188,8 @@ TEST(Server, AStalledClientKeepsOnlyItsLatestCamera) {
 // on the way up is dropped by the server and the client says hello again
 // after a silence — and every converged frame still equals the clean local
 // render byte for byte.
-TEST(Server, NoisySerialLinkRecoversToTheCleanImage) {
+TEST_F(ServerWithLog, NoisySerialLinkRecoversToTheCleanImage) {
   const Local local;
-  Server server;
-  std::string error;
-  std::vector<std::string> log;
-  ServerOptions o;
-  o.log = [&](const std::string& line) { log.push_back(line); };
-  ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
   LinkProfile down = kSerial115200, up = kSerial115200;
   down.loss_per_million = 40;
   down.flip_per_million = 40;
@@ -309,14 +310,9 @@ class NoisyLine final : public Transport {
 // A noisy tty: the pseudo-terminal pair with bytes lost and flipped both
 // ways; the client resynchronises and its converged frames still equal the
 // clean local render byte for byte.
-TEST(Server, NoisyPtyPairRecoversToTheCleanImage) {
+TEST_F(ServerWithLog, NoisyPtyPairRecoversToTheCleanImage) {
   const Local local;
-  Server server;
-  std::string error, slave;
-  std::vector<std::string> log;
-  ServerOptions o;
-  o.log = [&](const std::string& line) { log.push_back(line); };
-  ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
+  std::string slave;
   int master = -1;
   ASSERT_TRUE(open_pty_pair(&master, &slave, error)) << error;
   SerialTransport master_end;
@@ -501,14 +497,8 @@ TEST(Server, ACorruptFrameIsAnsweredWithItsFaultAndClosed) {
 // is pulled mid-frame. The good client's frames are still the local render's;
 // every queue stays bounded (one startup and one update, not the floods'
 // sum), and each hostile peer is dropped, refused or removed by name.
-TEST(Server, HostilePeersAreBoundedAndTheOthersServed) {
+TEST_F(ServerWithLog, HostilePeersAreBoundedAndTheOthersServed) {
   const Local local;
-  Server server;
-  std::string error;
-  std::vector<std::string> log;
-  ServerOptions o;
-  o.log = [&](const std::string& line) { log.push_back(line); };
-  ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
   LoopbackPipe good, babbler, hello_flood, keepalive_flood, twice, pulled;
   server.add_client(std::make_unique<TransportRef>(good.server()), -1, "good");
   server.add_client(std::make_unique<TransportRef>(babbler.server()), -1, "babbler", true);
@@ -600,13 +590,7 @@ TEST(Server, HostilePeersAreBoundedAndTheOthersServed) {
 // A serial client's resends, at the frame level: the server writes again
 // exactly the frames from the one asked for; once they are acknowledged they
 // are forgotten, and a resend for one of them starts the stream over.
-TEST(Server, SerialResendsWhatIsKeptAndStartsOverWhenItIsNot) {
-  Server server;
-  std::string error;
-  std::vector<std::string> log;
-  ServerOptions o;
-  o.log = [&](const std::string& line) { log.push_back(line); };
-  ASSERT_TRUE(server.init(bunny_file(), "bunny", o, error)) << error;
+TEST_F(ServerWithLog, SerialResendsWhatIsKeptAndStartsOverWhenItIsNot) {
   LoopbackPipe pipe(1 << 22);
   server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "serial", true);
   uint16_t up = 0;
