@@ -151,8 +151,7 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
         if (k != 0 && (k & (kChunk - 1)) == 0) chunk = chunk_next_[chunk];
         const Entry& e = entries_[(chunk << kChunkLog2) + (k & (kChunk - 1))];
         const Word w = pack_word<Word>(e.depth, e.color_wh);
-        const uint32_t wh = e.color_wh >> 24;
-        ztest_square(words + e.offset, tile, static_cast<int>(wh & 15u), static_cast<int>(wh >> 4), w);
+        ztest_square(words + e.offset, tile, e.color_wh >> 24, w);
       }
       const bool items = tile_nodes_ != nullptr && tile_nodes_[t] != kNoLink;
       if (items && tile_fn != nullptr) tile_fn(context, static_cast<uint32_t>(t), px0, py0, words);

@@ -78,19 +78,20 @@ constexpr uint64_t pack_word<uint64_t>(uint32_t depth, uint32_t color) {
   return (static_cast<uint64_t>(depth) << 32) | (color & 0xFFFFFFu);
 }
 
-// Depth-tests word `w` into the w x h pixels from `at` in a tile of rows
-// `tile` words apart: the one z-test the bins and the tile pass share
-// (1 x 1 and 2 x 2, nearly every point, unrolled).
+// Depth-tests word `w` into the pixels from `at` in a tile of rows `tile`
+// words apart, `wh` = width | height << 4 (1..15 each): the one z-test the
+// bins and the tile pass share (2 x 2 and 1 x 1, nearly every point, unrolled).
 template <class Word>
-inline void ztest_square(Word* at, int tile, int width, int height, Word w) {
-  if (width == 1 && height == 1) {
-    if (w < at[0]) at[0] = w;
-  } else if (width == 2 && height == 2) {
+inline void ztest_square(Word* at, int tile, uint32_t wh, Word w) {
+  if (wh == 0x22u) {
     if (w < at[0]) at[0] = w;
     if (w < at[1]) at[1] = w;
     if (w < at[tile]) at[tile] = w;
     if (w < at[tile + 1]) at[tile + 1] = w;
+  } else if (wh == 0x11u) {
+    if (w < at[0]) at[0] = w;
   } else {
+    const int width = static_cast<int>(wh & 15u), height = static_cast<int>(wh >> 4);
     for (int y = 0; y < height; ++y, at += tile)
       for (int x = 0; x < width; ++x)
         if (w < at[x]) at[x] = w;

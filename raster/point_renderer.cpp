@@ -94,7 +94,7 @@ struct TileSink {
 #if STIPPLE_CHECK_RANGES
     if (x < 0 || y < 0 || x + size > tile || y + size > tile) __builtin_trap();
 #endif
-    ztest_square(words + (y << tile_log2) + x, tile, size, size, w);
+    ztest_square(words + (y << tile_log2) + x, tile, static_cast<uint32_t>(size | size << 4), w);
     return true;
   }
 };
