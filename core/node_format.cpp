@@ -29,7 +29,7 @@ inline uint32_t load_window32(const uint8_t* p) {
 // The fields of a record from `buf`, a copy of it followed by four zero
 // bytes (every field's window inside). Inlined into unpack_record and, with
 // a constant layout, into each paper layout's unrolled unpack.
-__attribute__((always_inline)) inline NodeFields read_fields(const RecordLayout& layout, const uint8_t* buf) {
+[[gnu::always_inline]] inline NodeFields read_fields(const RecordLayout& layout, const uint8_t* buf) {
   NodeFields fields;
   int bit = 0;
 #pragma GCC unroll 18

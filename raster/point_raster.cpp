@@ -68,20 +68,24 @@ void store(uint8_t* p, uint64_t word) {  // RGB888
 
 }  // namespace
 
+size_t PointRaster::entry_bytes(PixelFormat format) {
+  return format == PixelFormat::kRgb565 ? sizeof(Entry565) : sizeof(Entry888);
+}
+
 size_t point_raster_bytes(const RasterConfig& config) {
-  return valid(config) ? layout_of(config, sizeof(uint32_t) * 3).total : 0;
+  return valid(config) ? layout_of(config, PointRaster::entry_bytes(config.format)).total : 0;
 }
 
 RasterStatus PointRaster::init(const RasterConfig& config, void* arena, size_t bytes) {
-  static_assert(sizeof(Entry) == 12, "Entry is sized into point_raster_bytes");
+  static_assert(sizeof(Entry565) == 8 && sizeof(Entry888) == 12, "entries are sized into point_raster_bytes");
   if (!valid(config)) return RasterStatus::kBadConfig;
-  const Layout l = layout_of(config, sizeof(Entry));
+  const Layout l = layout_of(config, entry_bytes(config.format));
   if (bytes < l.total) return RasterStatus::kArenaTooSmall;
   config_ = config;
   tiles_x_ = (config.width + (1 << config.tile_log2) - 1) >> config.tile_log2;
   tiles_y_ = (config.height + (1 << config.tile_log2) - 1) >> config.tile_log2;
   uint8_t* base = static_cast<uint8_t*>(arena);
-  entries_ = reinterpret_cast<Entry*>(base + l.entries);
+  entries_ = base + l.entries;
   chunk_next_ = reinterpret_cast<uint32_t*>(base + l.chunk_next);
   tile_head_ = reinterpret_cast<uint32_t*>(base + l.tile_head);
   tile_tail_ = reinterpret_cast<uint32_t*>(base + l.tile_tail);
@@ -106,7 +110,7 @@ void PointRaster::begin_frame() {
 
 // A point on tile edges or the screen's: clipped to the screen, then one
 // entry per tile it touches, clipped to that tile.
-void PointRaster::split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t depth, uint32_t color) {
+void PointRaster::split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t depth, uint32_t rgb) {
   if (x0 < 0) x0 = 0;
   if (y0 < 0) y0 = 0;
   if (x1 > config_.width) x1 = config_.width;
@@ -116,9 +120,8 @@ void PointRaster::split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t
     const int ya = y0 > (ty << sh) ? y0 : ty << sh, yb = y1 < ((ty + 1) << sh) ? y1 : (ty + 1) << sh;
     for (int tx = x0 >> sh; tx <= (x1 - 1) >> sh; ++tx) {
       const int xa = x0 > (tx << sh) ? x0 : tx << sh, xb = x1 < ((tx + 1) << sh) ? x1 : (tx + 1) << sh;
-      push(static_cast<uint32_t>(ty * tiles_x_ + tx),
-           Entry{depth, color | static_cast<uint32_t>(xb - xa) << 24 | static_cast<uint32_t>(yb - ya) << 28,
-                 static_cast<uint32_t>(((ya - (ty << sh)) << sh) | (xa - (tx << sh)))});
+      push(static_cast<uint32_t>(ty * tiles_x_ + tx), depth, rgb, static_cast<uint32_t>((xb - xa) | (yb - ya) << 4),
+           static_cast<uint32_t>(((ya - (ty << sh)) << sh) | (xa - (tx << sh))));
     }
   }
 }
@@ -149,9 +152,8 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
       uint32_t chunk = tile_head_[t];
       for (uint32_t k = 0; k < fill; ++k) {
         if (k != 0 && (k & (kChunk - 1)) == 0) chunk = chunk_next_[chunk];
-        const Entry& e = entries_[(chunk << kChunkLog2) + (k & (kChunk - 1))];
-        const Word w = pack_word<Word>(e.depth, e.color_wh);
-        ztest_square(words + e.offset, tile, e.color_wh >> 24, w);
+        const EntryOf<Word>& e = static_cast<const EntryOf<Word>*>(entries_)[(chunk << kChunkLog2) + (k & (kChunk - 1))];
+        ztest_square(words + e.offset(), tile, e.wh(), static_cast<Word>(e.tile_word()));
       }
       const bool items = tile_nodes_ != nullptr && tile_nodes_[t] != kNoLink;
       if (items && tile_fn != nullptr) tile_fn(context, static_cast<uint32_t>(t), px0, py0, words);

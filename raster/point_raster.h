@@ -27,6 +27,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 namespace stipple {
 
@@ -116,18 +117,16 @@ class PointRaster {
     int32_t x0 = (p.x_q4 - (s - 1) * 8) >> 4, y0 = (p.y_q4 - (s - 1) * 8) >> 4;
     int32_t x1 = x0 + s, y1 = y0 + s;  // exclusive
     if (x1 <= 0 || y1 <= 0 || x0 >= config_.width || y0 >= config_.height) return true;  // off screen
-    const uint32_t color = config_.format == PixelFormat::kRgb565 ? rgb565(p.rgb) : (p.rgb & 0xFFFFFFu);
     const int sh = config_.tile_log2, mask = (1 << sh) - 1;
     ++count_;
     // Fast path: inside the screen and one tile.
     if (x0 >= 0 && y0 >= 0 && x1 <= config_.width && y1 <= config_.height && (x0 & mask) + s <= mask + 1 &&
         (y0 & mask) + s <= mask + 1) {
-      push((y0 >> sh) * tiles_x_ + (x0 >> sh),
-           Entry{p.depth, color | static_cast<uint32_t>(s) << 24 | static_cast<uint32_t>(s) << 28,
-                 static_cast<uint32_t>(((y0 & mask) << sh) | (x0 & mask))});
+      push((y0 >> sh) * tiles_x_ + (x0 >> sh), p.depth, p.rgb, static_cast<uint32_t>(s | s << 4),
+           static_cast<uint32_t>(((y0 & mask) << sh) | (x0 & mask)));
       return true;
     }
-    split(x0, y0, x1, y1, p.depth, color);
+    split(x0, y0, x1, y1, p.depth, p.rgb);
     return true;
   }
   // Files item `item` (the caller's index: a node whose points all fall in
@@ -168,17 +167,36 @@ class PointRaster {
             void* context = nullptr) const;
 
   uint32_t points() const { return count_; }
+  // Bytes of one binned square: 8 for RGB565 frames, 12 for RGB888.
+  static size_t entry_bytes(PixelFormat format);
   const RasterConfig& config() const { return config_; }
   int tiles_x() const { return tiles_x_; }
 
  private:
   static constexpr uint32_t kChunkLog2 = 6;  // 64 entries a chunk
-  struct Entry {
-    uint32_t depth;
-    uint32_t color_wh;  // pixel-format colour, covered width << 24, height << 28 (1..3, within the tile)
-    uint32_t offset;    // first covered pixel, (y << tile_log2) + x within the tile
+  // A binned square: its tile word, its covered width | height << 4 (1..3
+  // each, within the tile) and its first pixel, (y << tile_log2) + x within
+  // the tile. RGB565 frames keep the 32-bit word itself (8 bytes an entry),
+  // RGB888 frames the depth and the colour (12).
+  struct Entry565 {
+    uint32_t word;
+    uint32_t offset_wh;  // offset | wh << 24
+    uint32_t tile_word() const { return word; }
+    uint32_t wh() const { return offset_wh >> 24; }
+    uint32_t offset() const { return offset_wh & 0xFFFFFFu; }
   };
-  void push(uint32_t tile, const Entry& e) {
+  struct Entry888 {
+    uint32_t depth;
+    uint32_t color_wh;  // colour | wh << 24
+    uint32_t offset_;
+    uint64_t tile_word() const { return pack_word<uint64_t>(depth, color_wh); }
+    uint32_t wh() const { return color_wh >> 24; }
+    uint32_t offset() const { return offset_; }
+  };
+  template <class Word>
+  using EntryOf = typename std::conditional<sizeof(Word) == 4, Entry565, Entry888>::type;
+  // Files a square of colour `rgb` (0xRRGGBB) in `tile`'s bins, in the frame's entry.
+  void push(uint32_t tile, uint32_t depth, uint32_t rgb, uint32_t wh, uint32_t offset) {
     const uint32_t fill = tile_fill_[tile];
     if ((fill & ((1u << kChunkLog2) - 1)) == 0) {  // the tile's chunk is full (or it has none)
       const uint32_t c = free_chunk_++;
@@ -186,17 +204,21 @@ class PointRaster {
       else chunk_next_[tile_tail_[tile]] = c;
       tile_tail_[tile] = c;
     }
-    entries_[(tile_tail_[tile] << kChunkLog2) + (fill & ((1u << kChunkLog2) - 1))] = e;
+    const uint32_t at = (tile_tail_[tile] << kChunkLog2) + (fill & ((1u << kChunkLog2) - 1));
+    if (config_.format == PixelFormat::kRgb565)
+      static_cast<Entry565*>(entries_)[at] = Entry565{pack_word<uint32_t>(depth, rgb565(rgb)), offset | wh << 24};
+    else
+      static_cast<Entry888*>(entries_)[at] = Entry888{depth, (rgb & 0xFFFFFFu) | wh << 24, offset};
     tile_fill_[tile] = fill + 1;
   }
-  void split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t depth, uint32_t color);
+  void split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t depth, uint32_t rgb);
   template <class Word>
   void draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage, TileFn tile_fn,
                   void* context) const;
 
   RasterConfig config_{};
   int tiles_x_ = 0, tiles_y_ = 0;
-  Entry* entries_ = nullptr;       // chunk_count_ chunks of 64
+  void* entries_ = nullptr;        // chunk_count_ chunks of 64 Entry565 or Entry888
   uint32_t* chunk_next_ = nullptr; // per chunk
   uint32_t* tile_head_ = nullptr;  // per tile: first and last chunk, entries
   uint32_t* tile_tail_ = nullptr;
