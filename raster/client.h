@@ -36,6 +36,12 @@ struct ClientConfig : RendererConfig {
   uint8_t max_record_bytes = 0;            // widest record held packed; 0: the paper's layout
 };
 
+// The handheld's tile pass (RendererConfig::tile_nodes): set-up records for
+// 1,024 nodes, 288 bytes each with their tile links, which keep the arena at
+// 240x320 RGB565 with 30,000 cached nodes and a 60,000-point budget within
+// 2 MiB, colour or not (docs/fixed_point.md). Nodes past them go through the bins.
+inline constexpr uint32_t kHandheldTileNodes = 1024;
+
 // The two halves of a client configuration.
 NodeCacheLimits cache_limits(const ClientConfig& config);
 RendererConfig renderer_config(const ClientConfig& config);

@@ -87,8 +87,9 @@ TEST(Client, ArenaSizeIsExactAndChecked) {
 TEST(Client, HandheldArenaAt240x320With30KNodes) {
   // The configuration docs/fixed_point.md reports: normals, no colour (the
   // bunny and dragon scans), 30 K cached nodes, a 60 K-point frame budget.
-  // The raster's default tiles (the handheld's), the tile pass off (its default).
+  // The raster's default tiles and the handheld's tile pass (kHandheldTileNodes).
   ClientConfig c;
+  c.tile_nodes = kHandheldTileNodes;
   c.raster = RasterConfig{};
   c.raster.width = 240;
   c.raster.height = 320;

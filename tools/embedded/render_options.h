@@ -18,7 +18,7 @@ struct RenderOptions {
   CutRule rule{CutRule::kProjectedSize, 0, 32};
   ViewSpec view;
   bool sized = false;  // --size was given
-  bool tile_nodes_given = false;  // --tile-nodes was given (the handheld's default is 0: its arena)
+  bool tile_nodes_given = false;  // --tile-nodes was given (the handheld's default is kHandheldTileNodes: its arena)
 };
 
 // The help lines of these options (view, cut, client), for a program's usage.

@@ -77,7 +77,7 @@ int run(int argc, char** argv) {
   RenderOptions o;
   std::string output, fbdev, error, v;
   if (!parse_render_options(args, o, error)) return fail(error);
-  if (!o.tile_nodes_given) o.config.tile_nodes = 0;  // the PDA's arena: ~280 bytes a node (docs/fixed_point.md)
+  if (!o.tile_nodes_given) o.config.tile_nodes = kHandheldTileNodes;  // the PDA's arena (raster/client.h)
   const bool crc = args.flag("--crc"), memory = args.flag("--memory");
   unsigned long long frames = 1;
   if (args.value("--frames", v) && (!cli::parse_uint(v, 100000, frames) || frames == 0))
