@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# Where an ARM build's frame goes, function by function, from qemu-user's
+# single-step execution log (Debian's qemu has no TCG plugins): every guest
+# instruction is one logged block, so counting the logged PCs of `--frames 2`
+# minus those of `--frames 1` gives one frame's instructions per function.
+#   tools/bench/arm_profile.sh HANDHELD MODEL.spg [stipple-handheld options...]
+# e.g. (the ARMv5 preset's handheld program on the bunny):
+#   tools/bench/arm_profile.sh build/armv5/tools/handheld/stipple-handheld \
+#     tests/golden/bunny_v1.spg
+# Prints the frame's total and the 20 costliest functions. QEMU (default
+# qemu-arm), QEMU_LD_PREFIX (default /usr/arm-linux-gnueabi) and NM (default
+# arm-linux-gnueabi-nm) choose the target; the program is a PIE that
+# qemu-user loads at 0x40000000 (LOAD_BASE to change).
+set -euo pipefail
+if [ $# -lt 2 ] || [ "$1" = --help ]; then
+  sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'
+  [ "${1:-}" = --help ] && exit 0 || exit 1
+fi
+program=$1 model=$2
+shift 2
+qemu=${QEMU:-qemu-arm} prefix=${QEMU_LD_PREFIX:-/usr/arm-linux-gnueabi} nm=${NM:-arm-linux-gnueabi-nm}
+base=${LOAD_BASE:-0x40000000}
+for tool in "$qemu" "$nm" python3; do
+  command -v "$tool" >/dev/null || { echo "arm_profile.sh: $tool is needed" >&2; exit 1; }
+done
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+histogram() {  # PC counts of a run of $1 frames, options after it
+  local frames=$1
+  shift
+  "$qemu" -L "$prefix" -singlestep -d nochain,exec -D /dev/stderr "$program" "$model" --frames "$frames" "$@" \
+    -o "$work/frame$frames.ppm" 2>&1 >/dev/null |
+    awk '/^Trace/ { split($4, f, "/"); n[f[2]]++ } END { for (pc in n) print pc, n[pc] }' >"$work/pc$frames"
+}
+histogram 1 "$@" &
+histogram 2 "$@" &
+wait
+"$nm" -C --defined-only -n "$program" | grep -E ' [tTwW] ' >"$work/symbols"
+python3 - "$work" "$base" <<'EOF'
+import bisect, sys
+work, base = sys.argv[1], int(sys.argv[2], 16)
+symbols = []
+for line in open(f"{work}/symbols"):
+    address, _, name = line.rstrip("\n").split(" ", 2)
+    symbols.append((int(address, 16) + base, name))
+symbols.sort()
+starts = [s[0] for s in symbols]
+def load(path):
+    return {int(pc, 16): int(n) for pc, n in (line.split() for line in open(path))}
+one, two = load(f"{work}/pc1"), load(f"{work}/pc2")
+total, outside, per = 0, 0, {}
+for pc in one.keys() | two.keys():
+    n = two.get(pc, 0) - one.get(pc, 0)
+    total += n
+    i = bisect.bisect_right(starts, pc) - 1
+    if i < 0 or pc < base or pc >= base + (1 << 24):
+        outside += n
+        continue
+    per[symbols[i][1]] = per.get(symbols[i][1], 0) + n
+print(f"frame: {total} instructions ({outside} in shared libraries)")
+for name, n in sorted(per.items(), key=lambda kv: -kv[1])[:20]:
+    print(f"{n:>11} {100 * n / total:5.1f} %  {name[:140]}")
+EOF
