@@ -35,14 +35,14 @@ histogram() {  # PC counts of a run of $1 frames, options after it
 histogram 1 "$@" &
 histogram 2 "$@" &
 wait
-"$nm" -C --defined-only -n "$program" | grep -E ' [tTwW] ' >"$work/symbols"
+"$nm" -C --defined-only -n -S "$program" | grep -E '^[0-9a-f]+ [0-9a-f]+ [tTwW] ' >"$work/symbols"
 python3 - "$work" "$base" <<'EOF'
 import bisect, sys
 work, base = sys.argv[1], int(sys.argv[2], 16)
 symbols = []
 for line in open(f"{work}/symbols"):
-    address, _, name = line.rstrip("\n").split(" ", 2)
-    symbols.append((int(address, 16) + base, name))
+    address, size, _, name = line.rstrip("\n").split(" ", 3)
+    symbols.append((int(address, 16) + base, int(size, 16), name))
 symbols.sort()
 starts = [s[0] for s in symbols]
 def load(path):
@@ -53,11 +53,11 @@ for pc in one.keys() | two.keys():
     n = two.get(pc, 0) - one.get(pc, 0)
     total += n
     i = bisect.bisect_right(starts, pc) - 1
-    if i < 0 or pc < base or pc >= base + (1 << 24):
+    if i < 0 or pc >= symbols[i][0] + symbols[i][1]:  # in no function of the program
         outside += n
         continue
-    per[symbols[i][1]] = per.get(symbols[i][1], 0) + n
-print(f"frame: {total} instructions ({outside} in shared libraries)")
+    per[symbols[i][2]] = per.get(symbols[i][2], 0) + n
+print(f"frame: {total} instructions ({outside} outside the program's functions: shared libraries, PLT)")
 for name, n in sorted(per.items(), key=lambda kv: -kv[1])[:20]:
     print(f"{n:>11} {100 * n / total:5.1f} %  {name[:140]}")
 EOF
