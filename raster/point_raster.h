@@ -195,7 +195,7 @@ class PointRaster {
   };
   template <class Word>
   using EntryOf = typename std::conditional<sizeof(Word) == 4, Entry565, Entry888>::type;
-  // Files a square of colour `rgb` (0xRRGGBB) in `tile`'s bins, in the frame's entry.
+  // Files a square of colour `rgb` (0xRRGGBB) in `tile`'s bins as the frame format's entry.
   void push(uint32_t tile, uint32_t depth, uint32_t rgb, uint32_t wh, uint32_t offset) {
     const uint32_t fill = tile_fill_[tile];
     if ((fill & ((1u << kChunkLog2) - 1)) == 0) {  // the tile's chunk is full (or it has none)
