@@ -38,7 +38,7 @@ Layout layout_of(const NodeCacheLimits& c) {
   Layout l{};
   l.decoder_bytes = node_decoder_bytes(worst_header(c));
   const size_t paper = static_cast<size_t>(paper_layout(c.normals, c.color, 2).record_bytes());
-  l.record_stride = c.decoded ? sizeof(FixedNode) : c.max_record_bytes > paper ? size_t{c.max_record_bytes} : paper;
+  l.record_stride = c.decoded ? sizeof(NodeFields) : c.max_record_bytes > paper ? size_t{c.max_record_bytes} : paper;
   l.hash_entries = 1;
   while (l.hash_entries < c.node_capacity + c.node_capacity / 2) l.hash_entries <<= 1;
   ArenaCarver arena;
@@ -156,8 +156,8 @@ CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size, uint
   if (size != record_bytes_) return CacheStatus::kBadRecordSize;
   const int pad_bits = static_cast<int>(record_bytes_ * 8) - header_.layout.total_bits();
   if (pad_bits > 0 && (record[record_bytes_ - 1] >> (8 - pad_bits)) != 0) return CacheStatus::kBadRecord;
-  FixedNode decoded;
-  if (decoder_.decode(record, &decoded) != DecodeStatus::kOk) return CacheStatus::kBadRecord;
+  const NodeFields fields = decoder_.unpacker().unpack(record);
+  if (!decoder_.classes_valid(fields)) return CacheStatus::kBadRecord;
   const uint32_t id = index_of(node);
   uint32_t* entry = find(id);
   uint32_t slot;
@@ -170,7 +170,7 @@ CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size, uint
     *entry = slot + 1;
   }
   uint8_t* dst = records_ + slot * record_stride_;
-  if (limits_.decoded) *reinterpret_cast<FixedNode*>(dst) = decoded;
+  if (limits_.decoded) *reinterpret_cast<NodeFields*>(dst) = fields;
   else
     for (size_t i = 0; i < record_bytes_; ++i) dst[i] = record[i];
   points_[slot] = points;
@@ -196,10 +196,7 @@ CacheStatus NodeCache::drop(NodeId node) {
 }
 
 bool NodeCache::node_at(uint32_t slot, FixedNode* out) const {
-  if (limits_.decoded) {
-    *out = decoded_at(slot);
-    return true;
-  }
+  if (limits_.decoded) return decoder_.decode(fields_at(slot), out) == DecodeStatus::kOk;
   return decoder_.decode(record_at(slot), out) == DecodeStatus::kOk;
 }
 

@@ -15,9 +15,9 @@
 // After init nothing is allocated, nothing is thrown and no floating point
 // is used. A record is validated when it is put (class indices against the
 // startup's tables, padding bits zero), so every held record decodes. Records
-// are kept packed (9-17 bytes a node, decoded by whoever reads them) or, with
-// `decoded`, decoded once into a FixedNode (116 bytes), which trades memory
-// for the per-frame decode. Ids hash into an open-addressed table (linear
+// are kept packed (9-17 bytes a node, unpacked by whoever reads them) or, with
+// `decoded`, unpacked once into their fields (NodeFields, 36 bytes), which
+// trades memory for the per-frame unpacking. Ids hash into an open-addressed table (linear
 // probing, backward-shift deletion); slots stay dense, so iteration visits
 // exactly count() records. Not thread-safe: one owner.
 #pragma once
@@ -33,7 +33,7 @@ namespace stipple {
 
 struct NodeCacheLimits {
   uint32_t node_capacity = 30000;          // nodes held at once (1 .. 2^24)
-  bool decoded = false;                    // keep FixedNodes instead of packed records
+  bool decoded = false;                    // keep unpacked fields (NodeFields) instead of packed records
   bool normals = true, color = true;       // attributes a startup may carry
   uint16_t max_classes[3] = {4096, 4096, 64};  // sigma_p, sigma_n, sigma_c tables
   uint8_t max_angle_bits = 10;             // widest angle field accepted
@@ -83,13 +83,15 @@ class NodeCache {
   // Dense iteration, slot 0 .. count() - 1 (order changes on drop).
   NodeId id_at(uint32_t slot) const { return NodeId{ids_[slot]}; }
   uint8_t points_at(uint32_t slot) const { return points_[slot]; }
-  // The node in slot `slot`, decoded into *out (copied when cached
-  // decoded); false only if its record fails to decode, which put() rules out.
+  // The node in slot `slot`, decoded into *out; false only if its record
+  // fails to decode, which put() rules out.
   [[nodiscard]] bool node_at(uint32_t slot, FixedNode* out) const;
   // The cached record: packed, record_bytes() long (when !decoded()).
   const uint8_t* record_at(uint32_t slot) const { return records_ + slot * record_stride_; }
-  // The cached FixedNode, without a copy (when decoded()).
-  const FixedNode& decoded_at(uint32_t slot) const { return *reinterpret_cast<const FixedNode*>(record_at(slot)); }
+  // Bytes from one slot's record (or fields) to the next's.
+  size_t record_stride() const { return record_stride_; }
+  // The cached fields, without a copy (when decoded()).
+  const NodeFields& fields_at(uint32_t slot) const { return *reinterpret_cast<const NodeFields*>(record_at(slot)); }
   bool decoded() const { return limits_.decoded; }
 
  private:

@@ -65,12 +65,24 @@ int64_t ratio(Dyadic num, Dyadic den, int frac, int64_t limit) {
 constexpr size_t kAlign = 4;
 size_t aligned(size_t n) { return (n + kAlign - 1) / kAlign * kAlign; }
 
+// The Euler form's gamma = psi - phi: a multiple of 2^(32 - gamma_bits).
+int gamma_bits_of(const RecordLayout& l, Field theta) {
+  const int phi = l.bits[static_cast<int>(theta) + 1], psi = l.bits[static_cast<int>(theta) + 2];
+  return phi > psi + 1 ? phi : psi + 1;
+}
+
+// Sine/cosine tables of theta, phi, psi and the Euler form's gamma.
 size_t frame_table_bytes(const RecordLayout& l, Field theta) {
   const int t = static_cast<int>(theta);
   size_t bytes = 0;
-  for (int k = 0; k < 3; ++k)
+  bool present = true;
+  for (int k = 0; k < 3; ++k) {
     if (l.bits[t + k] > 0 && l.bits[t + k] <= kMaxAngleBits)
       bytes += aligned(angle_table_entries(l.bits[t + k]) * sizeof(SinCosQ14));
+    else
+      present = false;
+  }
+  if (present) bytes += aligned((size_t{1} << gamma_bits_of(l, theta)) * sizeof(SinCosQ14));
   return bytes;
 }
 
@@ -92,23 +104,29 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
   unpacker_.init(l);
   uint8_t* at = static_cast<uint8_t*>(storage);
 
-  // Angle tables.
-  auto build = [&](Field theta, AngleKind theta_kind, FrameTables& out) {
+  // Angle tables, and each frame's Euler form (gamma = psi - phi).
+  auto build = [&](Field theta, AngleKind theta_kind, FrameTables& out, EulerTables& euler) {
     const int t = static_cast<int>(theta);
     const SinCosQ14** slots[3] = {&out.theta, &out.phi, &out.psi};
     const AngleKind kinds[3] = {theta_kind, AngleKind::kPhi, AngleKind::kPsi};
+    euler = EulerTables{};
     for (int k = 0; k < 3; ++k) {
       const int b = l.bits[t + k];
-      if (b == 0) continue;
+      if (b == 0) return;
       SinCosQ14* table = reinterpret_cast<SinCosQ14*>(at);
       if (!build_angle_table(kinds[k], b, table, angle_table_entries(b))) return;
       *slots[k] = table;
       at += aligned(angle_table_entries(b) * sizeof(SinCosQ14));
     }
+    const int g = gamma_bits_of(l, theta);
+    SinCosQ14* gamma = reinterpret_cast<SinCosQ14*>(at);
+    for (uint32_t i = 0; i < (1u << g); ++i) gamma[i] = sincos_q14(static_cast<uint32_t>(uint64_t{i} << (32 - g)));
+    at += aligned((size_t{1} << g) * sizeof(SinCosQ14));
+    euler = EulerTables{out.theta, out.phi, gamma, l.bits[t + 1], l.bits[t + 2], static_cast<uint8_t>(g)};
   };
-  build(Field::kFpTheta, AngleKind::kThetaSphere, fp_);
-  build(Field::kFnTheta, AngleKind::kThetaSphere, fn_);
-  build(Field::kFcTheta, AngleKind::kThetaHemisphere, fc_);
+  build(Field::kFpTheta, AngleKind::kThetaSphere, fp_, euler_[0]);
+  build(Field::kFnTheta, AngleKind::kThetaSphere, fn_, euler_[1]);
+  build(Field::kFcTheta, AngleKind::kThetaHemisphere, fc_, euler_[2]);
 
   // Box: extents and the largest, E.
   Dyadic extent[3], largest;
@@ -143,22 +161,29 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
   return DecodeStatus::kOk;
 }
 
+void NodeDecoder::color_rgb(const NodeFields& f, uint8_t out[3]) const {
+  for (int c = 0; c < 3; ++c) {
+    const int bits = header_.layout.bits[static_cast<int>(Field::kColorR) + c];
+    if (bits == 0) {
+      out[c] = 0;
+      continue;
+    }
+    const uint32_t max = (1u << bits) - 1;
+    out[c] = static_cast<uint8_t>((f.v[static_cast<int>(Field::kColorR) + c] * 255u + max / 2) / max);
+  }
+}
+
 DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
-  const RecordLayout& l = header_.layout;
-  const NodeFields f = unpacker_.unpack(record);
+  return decode(unpacker_.unpack(record), out);
+}
+
+DecodeStatus NodeDecoder::decode(const NodeFields& f, FixedNode* out) const {
   const bool normals = header_.has_normals(), color = header_.has_color();
-  if (f[Field::kSigmaP] >= header_.class_count[0] || (normals && f[Field::kSigmaN] >= header_.class_count[1]) ||
-      (color && f[Field::kSigmaC] >= header_.class_count[2]))
-    return DecodeStatus::kBadClass;
+  if (!classes_valid(f)) return DecodeStatus::kBadClass;
   // Straight into *out (the record is valid: nothing below fails); the
   // attributes the model lacks are zero.
   FixedNode& n = *out;
-  for (int a = 0; a < 3; ++a) {
-    // Cell centre: (q + 1/2) * extent / 2^b = (2q + 1) * extent / 2^(b+1).
-    const int64_t v = (2 * static_cast<int64_t>(f.v[a]) + 1) * axis_scale_q8_[a];
-    const int shift = l.bits[a] + 1 + 8;
-    n.mean[a] = narrow<int32_t>((v + (int64_t{1} << (shift - 1))) >> shift);
-  }
+  mean_mu(f, n.mean);
   const FrameQ14 fp = decode_frame_q14(fp_, f[Field::kFpTheta], f[Field::kFpPhi], f[Field::kFpPsi]);
   const int32_t* sp = sigma_p_mu(ClassId{f[Field::kSigmaP]});
   for (int k = 0; k < 3; ++k)
@@ -178,10 +203,7 @@ DecodeStatus NodeDecoder::decode(const uint8_t* record, FixedNode* out) const {
     n.color[0] = n.color[1] = n.color[2] = 0;
     for (auto& row : n.color_axis) row[0] = row[1] = row[2] = 0;
   } else {
-    for (int c = 0; c < 3; ++c) {
-      const uint32_t max = (1u << l.bits[static_cast<int>(Field::kColorR) + c]) - 1;
-      n.color[c] = static_cast<uint8_t>((f.v[static_cast<int>(Field::kColorR) + c] * 255u + max / 2) / max);
-    }
+    color_rgb(f, n.color);
     const FrameQ14 fc = decode_frame_q14(fc_, f[Field::kFcTheta], f[Field::kFcPhi], f[Field::kFcPsi]);
     const int32_t* sc = sigma_c_q12(ClassId{f[Field::kSigmaC]});
     for (int k = 0; k < 3; ++k)

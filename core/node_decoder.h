@@ -16,7 +16,9 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "core/fixed_range.h"
 #include "core/fixed_trig.h"
+#include "core/node_format.h"
 #include "core/spg_format.h"
 
 namespace stipple {
@@ -39,6 +41,29 @@ struct FixedNode {
   int32_t color_axis[3][3];  // colour frame * sigma_c, RGB in Q12 (4096 = full range)
 };
 
+// A frame field in Euler form, for clients that take frames straight to
+// camera space: the Rodrigues rotation of docs/format.md §5 (x and y turned
+// by theta about (-sin phi, cos phi, 0), then by psi about f3) is
+//   F = Rz(phi) Ry(theta) Rz(gamma),  gamma = psi - phi,
+// so a camera R turns it into (R Rz(phi)) Ry(theta) Rz(gamma): a per-frame
+// table over phi, then two plane rotations per node. phi and psi are exact
+// binary angles (q 2^(32-b_phi), q 2^(31-b_psi)), so gamma is too: a
+// multiple of 2^(32 - gamma_bits), gamma_bits = max(b_phi, b_psi + 1), whose
+// sine and cosine come from one table of 2^gamma_bits entries.
+struct EulerTables {
+  const SinCosQ14* theta = nullptr;  // 2^b_theta entries (the field's own)
+  const SinCosQ14* phi = nullptr;    // 2^b_phi entries
+  const SinCosQ14* gamma = nullptr;  // 2^gamma_bits entries
+  uint8_t phi_bits = 0, psi_bits = 0, gamma_bits = 0;
+  // The gamma table's index of psi - phi, for field values below 2^bits.
+  uint32_t gamma_index(uint32_t q_phi, uint32_t q_psi) const {
+    return ((q_psi << (gamma_bits - psi_bits - 1)) - (q_phi << (gamma_bits - phi_bits))) & ((1u << gamma_bits) - 1u);
+  }
+};
+
+// Which frame field of a record.
+enum class FrameField : uint8_t { kPosition, kNormal, kColor };
+
 // Bytes of storage `NodeDecoder::init` needs for this header (tables, 4-byte aligned).
 size_t node_decoder_bytes(const SpgHeader& header);
 
@@ -50,9 +75,35 @@ class NodeDecoder {
 
   // Decodes one packed record (view.record_bytes long).
   [[nodiscard]] DecodeStatus decode(const uint8_t* record, FixedNode* out) const;
+  // The same from the record's unpacked fields.
+  [[nodiscard]] DecodeStatus decode(const NodeFields& fields, FixedNode* out) const;
 
   // Extent of the box along each axis, in MU (the largest is 2^24).
   const int32_t* extent_mu() const { return extent_mu_; }
+
+  // The parts of decode, for a client that decodes a record its own way
+  // (raster/point_renderer.cpp takes the frames straight to camera space):
+  // the unpacker, the mean, a frame field's Euler tables, the colour.
+  const RecordUnpacker& unpacker() const { return unpacker_; }
+  // Fields checked against the header's class tables (what decode refuses).
+  bool classes_valid(const NodeFields& f) const {
+    return f[Field::kSigmaP] < header_.class_count[0] &&
+           (!header_.has_normals() || f[Field::kSigmaN] < header_.class_count[1]) &&
+           (!header_.has_color() || f[Field::kSigmaC] < header_.class_count[2]);
+  }
+  // The mean in MU: cell centre (q + 1/2) extent / 2^b, rounded.
+  int32_t mean_axis_mu(int axis, uint32_t q) const {
+    // (2q + 1) extent / 2^(b+1): below 2^17 * 2^32.
+    const int64_t v = (2 * static_cast<int64_t>(q) + 1) * axis_scale_q8_[axis];
+    const int shift = header_.layout.bits[axis] + 1 + 8;
+    return narrow<int32_t>((v + (int64_t{1} << (shift - 1))) >> shift);
+  }
+  void mean_mu(const NodeFields& f, int32_t out[3]) const {
+    for (int a = 0; a < 3; ++a) out[a] = mean_axis_mu(a, f.v[a]);
+  }
+  // 8-bit RGB of the record's colour fields (zero without colour).
+  void color_rgb(const NodeFields& f, uint8_t out[3]) const;
+  const EulerTables& euler(FrameField frame) const { return euler_[static_cast<int>(frame)]; }
   // A class's sigmas as the decoder holds them (for a GPU client's tables):
   // sigma_p 3 values in MU, sigma_n 2 in Q12 radians, sigma_c 3 in Q12. The
   // class must be below the header's count for that table.
@@ -66,6 +117,7 @@ class NodeDecoder {
   int64_t axis_scale_q8_[3] = {};  // extent_a / E * 2^32
   int32_t extent_mu_[3] = {};
   FrameTables fp_{}, fn_{}, fc_{};
+  EulerTables euler_[3] = {};
   const int32_t* sigma_p_ = nullptr;  // 3 per class, MU
   const int32_t* sigma_n_ = nullptr;  // 2 per class, Q12 radians
   const int32_t* sigma_c_ = nullptr;  // 3 per class, Q12

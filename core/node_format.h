@@ -129,6 +129,22 @@ class RecordUnpacker {
   uint8_t direct_ = 0, count_ = 0, bytes_ = 0, tail_at_ = 0;
 };
 
+// Where field `f` lies in a record: a 32-bit little-endian window read from
+// byte `byte` holds it at bit `shift`, `mask` wide (byte + 4 may pass the
+// record's end: readers that use this instead of RecordUnpacker make sure
+// the bytes are there, e.g. the next record).
+struct FieldWindow {
+  uint8_t byte = 0, shift = 0;
+  uint16_t mask = 0;
+};
+constexpr FieldWindow field_window(const RecordLayout& layout, Field f) {
+  int bit = 0;
+  for (int i = 0; i < static_cast<int>(f); ++i) bit += layout.bits[i];
+  const int w = layout.bits[static_cast<int>(f)];
+  return FieldWindow{static_cast<uint8_t>(bit >> 3), static_cast<uint8_t>(bit & 7),
+                     static_cast<uint16_t>(w == 0 ? 0u : (1u << w) - 1u)};
+}
+
 // True when every field value fits its width.
 bool fields_fit(const RecordLayout& layout, const NodeFields& fields);
 

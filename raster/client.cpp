@@ -47,7 +47,11 @@ NodeCacheLimits cache_limits(const ClientConfig& c) {
   return l;
 }
 
-RendererConfig renderer_config(const ClientConfig& c) { return c; }
+RendererConfig renderer_config(const ClientConfig& c) {
+  RendererConfig r = c;
+  if (r.tile_nodes > c.node_capacity) r.tile_nodes = c.node_capacity;  // never more drawn than held
+  return r;
+}
 
 const char* client_status_text(ClientStatus s) {
   switch (s) {

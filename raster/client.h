@@ -26,21 +26,21 @@
 namespace stipple {
 
 // The renderer's configuration (raster, normals/colour, samples, shading...)
-// and the cache's limits; `normals` and `color` size both.
+// and the cache's limits; `normals`, `color` and `max_angle_bits` size both.
 struct ClientConfig : RendererConfig {
   uint32_t node_capacity = 30000;          // nodes the cache holds
   bool cache_decoded = false;              // keep decoded nodes (sizeof(FixedNode) bytes each) instead of
                                            // packed records: no per-frame decode, ~7x the cache memory
   uint16_t max_classes[3] = {4096, 4096, 64};  // sigma_p, sigma_n, sigma_c tables
-  uint8_t max_angle_bits = 10;             // widest angle field accepted
   uint8_t max_record_bytes = 0;            // widest record held packed; 0: the paper's layout
 };
 
-// The handheld's tile pass (RendererConfig::tile_nodes): set-up records for
-// 1,024 nodes, 288 bytes each with their tile links, which keep the arena at
-// 240x320 RGB565 with 30,000 cached nodes and a 60,000-point budget within
-// 2 MiB, colour or not (docs/fixed_point.md). Nodes past them go through the bins.
-inline constexpr uint32_t kHandheldTileNodes = 1024;
+// The handheld's tile pass: 2,048 nodes drawn in it (RendererConfig::
+// tile_nodes: 132 bytes each with their tile links; the rest are binned,
+// every point of the budget binnable), which keeps the arena at 240x320
+// RGB565 with 30,000 cached nodes and a 60,000-point budget within 2 MiB,
+// colour or not (docs/fixed_point.md).
+inline constexpr uint32_t kHandheldTileNodes = 2048;
 
 // The two halves of a client configuration.
 NodeCacheLimits cache_limits(const ClientConfig& config);

@@ -1,7 +1,10 @@
 // stipple raster — tile-based z-buffer point rasterizer. See point_raster.h.
 #include "raster/point_raster.h"
 
+#include <cstring>
+
 #include "core/arena.h"
+#include "raster/point_kernel_avx2.h"
 
 namespace stipple {
 namespace {
@@ -15,7 +18,7 @@ struct Layout {
 
 bool valid(const RasterConfig& c) {
   return c.width > 0 && c.height > 0 && c.tile_log2 >= 3 && c.tile_log2 <= 7 && c.max_points > 0 &&
-         c.max_points <= (1u << 26) && c.max_nodes <= (1u << 26);
+         c.max_points <= (1u << 26) && c.max_nodes <= (1u << 26) && c.max_links <= (1u << 26);
 }
 
 uint32_t tile_count(const RasterConfig& c) {
@@ -23,7 +26,7 @@ uint32_t tile_count(const RasterConfig& c) {
   return ((c.width + tile - 1) >> c.tile_log2) * ((c.height + tile - 1) >> c.tile_log2);
 }
 
-// Entries: one per point plus a quarter for points on tile edges (a point of
+// Entries: one per binned point plus a quarter for points on tile edges (a point of
 // s <= 3 px straddles an edge of a 2^k-pixel tile with probability about
 // 2 (s - 1) / 2^k: 6 % at 32 px and s = 2), in chunks of 64, plus one
 // partial chunk per tile and the 4 that `add` keeps in reserve.
@@ -49,9 +52,9 @@ Layout layout_of(const RasterConfig& c, size_t entry_size) {
   l.tile_nodes = at;
   at += c.max_nodes ? align8(4 * tiles) : 0;
   l.node_item = at;
-  at += align8(4 * size_t{c.max_nodes});
+  at += align8(4 * size_t{c.max_links});
   l.node_next = at;
-  at += align8(4 * size_t{c.max_nodes});
+  at += align8(4 * size_t{c.max_links});
   l.total = at;
   return l;
 }
@@ -64,6 +67,25 @@ void store(uint8_t* p, uint64_t word) {  // RGB888
   p[0] = static_cast<uint8_t>(word >> 16);
   p[1] = static_cast<uint8_t>(word >> 8);
   p[2] = static_cast<uint8_t>(word);
+}
+
+// A row of tile words as pixels. RGB565: two pixels a 32-bit store where
+// the row is so aligned (a 32-bit handheld's frame buffer), the same bytes.
+void store_row(const uint32_t* row, int pixels, uint8_t* out) {
+  int x = 0;
+  if ((reinterpret_cast<uintptr_t>(out) & 1) != 0) {  // a frame at an odd address: a pixel at a time
+    for (; x < pixels; ++x, out += 2) store(out, row[x]);
+    return;
+  }
+  if ((reinterpret_cast<uintptr_t>(out) & 3) != 0 && pixels > 0) store(out, row[x++]), out += 2;
+  for (; x + 2 <= pixels; x += 2, out += 4) {
+    const uint32_t two = (row[x] & 0xFFFFu) | row[x + 1] << 16;  // little-endian: the first pixel's bytes first
+    std::memcpy(__builtin_assume_aligned(out, 4), &two, 4);
+  }
+  if (x < pixels) store(out, row[x]);
+}
+void store_row(const uint64_t* row, int pixels, uint8_t* out) {
+  for (int x = 0; x < pixels; ++x, out += 3) store(out, row[x]);
 }
 
 }  // namespace
@@ -141,13 +163,37 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
   Word* words = static_cast<Word*>(tile_words_);
   const Word clear = pack_word<Word>(0xFFFFFFFFu, clear_color);
   const int bpp = bytes_per_pixel(config_.format);
+  const bool wide = avx2::kBuilt && config_.avx2;
   for (int ty = 0; ty < tiles_y_; ++ty) {
     for (int tx = 0; tx < tiles_x_; ++tx) {
       const int t = ty * tiles_x_ + tx;
       const int px0 = tx << sh, py0 = ty << sh;
       const int pw = (px0 + tile > config_.width ? config_.width - px0 : tile);
       const int ph = (py0 + tile > config_.height ? config_.height - py0 : tile);
-      for (int i = 0; i < tile * tile; ++i) words[i] = clear;
+      const bool items = tile_nodes_ != nullptr && tile_nodes_[t] != kNoLink;
+      if (tile_fill_[t] == 0 && !(items && tile_fn != nullptr)) {
+        // Nothing drawn here: every row the clear colour (one row of clear
+        // words written out), no coverage.
+        for (int x = 0; x < pw; ++x) words[x] = clear;
+        for (int y = 0; y < ph; ++y) {
+          uint8_t* out = frame + static_cast<size_t>(py0 + y) * stride + static_cast<size_t>(px0) * bpp;
+          if constexpr (avx2::kBuilt) {
+            if (wide) avx2::store_row(words, pw, out);
+          }
+          if (!wide) store_row(words, pw, out);
+        }
+        if (coverage != nullptr) {
+          const size_t row_bytes = (size_t{config_.width} + 7) / 8;
+          for (int y = 0; y < ph; ++y)
+            for (int x = 0; x < pw; x += 8) coverage[static_cast<size_t>(py0 + y) * row_bytes + ((px0 + x) >> 3)] = 0;
+        }
+        continue;
+      }
+      if constexpr (avx2::kBuilt) {
+        if (wide) avx2::clear_words(words, size_t{1} << (2 * sh), clear);
+      }
+      if (!wide)
+        for (int i = 0; i < tile * tile; ++i) words[i] = clear;
       const uint32_t fill = tile_fill_[t];
       uint32_t chunk = tile_head_[t];
       for (uint32_t k = 0; k < fill; ++k) {
@@ -155,12 +201,14 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
         const EntryOf<Word>& e = static_cast<const EntryOf<Word>*>(entries_)[(chunk << kChunkLog2) + (k & (kChunk - 1))];
         ztest_square(words + e.offset(), tile, e.wh(), static_cast<Word>(e.tile_word()));
       }
-      const bool items = tile_nodes_ != nullptr && tile_nodes_[t] != kNoLink;
       if (items && tile_fn != nullptr) tile_fn(context, static_cast<uint32_t>(t), px0, py0, words);
       for (int y = 0; y < ph; ++y) {
         uint8_t* out = frame + static_cast<size_t>(py0 + y) * stride + static_cast<size_t>(px0) * bpp;
         const Word* row = words + (y << sh);
-        for (int x = 0; x < pw; ++x, out += bpp) store(out, row[x]);
+        if constexpr (avx2::kBuilt) {
+          if (wide) avx2::store_row(row, pw, out);
+        }
+        if (!wide) store_row(row, pw, out);
       }
       if (coverage != nullptr) {
         // Covered: the depth is not the clear word's (all ones). Tiles are

@@ -41,8 +41,13 @@ struct RasterConfig {
   PixelFormat format = PixelFormat::kRgb565;
   uint32_t max_points = 1u << 16;  // points per frame; more are refused by add()
   // Items (the renderer's nodes) filed per tile by add_node, drawn by the
-  // caller's tile function inside the tile pass: 0 for none.
+  // caller's tile function inside the tile pass: 0 for none; an item may be
+  // filed in several tiles, max_links filings in all.
   uint32_t max_nodes = 0;
+  uint32_t max_links = 0;
+  // Clear and write out tiles with AVX2 (PointRenderer sets it where the
+  // CPU has it: raster/point_kernel_avx2.h). The same bytes either way.
+  bool avx2 = false;
 };
 
 struct ScreenPoint {
@@ -129,15 +134,32 @@ class PointRaster {
     split(x0, y0, x1, y1, p.depth, p.rgb);
     return true;
   }
-  // Files item `item` (the caller's index: a node whose points all fall in
-  // one tile) in `tile`'s list; false when max_nodes are filed.
+  // Files item `item` (the caller's index: a node drawn in the tile pass)
+  // in `tile`'s list; false when max_links filings are made.
   bool add_node(uint32_t tile, uint32_t item) {
-    if (node_count_ >= config_.max_nodes) return false;
+    if (node_count_ >= config_.max_links) return false;
     const uint32_t link = node_count_++;
     node_item_[link] = item;
     node_next_[link] = tile_nodes_[tile];
     tile_nodes_[tile] = link;
     return true;
+  }
+  // Files item `item` in the tile `tile` and, where `wide` and `tall`
+  // say, the tiles to its right and below (a node in up to 2 x 2 tiles),
+  // and counts its `points`: the caller made sure there is room
+  // (links_free, room_for).
+  void add_node_in_tiles(uint32_t tile, bool wide, bool tall, uint32_t item, uint32_t points) {
+    const auto link = [&](uint32_t t) {
+      const uint32_t l = node_count_++;
+      node_item_[l] = item;
+      node_next_[l] = tile_nodes_[t];
+      tile_nodes_[t] = l;
+    };
+    link(tile);
+    if (wide) link(tile + static_cast<uint32_t>(1));
+    if (tall) link(tile + static_cast<uint32_t>(tiles_x_));
+    if (wide && tall) link(tile + static_cast<uint32_t>(tiles_x_) + 1);
+    count_ += points;
   }
   // Counts n points against the frame's budget without filing them (the
   // points of an item drawn in the tile pass); false, nothing counted, when
@@ -148,6 +170,14 @@ class PointRaster {
     return true;
   }
   void reserve_undo(uint32_t n) { count_ -= n; }
+  // Whether `n` more points surely fit the frame's budget and pool, however
+  // they straddle tiles (each takes at most 4 entries).
+  bool room_for(uint32_t n) const {
+    return n <= config_.max_points - count_ &&
+           uint64_t{free_chunk_} + 4 + (uint64_t{4} * n >> kChunkLog2) + 2 * static_cast<uint64_t>(tiles_x_ * tiles_y_) <= chunk_count_;
+  }
+  // Filings add_node can still make this frame.
+  uint32_t links_free() const { return config_.max_links - node_count_; }
   static constexpr uint32_t kNoLink = 0xFFFFFFFFu;
   // A tile's filed items: first link, then next_link(link) until kNoLink.
   uint32_t first_link(uint32_t tile) const { return tile_nodes_[tile]; }

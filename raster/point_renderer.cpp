@@ -2,6 +2,7 @@
 // formats and measured errors are in docs/fixed_point.md.
 #include "raster/point_renderer.h"
 
+#include "raster/point_kernel_avx2.h"
 #include "raster/resolve.h"
 
 #include "core/arena.h"
@@ -13,10 +14,13 @@ namespace {
 constexpr int32_t kMaxFocalQ4 = 1 << 20;
 constexpr int32_t kMaxDepthMu = 1 << 30;
 constexpr int32_t kMaxSigmaN = 4 << 12;       // theta table covers theta <= 4 rad
+constexpr int32_t kMaxSigmaP = 1 << 25;       // MU: two box extents
+constexpr int kMeanTermBits = 11;             // the node lanes' mean tables: position fields up to 11 bits
+constexpr uint32_t kLaneBatches = 64;         // node lanes: batches of 8 set up in one call
 
 struct Layout {
   size_t raster, internal_frame, coverage, screen_coverage, resolve, g_position, g_normal, g_color, shading, reciprocal,
-      tile_setups, total;
+      lanes, grey, angles, tile_nodes, tile_list, mean_terms, ppn, total;
 };
 
 // The raster's configuration: the screen, times the supersampling, in
@@ -29,10 +33,9 @@ RasterConfig internal_raster(const RendererConfig& c) {
     r.format = PixelFormat::kRgb888;
   }
   r.max_nodes = c.tile_nodes;
+  r.max_links = c.tile_nodes + c.tile_nodes / 2;  // most tile nodes lie in one tile, some in 2 or 4
   return r;
 }
-
-size_t point_setup_bytes();
 
 Layout layout_of(const RendererConfig& c) {
   Layout l{};
@@ -45,57 +48,33 @@ Layout layout_of(const RendererConfig& c) {
   // (supersampling) the screen's, a pixel covered where any of its block is.
   l.coverage = take(c.resolve ? coverage_bytes(r.width, r.height) : 0);
   l.screen_coverage = take(c.resolve && c.supersample > 1 ? coverage_bytes(c.raster.width, c.raster.height) : 0);
-  l.resolve = take(c.resolve ? resolve_scratch_bytes(c.raster.width) : 0);
+  l.resolve = take(c.resolve ? resolve_scratch_bytes(c.raster.width, c.raster.format) : 0);
   l.g_position = take(sizeof(Gaussian3Q12) * c.samples);
   l.g_normal = take(c.normals ? sizeof(Gaussian2Q12) * c.samples : 0);
   l.g_color = take(c.color ? sizeof(Gaussian3Q12) * c.samples : 0);
   l.shading = take(sizeof(ShadingTables));
   l.reciprocal = take(sizeof(uint16_t) << kReciprocalBits);
-  l.tile_setups = take(point_setup_bytes() * size_t{c.tile_nodes});
+  l.lanes = take(point_lane_bytes(c.samples));
+  l.grey = take(align8(2 * kIntensityEntries) + 2 * 4 * kGreyShades);
+  l.angles = take(frame_angles_bytes(c.max_angle_bits));
+  l.tile_nodes = take(TileNodes::bytes(c.tile_nodes));
+  l.tile_list = take(4 * size_t{c.tile_nodes});
+  // The node lanes' per-frame tables (x86-64 builds, lanes kBest): each
+  // mean field value's camera-space terms, and the points-per-node table
+  // with room for the lanes' 32-bit reads.
+  const bool node_lanes = avx2::kBuilt && c.lanes == PointLanes::kBest && c.tile_nodes > 0;
+  l.mean_terms = take(node_lanes ? sizeof(int32_t) * 3 * 3 * (size_t{1} << kMeanTermBits) : 0);
+  l.ppn = take(node_lanes ? sizeof(PpnTable) + 4 : 0);
   l.total = arena.total();
   return l;
 }
 
-inline int32_t dot_q14(const int16_t a[3], const int16_t b[3]) {
-  return narrow<int32_t>((int64_t{a[0]} * b[0] + int64_t{a[1]} * b[1] + int64_t{a[2]} * b[2]) >> 14);
-}
-
-
-inline uint32_t clamp255(int32_t v) { return v < 0 ? 0u : v > 255 ? 255u : static_cast<uint32_t>(v); }
-
-// Colour after shading: channel * intensity (Q8) + specular, saturated.
-inline uint32_t shade(uint32_t r, uint32_t g, uint32_t b, uint32_t intensity, uint32_t specular) {
-  const uint32_t rr = ((r * intensity) >> 8) + specular, gg = ((g * intensity) >> 8) + specular,
-                 bb = ((b * intensity) >> 8) + specular;
-  return ((rr > 255 ? 255 : rr) << 16) | ((gg > 255 ? 255 : gg) << 8) | (bb > 255 ? 255 : bb);
-}
-
-// Where draw_points puts a point: filed in the raster's bins (any node) ...
+// Where draw_points puts a point: filed in the raster's bins.
 struct RasterSink {
   PointRaster& raster;
   int size;
   bool put(int32_t x_q4, int32_t y_q4, uint32_t depth, uint32_t rgb) {
     return raster.add(ScreenPoint{x_q4, y_q4, depth, rgb}, size);
-  }
-};
-
-// ... or straight into the hot tile's words (a node whose points all fall
-// in that tile: PointRenderer::draw_node proved it, the checked build traps
-// otherwise). The same square and the same word as the bins would give.
-template <class Word>
-struct TileSink {
-  Word* words;
-  int tile_log2, px0, py0, size;
-  bool put(int32_t x_q4, int32_t y_q4, uint32_t depth, uint32_t rgb) {
-    const uint32_t color = sizeof(Word) == 4 ? rgb565(rgb) : (rgb & 0xFFFFFFu);
-    const Word w = pack_word<Word>(depth, color);
-    const int x = ((x_q4 - (size - 1) * 8) >> 4) - px0, y = ((y_q4 - (size - 1) * 8) >> 4) - py0;
-    const int tile = 1 << tile_log2;
-#if STIPPLE_CHECK_RANGES
-    if (x < 0 || y < 0 || x + size > tile || y + size > tile) __builtin_trap();
-#endif
-    ztest_square(words + (y << tile_log2) + x, tile, static_cast<uint32_t>(size | size << 4), w);
-    return true;
   }
 };
 
@@ -106,12 +85,16 @@ struct TileSink {
 struct Span {
   int32_t lo, hi;
 };
-inline Span pixel_span(int32_t p0_q4, const int32_t m[3], int size) {
-  const int64_t sum = abs64(m[0]) + abs64(m[1]) + abs64(m[2]);
-  const int64_t d = (sum * kGaussianClip) >> 16;
-  const int64_t lo = p0_q4 - d - 1 - (size - 1) * 8, hi = p0_q4 + d - (size - 1) * 8;
-  return Span{static_cast<int32_t>(lo >> 4), static_cast<int32_t>((hi >> 4) + size - 1)};
+// (For the tile pass's nodes: sum |m| < 2^15, so every term is int32.)
+inline Span pixel_span(int32_t p0_q4, int32_t sum_abs_m, int size) {
+  const int32_t d = (sum_abs_m * kGaussianClip) >> 16;
+  const int32_t lo = p0_q4 - d - 1 - (size - 1) * 8, hi = p0_q4 + d - (size - 1) * 8;
+  return Span{lo >> 4, (hi >> 4) + size - 1};
 }
+
+inline int32_t abs32(int32_t v) { return v < 0 ? -v : v; }
+
+inline int bit_length(uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); }
 
 }  // namespace
 
@@ -136,7 +119,7 @@ bool renderer_config_valid(const RendererConfig& c) {
   if (c.supersample != 1 && c.supersample != 2 && c.supersample != 4) return false;
   if (uint32_t{c.raster.width} * c.supersample > 8192 || uint32_t{c.raster.height} * c.supersample > 8192) return false;
   return point_raster_bytes(internal_raster(c)) > 0 && point_raster_bytes(c.raster) > 0 && c.samples >= 1 && c.samples <= 8192 && c.point_size >= 1 &&
-         c.point_size <= 3 && c.quality_q8 >= 1 && c.lighting.shininess >= 1 && c.lighting.shininess <= 64 &&
+         c.point_size <= 3 && c.max_angle_bits >= 1 && c.max_angle_bits <= kMaxAngleBits && c.quality_q8 >= 1 && c.lighting.shininess >= 1 && c.lighting.shininess <= 64 &&
          (c.lighting.light_q14[0] | c.lighting.light_q14[1] | c.lighting.light_q14[2]) != 0;
 }
 
@@ -161,6 +144,7 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   if (bytes < l.total) return RenderStatus::kStorageTooSmall;
   uint8_t* base = static_cast<uint8_t*>(storage);
   internal_ = internal_raster(config);
+  internal_.avx2 = config.lanes == PointLanes::kBest && avx2::supported();
   if (raster_.init(internal_, base + l.raster, l.internal_frame - l.raster) != RasterStatus::kOk)
     return RenderStatus::kBadConfig;
   internal_frame_ = config.supersample > 1 ? base + l.internal_frame : nullptr;
@@ -173,63 +157,102 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   g_color_ = config.color ? reinterpret_cast<Gaussian3Q12*>(base + l.g_color) : nullptr;
   shading_ = reinterpret_cast<ShadingTables*>(base + l.shading);
   reciprocal_ = reinterpret_cast<uint16_t*>(base + l.reciprocal);
-  tile_setups_ = config.tile_nodes ? reinterpret_cast<PointSetup*>(base + l.tile_setups) : nullptr;
+  angles_.init(base + l.angles, config.max_angle_bits);
+  tile_nodes_.init(base + l.tile_nodes, config.tile_nodes);
+  tile_list_ = reinterpret_cast<uint32_t*>(base + l.tile_list);
+  mean_terms_ = l.mean_terms != l.ppn ? reinterpret_cast<int32_t*>(base + l.mean_terms) : nullptr;
+  lane_ppn_ = l.ppn != l.total ? reinterpret_cast<uint16_t*>(base + l.ppn) : nullptr;
+  lanes_ = config.lanes == PointLanes::kScalar ? PointLanes::kScalar
+           : config.lanes == PointLanes::kBest && avx2::supported() ? PointLanes::kBest
+                                                                     : PointLanes::kBaseline;
   build_gaussian3_table(config.source, g_position_, config.samples);
   if (g_normal_) build_gaussian2_table(config.source, g_normal_, config.samples);
   if (g_color_) build_gaussian3_table(config.source, g_color_, config.samples, kColorSobolDim);
   if (!build_shading_tables(config.lighting, shading_)) return RenderStatus::kBadConfig;
   build_reciprocal_table(reciprocal_);
+  tables_ = PointTables{g_position_, g_normal_, g_color_, shading_};
+  build_point_lanes(g_position_, g_normal_, g_color_, config.samples, base + l.lanes, &tables_);
+  uint16_t* grey_diffuse = reinterpret_cast<uint16_t*>(base + l.grey);
+  uint32_t* grey_shades = reinterpret_cast<uint32_t*>(base + l.grey + align8(2 * kIntensityEntries));
+  grey_ok_ = build_grey_shades(*shading_, config.grey_rgb, grey_diffuse, grey_shades, grey_shades + kGreyShades);
+  tables_.grey_diffuse = grey_diffuse;
   ppn_ = &ppn_table(config.source, config.point_size);
+  if (lane_ppn_ != nullptr) {
+    const uint16_t* table = &(*ppn_)[0][0];
+    for (int i = 0; i < kPpnSizes * kPpnAspects; ++i) lane_ppn_[i] = table[i];
+    lane_ppn_[kPpnSizes * kPpnAspects] = lane_ppn_[kPpnSizes * kPpnAspects + 1] = 0;
+  }
   return RenderStatus::kOk;
 }
 
+// A node's per-point constants for the per-point path (the bins): the
+// projection in full (the exact and reciprocal modes read the camera-space
+// axes) and the point formula's depth and shading terms.
 struct PointRenderer::PointSetup {
   NodeProjection proj;
+  int64_t depth0;  // (Z - near) << depth shift, below 2^61
+  int32_t dz[3];   // depth per sigma, scaled by 2^dshift: |dz| < 2^15
+  int dshift;      // 12 - e; negative for a node deeper than 2^27 depth units a sigma
   uint32_t count;
   int32_t near;
-  int shift, size;
-  uint32_t base_r, base_g, base_b, node_rgb, node_intensity, node_specular;
-  int32_t sn0, sn1, l0, l1, l2, h0, h1, h2;
-  int32_t surface[2][3];  // kSurface: the normal sample (in sigma_n) per position sample component, Q14
-  int64_t ca[3][3];  // colour axes, 8-bit levels per sigma in Q8
+  int size;
+  PointShade shade;
 };
-
-namespace {
-size_t point_setup_bytes() { return (sizeof(PointRenderer::PointSetup) + 7) & ~size_t{7}; }
-}  // namespace
 
 struct PointRenderer::FrameSetup {
   Camera camera;
+  const NodeDecoder* decoder;
   int32_t width_q4, height_q4;
   int depth_shift;
   int16_t light[3], half[3];  // model space, Q14
   bool model_color;
+  bool lit;  // the model has normals and the shading uses them
 };
 
-template <Projection P, PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular>
-void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, uint32_t max_points,
-                              FrameStats& stats) {
-  // Filled in place — in the tile pass's next free record when there is one,
-  // so a node that waits for its tile is not copied: draw_points reads it by
-  // reference either way.
-  PointSetup local;
-  const bool pooled = P == Projection::kAffine && tile_setups_ != nullptr && tile_setup_count_ < config_.tile_nodes;
-  PointSetup& setup = pooled ? tile_setups_[tile_setup_count_] : local;
-  NodeProjection& proj = setup.proj;
-  if (!proj.setup(f.camera, node)) {
+template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
+void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uint32_t max_points, FrameStats& stats) {
+  const NodeDecoder& decoder = *f.decoder;
+  // The mean in camera space, each axis's term rounded: R (mean - eye) /
+  // 2^14 (|mean - eye| < 2^29.9, so every partial sum is within int32).
+  int32_t c[3] = {0, 0, 0};
+  for (int a = 0; a < 3; ++a) {
+    const int32_t d = decoder.mean_axis_mu(a, fields.v[a]) - f.camera.eye[a];  // |.| <= 2^29 + 2^24
+    for (int i = 0; i < 3; ++i) c[i] += static_cast<int32_t>((int64_t{f.camera.rotation[i][a]} * d + (1 << 13)) >> 14);
+  }
+  if (!NodeProjection::in_view(f.camera, c)) {
+    ++stats.nodes_culled;
+    return;
+  }
+  // The axes in camera space (node_setup.h): the frame in Q14 times sigma
+  // in MU, at most 2^25 (two box extents: larger only in a hostile file),
+  // below 2^25 + 2^11.
+  int16_t frame[3][3];
+  angles_.position_frame(decoder.euler(FrameField::kPosition), fields, frame);
+  const int32_t* sigma = decoder.sigma_p_mu(ClassId{fields[Field::kSigmaP]});
+  int32_t axes[3][3], sk[3];
+  for (int k = 0; k < 3; ++k) {
+    sk[k] = sigma[k] < kMaxSigmaP ? sigma[k] : kMaxSigmaP;
+    for (int i = 0; i < 3; ++i) axes[k][i] = static_cast<int32_t>((frame[k][i] * int64_t{sk[k]} + (1 << 13)) >> 14);
+  }
+  PointSetup s;
+  NodeProjection& proj = s.proj;
+  if (!proj.setup(f.camera, c, axes)) {
     ++stats.nodes_culled;
     return;
   }
   // The gamma-extent (3.5 sigma) on screen, an L1 bound: cull nodes wholly
   // off screen. Screen covariance M M^T for the points-per-node index.
-  int64_t ex = 0, ey = 0, a = 0, b = 0, cc = 0;
+  // |mx|, |my| < 2^28: the extents below 2^28 (int32), the covariance's
+  // products 32 x 32 bits into 64.
+  int32_t ex = 0, ey = 0;
+  int64_t a = 0, b = 0, cc = 0;
   for (int k = 0; k < 3; ++k) {
-    const int64_t vx = proj.mx[k] >> 4, vy = proj.my[k] >> 4;  // 1/16 px per sigma
-    ex += abs64(vx);
-    ey += abs64(vy);
-    a += vx * vx;
-    b += vx * vy;
-    cc += vy * vy;
+    const int32_t vx = proj.mx[k] >> 4, vy = proj.my[k] >> 4;  // 1/16 px per sigma
+    ex += vx < 0 ? -vx : vx;
+    ey += vy < 0 ? -vy : vy;
+    a += int64_t{vx} * vx;
+    b += int64_t{vx} * vy;
+    cc += int64_t{vy} * vy;
   }
   ex = (ex * 7) >> 1;
   ey = (ey * 7) >> 1;
@@ -238,169 +261,267 @@ void PointRenderer::draw_node(const FrameSetup& f, const SpgHeader& header, cons
     return;
   }
   // a, c: (1/16 px)^2 = 1/256 px^2, below 3 * 2^48.
-  setup.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
-  if (setup.count > max_points) setup.count = max_points;  // the point cap
-  setup.near = f.camera.near_mu;
-  setup.shift = f.depth_shift;
-  setup.size = config_.point_size;
+  s.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
+  if (s.count > max_points) s.count = max_points;  // the point cap
+  s.near = f.camera.near_mu;
+  s.size = config_.point_size;
 
-  // Base colour and per-node shading terms.
-  const uint32_t base = f.model_color ? (uint32_t{node.color[0]} << 16) | (uint32_t{node.color[1]} << 8) | node.color[2]
-                                      : config_.grey_rgb & 0xFFFFFFu;
-  setup.base_r = base >> 16;
-  setup.base_g = (base >> 8) & 0xFF;
-  setup.base_b = base & 0xFF;
-  const int32_t sn0 = node.sigma_n[0] < kMaxSigmaN ? node.sigma_n[0] : kMaxSigmaN;
-  const int32_t sn1 = node.sigma_n[1] < kMaxSigmaN ? node.sigma_n[1] : kMaxSigmaN;
-  setup.sn0 = sn0;
-  setup.sn1 = sn1;
-  setup.l0 = dot_q14(node.normal_frame[2], f.light);
-  setup.l1 = narrow<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.light)} * sn0) >> 12);
-  setup.l2 = narrow<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.light)} * sn1) >> 12);
-  setup.h0 = dot_q14(node.normal_frame[2], f.half);
-  setup.h1 = narrow<int32_t>((int64_t{dot_q14(node.normal_frame[0], f.half)} * sn0) >> 12);
-  setup.h2 = narrow<int32_t>((int64_t{dot_q14(node.normal_frame[1], f.half)} * sn1) >> 12);
-  if constexpr (kNormals == PointNormals::kSurface) {
-    // The surface's normal field: a position sample g lands at sum_i g_i
-    // axis_i; its offset along the normal frame's tangent f_k, over the
-    // node's positional spread along f_k, is how many sigma_n the normal
-    // turns there (a convex patch, its curvature sigma_n / sigma_p).
+  // Depth: (z - near) << shift for z = Z + (A_z . g) / 2^12, as
+  // depth0 + (dz . g) >> dshift with dz = A_z 2^(shift - e) in 16 bits
+  // (|A_z| 2^shift < 2^61.1: e <= 47).
+  // e from A_z's bit length and the shift; A_z << (shift - e) or
+  // A_z >> (e - shift), floored: (A_z 2^shift) >> e in 32 bits.
+  s.depth0 = (int64_t{c[2]} - f.camera.near_mu) * (int64_t{1} << f.depth_shift);
+  uint32_t az_max = 0;
+  for (int k = 0; k < 3; ++k) {
+    const uint32_t m = static_cast<uint32_t>(axes[k][2] < 0 ? -axes[k][2] : axes[k][2]);
+    if (m > az_max) az_max = m;
+  }
+  const int bits = az_max == 0 ? 0 : bit_length(az_max) + f.depth_shift;
+  const int e = bits > 15 ? bits - 15 : 0;
+  for (int k = 0; k < 3; ++k)
+    s.dz[k] = e <= f.depth_shift ? axes[k][2] * (1 << (f.depth_shift - e)) : axes[k][2] >> (e - f.depth_shift);
+  s.dshift = 12 - e;
+
+  // Colour and shading constants.
+  PointShade& sh = s.shade;
+  uint8_t rgb[3] = {0, 0, 0};
+  if (f.model_color) decoder.color_rgb(fields, rgb);
+  sh.base_rgb = f.model_color ? (uint32_t{rgb[0]} << 16) | (uint32_t{rgb[1]} << 8) | rgb[2] : config_.grey_rgb & 0xFFFFFFu;
+  if (f.lit) {
+    int32_t l[3], h[3];
+    angles_.light_terms(decoder.euler(FrameField::kNormal), fields, l, h);
+    const int32_t* sn = decoder.sigma_n_q12(ClassId{fields[Field::kSigmaN]});
     for (int k = 0; k < 2; ++k) {
-      int64_t along[3];
-      uint64_t s2 = 0;
-      for (int i = 0; i < 3; ++i) {
-        along[i] = (int64_t{node.axis[i][0]} * node.normal_frame[k][0] + int64_t{node.axis[i][1]} * node.normal_frame[k][1] +
-                    int64_t{node.axis[i][2]} * node.normal_frame[k][2]) >> 14;  // MU
-        s2 += static_cast<uint64_t>(along[i] * along[i]);
-      }
-      if (s2 == 0) {
-        setup.surface[k][0] = setup.surface[k][1] = setup.surface[k][2] = 0;
-        continue;
-      }
-      const RsqrtScale r = rsqrt_scale(*shading_, s2);  // 2^14 / spread, without a division
-      for (int i = 0; i < 3; ++i) {
-        const int64_t v = (along[i] * int64_t{r.mul}) >> r.shift;  // |.| <= 2^14 (1 + 1/512)
-        setup.surface[k][i] = static_cast<int32_t>(v > 16416 ? 16416 : v < -16416 ? -16416 : v);
+      sh.sn[k] = static_cast<int16_t>(sn[k] < 0 ? 0 : sn[k] > kMaxSigmaN ? kMaxSigmaN : sn[k]);
+      sh.lt[k] = static_cast<int16_t>(l[k]);
+      sh.ht[k] = static_cast<int16_t>(h[k]);
+    }
+    sh.l0 = static_cast<int16_t>((l[2] + 2) >> 2);
+    sh.h0 = static_cast<int16_t>((h[2] + 2) >> 2);
+    sh.intensity = shading_->diffuse[intensity_index(l[2])];
+    sh.specular = kSpecular ? shading_->specular[intensity_index(h[2])] : 0;
+    if constexpr (kNormals == PointNormals::kSurface) {
+      // The surface's normal field: a position sample g lands at sum_i g_i
+      // sigma_i a_i; its offset along the normal frame's tangent t_k, over
+      // the node's positional spread along t_k, is how many sigma_n the
+      // normal turns there (a convex patch, its curvature sigma_n /
+      // sigma_p). Only the direction of w_k = (sigma_i a_i . t_k)_i
+      // matters, so sigma is scaled to 15 bits first: every term is int32.
+      // Per point the angle is then surface_k . g (point_kernel.h).
+      int16_t tangent[2][3];
+      angles_.normal_tangents(decoder.euler(FrameField::kNormal), fields, tangent);
+      const int32_t smax = sk[0] > sk[1] ? (sk[0] > sk[2] ? sk[0] : sk[2]) : (sk[1] > sk[2] ? sk[1] : sk[2]);
+      const int scale = bit_length(static_cast<uint64_t>(smax)) > 15 ? bit_length(static_cast<uint64_t>(smax)) - 15 : 0;
+      for (int k = 0; k < 2; ++k) {
+        int32_t w[3], s2 = 0;
+        for (int i = 0; i < 3; ++i) {
+          // a_i . t_k: Q14 unit vectors, below 2^28 (+ rounding); w below 2^14.
+          const int32_t cosine = (frame[i][0] * tangent[k][0] + frame[i][1] * tangent[k][1] +
+                                  frame[i][2] * tangent[k][2] + (1 << 13)) >> 14;
+          w[i] = ((sk[i] >> scale) * cosine) >> 15;
+          s2 += w[i] * w[i];  // below 3 * 2^28
+        }
+        if (s2 == 0) continue;
+        const RsqrtScale r = rsqrt_scale(*shading_, static_cast<uint64_t>(s2));  // 2^14 / |w|, without a division
+        for (int i = 0; i < 3; ++i) {
+          // The turn along axis i in Q14 (|.| <= 2^14 (1 + 1/512)), times sigma_n (Q12, <= 2^14).
+          const int32_t n = (w[i] * static_cast<int32_t>(r.mul)) >> r.shift;
+          const int32_t turn = n > 16416 ? 16416 : n < -16416 ? -16416 : n;
+          sh.surface[k][i] = static_cast<int16_t>((sh.sn[k] * turn + (1 << 13)) >> 14);
+        }
       }
     }
   }
-  setup.node_rgb = base;
-  setup.node_intensity = 256;
-  setup.node_specular = 0;
-  if (config_.shading != ShadingMode::kNone && header.has_normals()) {
-    setup.node_intensity = shading_->diffuse[intensity_index(setup.l0)];
-    if (kSpecular) setup.node_specular = shading_->specular[intensity_index(setup.h0)];
-    setup.node_rgb = shade(setup.base_r, setup.base_g, setup.base_b, setup.node_intensity, setup.node_specular);
-  }
-  // Colour axes in 8-bit levels per sigma, Q8 (saturated: sigma_c comes from the file).
-  if (kColorPoints)
+  sh.node_rgb = shade(sh.base_rgb >> 16, (sh.base_rgb >> 8) & 0xFFu, sh.base_rgb & 0xFFu, sh.intensity, sh.specular);
+  if constexpr (kColorPoints) {
+    // Colour axes in 8-bit levels per sigma, Q7: the frame (Q14) times
+    // sigma_c (Q12, < 2^31) times 255, below 2^53; saturated to 16 bits.
+    int16_t cf[3][3];
+    FrameAngles::model_frame(decoder.euler(FrameField::kColor), fields, Field::kFcTheta, cf);
+    const int32_t* sc = decoder.sigma_c_q12(ClassId{fields[Field::kSigmaC]});
     for (int k = 0; k < 3; ++k)
       for (int ch = 0; ch < 3; ++ch) {
-        const int64_t v = (int64_t{node.color_axis[k][ch]} * 255) >> 4;
-        setup.ca[k][ch] = v > (1 << 24) ? (1 << 24) : v < -(1 << 24) ? -(1 << 24) : v;
+        const int64_t w = (int64_t{cf[k][ch]} * sc[k] * 255) >> 19;
+        sh.ca[k][ch] = static_cast<int16_t>(w > 32767 ? 32767 : w < -32767 ? -32767 : w);
       }
+  }
   ++stats.nodes_drawn;
   if constexpr (P == Projection::kAffine) {
-    // A node inside one tile (and the screen) waits for that tile's pass,
-    // where its points go straight into the tile's words; its points count
-    // against the frame's budget now.
-    if (pooled) {
-      const Span sx = pixel_span(proj.x0_q4, proj.mx, setup.size), sy = pixel_span(proj.y0_q4, proj.my, setup.size);
-      const int sh = internal_.tile_log2;
-      if (sx.lo >= 0 && sy.lo >= 0 && sx.hi < internal_.width && sy.hi < internal_.height && (sx.lo >> sh) == (sx.hi >> sh) &&
-          (sy.lo >> sh) == (sy.hi >> sh) && raster_.reserve(setup.count)) {
-        const uint32_t tile = static_cast<uint32_t>((sy.lo >> sh) * raster_.tiles_x() + (sx.lo >> sh));
-        if (raster_.add_node(tile, tile_setup_count_)) {
-          ++tile_setup_count_;
-          ++stats.nodes_in_tiles;
-          return;
+    // A node whose terms fit 16 bits and whose depths stay inside the depth
+    // word waits for the tile pass of the (at most 2 x 2) tiles it touches;
+    // its points count against the frame's budget now.
+    const int32_t sx = abs32(proj.mx[0]) + abs32(proj.mx[1]) + abs32(proj.mx[2]);  // below 2^30
+    const int32_t sy = abs32(proj.my[0]) + abs32(proj.my[1]) + abs32(proj.my[2]);
+    if (tile_node_count_ < config_.tile_nodes && sx < (1 << 15) && sy < (1 << 15) &&
+        s.dshift >= 0) {
+      const int32_t reach = ((abs32(s.dz[0]) + abs32(s.dz[1]) + abs32(s.dz[2])) * kGaussianClip) >> s.dshift;
+      const Span spx = pixel_span(proj.x0_q4, sx, s.size), spy = pixel_span(proj.y0_q4, sy, s.size);
+      const int sh_t = internal_.tile_log2;
+      const int32_t tx0 = (spx.lo < 0 ? 0 : spx.lo) >> sh_t, ty0 = (spy.lo < 0 ? 0 : spy.lo) >> sh_t;
+      const int32_t tx1 = (spx.hi >= internal_.width ? internal_.width - 1 : spx.hi) >> sh_t;
+      const int32_t ty1 = (spy.hi >= internal_.height ? internal_.height - 1 : spy.hi) >> sh_t;
+      const uint32_t tiles = static_cast<uint32_t>((tx1 - tx0 + 1) * (ty1 - ty0 + 1));
+      if (s.depth0 - reach - 1 >= 0 && s.depth0 + reach <= 0xFFFFFFFE && spx.hi >= 0 && spy.hi >= 0 &&
+          spx.lo < internal_.width && spy.lo < internal_.height && tx1 - tx0 <= 1 && ty1 - ty0 <= 1 &&
+          raster_.links_free() >= tiles && raster_.reserve(s.count)) {
+        TileNode n;
+        for (int k = 0; k < 3; ++k) {
+          n.mx[k] = static_cast<int16_t>(proj.mx[k]);
+          n.my[k] = static_cast<int16_t>(proj.my[k]);
+          n.dz[k] = static_cast<int16_t>(s.dz[k]);
         }
-        raster_.reserve_undo(setup.count);
+        n.x0_q4 = proj.x0_q4 - (s.size - 1) * 8;
+        n.y0_q4 = proj.y0_q4 - (s.size - 1) * 8;
+        n.depth0 = static_cast<uint32_t>(s.depth0);
+        n.span[0] = static_cast<int16_t>(spx.lo);
+        n.span[1] = static_cast<int16_t>(spx.hi);
+        n.span[2] = static_cast<int16_t>(spy.lo);
+        n.span[3] = static_cast<int16_t>(spy.hi);
+        n.count = static_cast<uint16_t>(s.count);
+        n.dshift = static_cast<uint8_t>(s.dshift);
+        n.shade = sh;
+        tile_nodes_.store(tile_node_count_, n);
+        for (int32_t ty = ty0; ty <= ty1; ++ty)
+          for (int32_t tx = tx0; tx <= tx1; ++tx)
+            raster_.add_node(static_cast<uint32_t>(ty * raster_.tiles_x() + tx), tile_node_count_);
+        ++tile_node_count_;
+        ++stats.nodes_in_tiles;
+        stats.points += s.count;
+        return;
       }
     }
   }
-  RasterSink sink{raster_, setup.size};
-  stats.points += draw_points<P, kNormals, kColorPoints, kSpecular>(setup, stats, sink);
+  stats.points += draw_points<P, kNormals, kColorPoints, kSpecular>(s, stats);
 }
 
-template <PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
-void PointRenderer::draw_tile_nodes(uint32_t tile, int px0, int py0, Word* words, FrameStats& stats) {
-  TileSink<Word> sink{words, internal_.tile_log2, px0, py0, config_.point_size};
-  for (uint32_t link = raster_.first_link(tile); link != PointRaster::kNoLink; link = raster_.next_link(link))
-    stats.points += draw_points<Projection::kAffine, kNormals, kColorPoints, kSpecular>(tile_setups_[raster_.item_of(link)],
-                                                                                         stats, sink);
-}
-
-template <PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular>
-void PointRenderer::tile_nodes_of(void* context, uint32_t tile, int px0, int py0, void* words) {
-  TileContext& c = *static_cast<TileContext*>(context);
-  if (c.renderer->internal_.format == PixelFormat::kRgb565)
-    c.renderer->draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint32_t*>(words), *c.stats);
-  else
-    c.renderer->draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint64_t*>(words), *c.stats);
-}
-
-// The per-point path: its own function, never inlined, so that the ARMv5
-// build can be checked symbol by symbol for run-time helper calls
-// (tests/handheld/per_point_helpers.cmake).
-template <Projection P, PointRenderer::PointNormals kNormals, bool kColorPoints, bool kSpecular, class Sink>
-uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats, Sink& sink) {
-  const NodeProjection& proj = s.proj;
-  const uint32_t count = s.count;
-  const uint32_t base_r = s.base_r, base_g = s.base_g, base_b = s.base_b;
-  const uint32_t node_rgb = s.node_rgb, node_intensity = s.node_intensity, node_specular = s.node_specular;
-  const int32_t sn0 = s.sn0, sn1 = s.sn1, l0 = s.l0, l1 = s.l1, l2 = s.l2, h0 = s.h0, h1 = s.h1, h2 = s.h2;
-  const int64_t(&ca)[3][3] = s.ca;
-  const int32_t(&surface)[2][3] = s.surface;
-  constexpr bool kShadePoints = kNormals != PointNormals::kNode;
-  const int32_t near = s.near;
-  const int shift = s.shift;
-  uint32_t drawn = 0;
-  for (uint32_t j = 0; j < count; ++j) {
-    ScreenSample p;
-    if (!proj.template point<P>(g_position_[j], near, reciprocal_, &p)) continue;
-    const int32_t x = p.x_q4, y = p.y_q4;
-    const int64_t z = p.z;
-    const uint64_t dz = static_cast<uint64_t>(z - near) << shift;
-    const uint32_t depth = dz > 0xFFFFFFFEu ? 0xFFFFFFFEu : static_cast<uint32_t>(dz);
-    uint32_t rgb = node_rgb;
-    if constexpr (kColorPoints || kShadePoints) {
-      uint32_t r = base_r, gg = base_g, bb = base_b;
-      if constexpr (kColorPoints) {
-        const Gaussian3Q12 q = g_color_[j];
-        r = clamp255(static_cast<int32_t>(base_r) + narrow<int32_t>((ca[0][0] * q.v[0] + ca[1][0] * q.v[1] + ca[2][0] * q.v[2]) >> 20));
-        gg = clamp255(static_cast<int32_t>(base_g) + narrow<int32_t>((ca[0][1] * q.v[0] + ca[1][1] * q.v[1] + ca[2][1] * q.v[2]) >> 20));
-        bb = clamp255(static_cast<int32_t>(base_b) + narrow<int32_t>((ca[0][2] * q.v[0] + ca[1][2] * q.v[1] + ca[2][2] * q.v[2]) >> 20));
-      }
-      uint32_t intensity = node_intensity, specular = node_specular;
-      if constexpr (kShadePoints) {
-        Gaussian2Q12 n;
-        if constexpr (kNormals == PointNormals::kSurface) {
-          const Gaussian3Q12 g = g_position_[j];
-          for (int k = 0; k < 2; ++k) {
-            const int32_t v = (surface[k][0] * g.v[0] + surface[k][1] * g.v[1] + surface[k][2] * g.v[2]) >> 14;
-            n.v[k] = static_cast<int16_t>(v < -32767 ? -32767 : v > 32767 ? 32767 : v);
-          }
-        } else {
-          n = g_normal_[j];
-        }
-        const int64_t al = (int64_t{sn0} * n.v[0]) >> 12, be = (int64_t{sn1} * n.v[1]) >> 12;  // Q12 radians
-        const uint64_t t2 = static_cast<uint64_t>(al * al + be * be) >> kCosSincShift;          // theta^2 cell
-        const CosSincQ14 cs = shading_->cos_sinc[t2 < kCosSincEntries ? t2 : kCosSincEntries - 1];
-        const int32_t l = narrow<int32_t>((cs.cos * int64_t{l0} + cs.sinc * ((n.v[0] * int64_t{l1} + n.v[1] * int64_t{l2}) >> 12)) >> 14);
-        intensity = shading_->diffuse[intensity_index(l)];
-        if constexpr (kSpecular) {
-          const int32_t h = narrow<int32_t>((cs.cos * int64_t{h0} + cs.sinc * ((n.v[0] * int64_t{h1} + n.v[1] * int64_t{h2}) >> 12)) >> 14);
-          specular = shading_->specular[intensity_index(h)];
-        }
-      }
-      rgb = (kShadePoints || config_.shading != ShadingMode::kNone) ? shade(r, gg, bb, intensity, specular)
-                                                                    : (r << 16) | (gg << 8) | bb;
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
+void PointRenderer::draw_tile_nodes(uint32_t tile, int px0, int py0, Word* words) {
+  const PointTables& t = tables_;
+  if constexpr (avx2::kBuilt) {
+    if (lanes_ == PointLanes::kBest) {
+      uint32_t n = 0;
+      for (uint32_t link = raster_.first_link(tile); link != PointRaster::kNoLink; link = raster_.next_link(link))
+        tile_list_[n++] = raster_.item_of(link);
+      avx2::draw_tile<kNormals, kColorPoints, kSpecular>(tile_nodes_, tile_list_, n, t, config_.point_size, words,
+                                                         internal_.tile_log2, px0, py0);
+      return;
     }
-    if (sink.put(x, y, depth, rgb)) ++drawn;
+  }
+  for (uint32_t link = raster_.first_link(tile); link != PointRaster::kNoLink; link = raster_.next_link(link)) {
+    const TileNode n = tile_nodes_.load(raster_.item_of(link));
+    if (lanes_ == PointLanes::kScalar)
+      draw_tile_node_scalar<kNormals, kColorPoints, kSpecular>(n, t, config_.point_size, words, internal_.tile_log2, px0, py0);
+    else
+      draw_tile_node<kNormals, kColorPoints, kSpecular>(n, t, config_.point_size, words, internal_.tile_log2, px0, py0);
+  }
+}
+
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
+void PointRenderer::tile_nodes_of(void* context, uint32_t tile, int px0, int py0, void* words) {
+  PointRenderer& r = *static_cast<PointRenderer*>(context);
+  if (r.internal_.format == PixelFormat::kRgb565)
+    r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint32_t*>(words));
+  else
+    r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint64_t*>(words));
+}
+
+// The per-point path through the bins: its own function, never inlined,
+// so that the ARMv5 build can be checked symbol by symbol for run-time
+// helper calls (tests/handheld/per_point_helpers.cmake).
+template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
+uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
+  const NodeProjection& proj = s.proj;
+  const PointTables& t = tables_;
+  const PackedShade shade(s.shade);
+  RasterSink sink{raster_, s.size};
+  // A left shift of dz . g (|.| < 2^30.4) by up to 35 bits, saturated at
+  // 2^62: the depth of a node deeper than the whole depth range.
+  const int64_t limit = s.dshift >= 0 ? 0 : int64_t{1} << (62 + s.dshift);
+  uint32_t drawn = 0;
+  for (uint32_t j = 0; j < s.count; ++j) {
+    const Gaussian3Q12 g = g_position_[j];
+    const int64_t dg = int64_t{s.dz[0]} * g.v[0] + int64_t{s.dz[1]} * g.v[1] + int64_t{s.dz[2]} * g.v[2];
+    const int64_t off = s.dshift >= 0 ? dg >> s.dshift
+                        : dg >= limit ? limit
+                        : dg <= -limit ? -limit
+                                       : dg * (int64_t{1} << -s.dshift);
+    const int64_t d = s.depth0 + off;
+    int32_t x, y;
+    if constexpr (P == Projection::kAffine) {
+      if (d < 0) continue;  // behind the near plane
+      x = proj.x0_q4 + narrow<int32_t>((int64_t{proj.mx[0]} * g.v[0] + int64_t{proj.mx[1]} * g.v[1] + int64_t{proj.mx[2]} * g.v[2]) >> 16);
+      y = proj.y0_q4 + narrow<int32_t>((int64_t{proj.my[0]} * g.v[0] + int64_t{proj.my[1]} * g.v[1] + int64_t{proj.my[2]} * g.v[2]) >> 16);
+    } else {
+      ScreenSample p;
+      if (!proj.template point<P>(g, s.near, reciprocal_, &p)) continue;
+      x = p.x_q4;
+      y = p.y_q4;
+    }
+    const uint32_t depth = d < 0 ? 0u : d > 0xFFFFFFFE ? 0xFFFFFFFEu : static_cast<uint32_t>(d);
+    if (sink.put(x, y, depth, point_color<kNormals, kColorPoints, kSpecular>(shade, t, j, t.g01[j], t.g2[j]))) ++drawn;
     else ++stats.points_dropped;
   }
   return drawn;
+}
+
+NodeLaneFrame PointRenderer::lane_frame(const FrameSetup& f, const NodeCache& cache) {
+  const NodeDecoder& decoder = cache.decoder();
+  const SpgHeader& header = cache.header();
+  NodeLaneFrame lf;
+  lf.records = cache.record_at(0);
+  lf.stride = static_cast<uint32_t>(cache.record_stride());
+  for (int i = 0; i < kFieldCount; ++i)
+    lf.window[i] = cache.decoded() ? FieldWindow{static_cast<uint8_t>(2 * i), 0, 0xFFFF}
+                                   : field_window(header.layout, static_cast<Field>(i));
+  // Each mean field value's camera-space terms (draw_node's, rounded).
+  for (int a = 0; a < 3; ++a) {
+    int32_t* t = mean_terms_ + size_t{3} * a * (size_t{1} << kMeanTermBits);
+    for (uint32_t q = 0; q < (1u << header.layout.bits[a]); ++q) {
+      const int64_t d = int64_t{decoder.mean_axis_mu(a, q)} - f.camera.eye[a];
+      for (int i = 0; i < 3; ++i) t[3 * q + i] = static_cast<int32_t>((f.camera.rotation[i][a] * d + (1 << 13)) >> 14);
+    }
+    lf.mean[a] = t;
+  }
+  lf.position = angles_.position_table();
+  lf.normal = angles_.normal_table();
+  lf.light = angles_.light_table();
+  for (int i = 0; i < 3; ++i) lf.column2[i] = angles_.column2()[i];
+  lf.light_z = angles_.light_z();
+  lf.half_z = angles_.half_z();
+  const auto euler = [](const EulerTables& e, const SinCosQ14** theta, const SinCosQ14** gamma, uint8_t* psi_shift,
+                        uint8_t* phi_shift, uint32_t* mask) {
+    *theta = e.theta;
+    *gamma = e.gamma;
+    *psi_shift = static_cast<uint8_t>(e.gamma_bits - e.psi_bits - 1);
+    *phi_shift = static_cast<uint8_t>(e.gamma_bits - e.phi_bits);
+    *mask = (1u << e.gamma_bits) - 1u;
+  };
+  euler(decoder.euler(FrameField::kPosition), &lf.theta_p, &lf.gamma_p, &lf.gamma_psi_shift_p, &lf.gamma_phi_shift_p,
+        &lf.gamma_mask_p);
+  if (f.lit)
+    euler(decoder.euler(FrameField::kNormal), &lf.theta_n, &lf.gamma_n, &lf.gamma_psi_shift_n, &lf.gamma_phi_shift_n,
+          &lf.gamma_mask_n);
+  lf.sigma_p = decoder.sigma_p_mu(ClassId{0});
+  lf.sigma_n = f.lit ? decoder.sigma_n_q12(ClassId{0}) : nullptr;
+  lf.near = f.camera.near_mu;
+  lf.focal_q4 = f.camera.focal_q4;
+  lf.cx_q4 = f.camera.center_q4[0];
+  lf.cy_q4 = f.camera.center_q4[1];
+  lf.width_q4 = f.width_q4;
+  lf.height_q4 = f.height_q4;
+  lf.width = internal_.width;
+  lf.height = internal_.height;
+  lf.depth_shift = f.depth_shift;
+  lf.size = config_.point_size;
+  lf.tile_log2 = internal_.tile_log2;
+  lf.ppn = lane_ppn_;
+  lf.quality_q8 = config_.quality_q8;
+  lf.samples = config_.samples;
+  lf.lit = f.lit;
+  lf.shading = shading_;
+  lf.base_rgb = config_.grey_rgb & 0xFFFFFFu;
+  return lf;
 }
 
 RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera, uint8_t* frame, size_t stride,
@@ -438,15 +559,25 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
     f.half[a] = static_cast<int16_t>(h >> 14);
   }
   f.model_color = header.has_color() && !config_.grey;
+  f.decoder = &cache.decoder();
+  tables_.uniform_base = !f.model_color;
+  tables_.base_rgb = config_.grey_rgb & 0xFFFFFFu;
+  tables_.grey_shade = grey_ok_ && !f.model_color
+                           ? reinterpret_cast<const uint32_t*>(reinterpret_cast<const uint8_t*>(tables_.grey_diffuse) +
+                                                               align8(2 * kIntensityEntries))
+                           : nullptr;
+  tables_.grey_shade565 = tables_.grey_shade ? tables_.grey_shade + kGreyShades : nullptr;
+  if (!angles_.build(f.camera, cache.decoder(), f.light, f.half)) return RenderStatus::kBadConfig;  // fields too wide
 
   const bool normals = header.has_normals() && config_.shading != ShadingMode::kNone;
+  f.lit = normals;
   const PointNormals point_normals = !normals                                    ? PointNormals::kNode
                                     : config_.shading == ShadingMode::kPerPoint ? PointNormals::kSampled
                                     : config_.shading == ShadingMode::kSurface  ? PointNormals::kSurface
                                                                                 : PointNormals::kNode;
   const bool color_points = f.model_color && config_.sample_color;
   const bool specular = normals && config_.lighting.specular_q8 > 0;
-  using DrawFn = void (PointRenderer::*)(const FrameSetup&, const SpgHeader&, const FixedNode&, uint32_t, FrameStats&);
+  using DrawFn = void (PointRenderer::*)(const FrameSetup&, const NodeFields&, uint32_t, FrameStats&);
   const PointRaster::TileFn tile_fn =
       point_normals == PointNormals::kSampled
           ? (color_points ? (specular ? &tile_nodes_of<PointNormals::kSampled, true, true> : &tile_nodes_of<PointNormals::kSampled, true, false>)
@@ -473,7 +604,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   const uint32_t count = cache.count();
   stats.nodes = count;
   raster_.begin_frame();
-  tile_setup_count_ = 0;
+  tile_node_count_ = 0;
   // The point cap: a node draws at most point_cap times the original points
   // under it (times the supersampling's n^2, so it means the same on screen).
   const uint32_t cap_scale = uint32_t{config_.point_cap} * static_cast<uint32_t>(n * n);
@@ -481,19 +612,74 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
     const uint32_t p = cache.points_at(s);
     return cap_scale == 0 || p == 0 ? 0xFFFFFFFFu : cap_scale * p;
   };
-  if (cache.decoded()) {
-    for (uint32_t s = 0; s < count; ++s) (this->*draw)(f, header, cache.decoded_at(s), cap_of(s), stats);
-  } else {
-    FixedNode node;
-    for (uint32_t s = 0; s < count; ++s) {
-      if (!cache.node_at(s, &node)) continue;  // checked at put
-      (this->*draw)(f, header, node, cap_of(s), stats);
+  // Records were checked when they were put: every one unpacks to valid classes.
+  const RecordUnpacker& unpacker = cache.decoder().unpacker();
+  const auto draw_slot = [&](uint32_t s) {
+    if (cache.decoded()) (this->*draw)(f, cache.fields_at(s), cap_of(s), stats);
+    else (this->*draw)(f, unpacker.unpack(cache.record_at(s)), cap_of(s), stats);
+  };
+  uint32_t first = 0;  // nodes before it are set up
+  if constexpr (avx2::kBuilt) {
+    // Eight nodes at a time in AVX2 lanes (node_lanes.h) where this frame
+    // allows; what the lanes leave, and every node when the tile pass or the
+    // budget runs short (so the order in which nodes claim them is the
+    // scalar loop's), through draw_node.
+    const bool mean_fits = header.layout.bits[0] <= kMeanTermBits && header.layout.bits[1] <= kMeanTermBits &&
+                           header.layout.bits[2] <= kMeanTermBits;
+    if (mean_terms_ != nullptr && lanes_ == PointLanes::kBest && config_.projection == Projection::kAffine &&
+        !f.model_color && config_.point_cap == 0 && mean_fits && count >= 64) {
+      const NodeLaneFrame lf = lane_frame(f, cache);
+      using LaneFn = uint32_t (*)(const NodeLaneFrame&, uint32_t, uint32_t, TileNodes&, uint32_t, NodeLaneBatch*);
+      const LaneFn lane_fn = point_normals == PointNormals::kSampled
+                                 ? (specular ? &avx2::set_up_nodes<PointNormals::kSampled, true>
+                                             : &avx2::set_up_nodes<PointNormals::kSampled, false>)
+                             : point_normals == PointNormals::kSurface
+                                 ? (specular ? &avx2::set_up_nodes<PointNormals::kSurface, true>
+                                             : &avx2::set_up_nodes<PointNormals::kSurface, false>)
+                                 : (specular ? &avx2::set_up_nodes<PointNormals::kNode, true>
+                                             : &avx2::set_up_nodes<PointNormals::kNode, false>);
+      const uint32_t tiles_x = static_cast<uint32_t>(raster_.tiles_x());
+      NodeLaneBatch batches[kLaneBatches];
+      while (first < count) {
+        // As many batches as the tile pass and the budget surely hold (each
+        // node of them a TileNode and 4 links, or its scalar set-up's, and
+        // every point filed), so that no node is refused for room.
+        uint32_t run = (count - first + 7) / 8;
+        if (run > kLaneBatches) run = kLaneBatches;
+        while (run > 0 && (tile_node_count_ + 16 * run + 8 > config_.tile_nodes || raster_.links_free() < 32 * run ||
+                           !raster_.room_for(8 * run * config_.samples)))
+          run /= 2;
+        if (run == 0) break;
+        const uint32_t slots = count - first < 8 * run ? count - first : 8 * run;
+        uint32_t index = tile_node_count_;
+        tile_node_count_ += lane_fn(lf, first, slots, tile_nodes_, tile_node_count_, batches);
+        for (uint32_t b = 0; b < run; ++b) {
+          const NodeLaneBatch& r = batches[b];
+          for (uint32_t m = r.tile_mask; m != 0; m &= m - 1) {
+            const int k = __builtin_ctz(m);
+            const uint32_t code = r.tiles[k];
+            raster_.add_node_in_tiles(((code >> 12) & 0xFFFu) * tiles_x + (code & 0xFFFu), code >> 24 & 1u,
+                                      code >> 25 & 1u, index++, r.count[k]);
+            stats.points += r.count[k];
+          }
+          stats.nodes_in_lanes += r.tile_count + r.culled_count;
+          stats.nodes_drawn += r.tile_count;
+          stats.nodes_in_tiles += r.tile_count;
+          stats.nodes_culled += r.culled_count;
+        }
+        for (uint32_t b = 0; b < run; ++b) {
+          const uint32_t lanes = slots - 8 * b < 8 ? slots - 8 * b : 8;
+          const uint32_t scalar = ~(batches[b].tile_mask | batches[b].culled_mask) & ((1u << lanes) - 1u);
+          for (uint32_t m = scalar; m != 0; m &= m - 1) draw_slot(first + 8 * b + static_cast<uint32_t>(__builtin_ctz(m)));
+        }
+        first += slots;
+      }
     }
   }
+  for (uint32_t s = first; s < count; ++s) draw_slot(s);
   uint8_t* const target = n == 1 ? frame : internal_frame_;
   const size_t target_stride = n == 1 ? stride : size_t{internal_.width} * 3;
-  TileContext tile_context{this, &stats};
-  raster_.draw(config_.clear_rgb, target, target_stride, coverage_, tile_fn, &tile_context);
+  raster_.draw(config_.clear_rgb, target, target_stride, coverage_, tile_fn, this);
   if (n > 1 && coverage_ != nullptr) {
     // The resolve's coverage: a screen pixel is covered where any pixel of its block is.
     const size_t in_row = coverage_row_bytes(internal_.width), out_row = coverage_row_bytes(config_.raster.width);

@@ -26,6 +26,9 @@
 #include "core/camera.h"
 #include "core/gaussian_table.h"
 #include "core/node_cache.h"
+#include "raster/node_lanes.h"
+#include "raster/node_setup.h"
+#include "raster/point_kernel.h"
 #include "raster/point_raster.h"
 #include "raster/points_per_node.h"
 #include "raster/projection.h"
@@ -39,6 +42,8 @@ namespace stipple {
 // differential points, docs/results.md); kPerNode: one normal a node;
 // kNone: unlit.
 enum class ShadingMode : uint8_t { kPerPoint, kPerNode, kNone, kSurface };
+
+enum class PointLanes : uint8_t { kBest, kBaseline, kScalar };
 
 struct RendererConfig {
   RasterConfig raster;                     // screen, pixel format, tiles, points per frame
@@ -70,12 +75,21 @@ struct RendererConfig {
   // under it (the counts the stream carries with each node; 0: no cap), so
   // sparse returns stay sparse (docs/results.md).
   uint8_t point_cap = 0;
+  // Which loops draw the tile pass's points: the widest this CPU has
+  // (kBest: AVX2 on x86-64 where the CPU has it, else SSE2; NEON on ARMv7
+  // and AArch64), the build's baseline lanes (SSE2 or NEON), or one point at
+  // a time. The same bytes from each (tests/portable/point_kernel_test.cpp).
+  PointLanes lanes = PointLanes::kBest;
   // Nodes drawn inside the tile pass per frame (affine projection): a node
-  // whose points all fall in one tile keeps its per-point set-up here and
-  // generates its points straight into the hot tile, instead of filing each
-  // point in the bins and reading it back (docs/fixed_point.md, "Speed").
-  // Each takes a set-up record of the arena; 0: every point through the bins.
-  uint32_t tile_nodes = 0;
+  // whose points fall within two tiles a side keeps its per-point constants
+  // here (a TileNode) and generates its points straight into each hot tile
+  // it touches, instead of filing each point in the bins and reading it
+  // back (docs/fixed_point.md, "Speed"). Each takes 132 bytes of the arena
+  // (its TileNode and tile links); nodes beyond go through the bins; 0:
+  // every point through the bins. A Client holds no more than it caches
+  // (ClientConfig::node_capacity).
+  uint32_t tile_nodes = 1u << 16;
+  uint8_t max_angle_bits = 10;             // widest angle field drawn (sizes the per-frame Euler tables)
 };
 
 enum class RenderStatus : uint8_t {
@@ -95,6 +109,7 @@ struct FrameStats {
   uint32_t points = 0;        // points generated and binned
   uint32_t points_dropped = 0;  // refused by a full frame budget
   uint32_t nodes_in_tiles = 0;  // of nodes_drawn: drawn inside the tile pass (RendererConfig::tile_nodes)
+  uint32_t nodes_in_lanes = 0;  // of nodes: set up 8 at a time in AVX2 lanes, culled or drawn (raster/node_lanes.h)
 };
 
 bool renderer_config_valid(const RendererConfig& config);
@@ -122,20 +137,15 @@ class PointRenderer {
   struct PointSetup;
 
  private:
-  // Which normal each point is shaded by.
-  enum class PointNormals : uint8_t { kNode, kSampled, kSurface };
   template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
-  void draw_node(const FrameSetup& f, const SpgHeader& header, const FixedNode& node, uint32_t max_points, FrameStats& stats);
-  template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular, class Sink>
-  [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats, Sink& sink);
+  void draw_node(const FrameSetup& f, const NodeFields& fields, uint32_t max_points, FrameStats& stats);
+  template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
+  [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
   template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
-  void draw_tile_nodes(uint32_t tile, int px0, int py0, Word* words, FrameStats& stats);
+  void draw_tile_nodes(uint32_t tile, int px0, int py0, Word* words);
   template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
   static void tile_nodes_of(void* context, uint32_t tile, int px0, int py0, void* words);
-  struct TileContext {
-    PointRenderer* renderer;
-    FrameStats* stats;
-  };
+  NodeLaneFrame lane_frame(const FrameSetup& f, const NodeCache& cache);
 
   RendererConfig config_{};
   PointRaster raster_;
@@ -150,8 +160,15 @@ class PointRenderer {
   ShadingTables* shading_ = nullptr;
   uint16_t* reciprocal_ = nullptr;  // 1024 entries
   const PpnTable* ppn_ = nullptr;
-  PointSetup* tile_setups_ = nullptr;  // tile_nodes of them
-  uint32_t tile_setup_count_ = 0;      // this frame's
+  PointTables tables_;
+  bool grey_ok_ = false;            // the grey shortcut's tables hold (PointTables::grey_shade)
+  FrameAngles angles_;
+  TileNodes tile_nodes_;            // config_.tile_nodes of them
+  uint32_t* tile_list_ = nullptr;   // one tile's nodes (the AVX2 loop's input)
+  PointLanes lanes_ = PointLanes::kScalar;  // what config_.lanes resolved to on this CPU
+  int32_t* mean_terms_ = nullptr;   // the node lanes' (node_lanes.h): [axis][q][3]
+  uint16_t* lane_ppn_ = nullptr;    // the points-per-node table, padded for 32-bit reads
+  uint32_t tile_node_count_ = 0;    // this frame's
 };
 
 }  // namespace stipple

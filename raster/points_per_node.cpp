@@ -23,7 +23,11 @@ PpnIndex ppn_index(int64_t a, int64_t b, int64_t c) {
   const int64_t tr = a + c;
   // a, c < 2^31: no overflow. |b| >= 2^31 > sqrt(a c) only off a covariance
   // (rounding, hostile input): as degenerate as it gets.
-  const int64_t det = b >= kBig || b <= -kBig ? -1 : a * c - b * b;
+  // a, b, c below 2^31 here: the products 32 x 32 bits into 64.
+  const int64_t det = b >= kBig || b <= -kBig
+                          ? -1
+                          : int64_t{static_cast<int32_t>(a)} * static_cast<int32_t>(c) -
+                                int64_t{static_cast<int32_t>(b)} * static_cast<int32_t>(b);
   const int t = half_octave(static_cast<uint64_t>(tr));
   const int d = det <= 0 ? kPpnAspects - 1 : 2 * t - half_octave(4 * static_cast<uint64_t>(det));
   return PpnIndex{static_cast<uint8_t>(t > kPpnSizes - 1 ? kPpnSizes - 1 : t),

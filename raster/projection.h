@@ -55,26 +55,42 @@ struct NodeProjection {
   // False when the node is not drawn: its mean behind the near plane or
   // outside a ~165 degree cone, or its projection too large.
   bool setup(const Camera& camera, const FixedNode& node) {
-    int32_t c[3];
+    int32_t c[3], a[3][3];
     camera_space(camera, node.mean, c);
+    if (!in_view(camera, c)) return false;
+    for (int k = 0; k < 3; ++k) camera_rotate(camera, node.axis[k], a[k]);
+    return setup(camera, c, a);
+  }
+  // Whether a camera-space mean is drawn at all: beyond the near plane, inside the cone.
+  static bool in_view(const Camera& camera, const int32_t c[3]) {
+    const int64_t z = c[2];
+    return z > camera.near_mu && abs64(c[0]) <= 8 * z && abs64(c[1]) <= 8 * z;
+  }
+  // The same from the mean and the axes in camera space (MU; the mean
+  // in_view, every axis component within 2^25 + 2^11: sigma <= 2^25).
+  bool setup(const Camera& camera, const int32_t c[3], const int32_t a[3][3]) {
     X = c[0];
     Y = c[1];
     Z = c[2];
-    if (Z <= camera.near_mu || abs64(X) > 8 * Z || abs64(Y) > 8 * Z) return false;
-    for (int k = 0; k < 3; ++k) camera_rotate(camera, node.axis[k], A[k]);
+    for (int k = 0; k < 3; ++k)
+      for (int i = 0; i < 3; ++i) A[k][i] = a[k][i];
     focal_q4 = camera.focal_q4;
     cx_q4 = camera.center_q4[0];
     cy_q4 = camera.center_q4[1];
-    const int64_t u = (int64_t{1} << 46) / Z;
-    const int64_t xr = (X * u) >> 30, yr = (Y * u) >> 30;  // X/Z, Y/Z in Q16
-    x0_q4 = cx_q4 + narrow<int32_t>((focal_q4 * xr) >> 16);
-    y0_q4 = cy_q4 + narrow<int32_t>((focal_q4 * yr) >> 16);
+    // u = 2^46 / Z < 2^34, floored — without a divide instruction where
+    // the build has none (core/divide.h: the same quotient).
+    const int64_t u = floor_div(int64_t{1} << 46, Z);
+    // X/Z, Y/Z in Q16: below 2^19 (|X|, |Y| <= 8 Z).
+    const int32_t xr = static_cast<int32_t>((X * u) >> 30), yr = static_cast<int32_t>((Y * u) >> 30);
+    x0_q4 = cx_q4 + narrow<int32_t>((int64_t{focal_q4} * xr) >> 16);
+    y0_q4 = cy_q4 + narrow<int32_t>((int64_t{focal_q4} * yr) >> 16);
+    const int64_t fu = (focal_q4 * u) >> 20;                    // f / Z in Q26 (Q4 focal): below 2^34
     for (int k = 0; k < 3; ++k) {
-      // (A - (X/Z) A_z) / Z in Q26: below 2^28.2 * 2^34 before the shift, 2^42.2 after;
-      // times f (<= 2^20) below 2^62.2.
-      const int64_t wx = ((A[k][0] - ((xr * A[k][2]) >> 16)) * u) >> 20;
-      const int64_t wy = ((A[k][1] - ((yr * A[k][2]) >> 16)) * u) >> 20;
-      const int64_t vx = (focal_q4 * wx) >> 22, vy = (focal_q4 * wy) >> 22;
+      // (A - (X/Z) A_z): below 2^25 * 9 = 2^28.2 for |A| <= 2^25 + 2^11;
+      // times f / Z below 2^62.2; 256 f / Z (A - (X/Z) A_z) after the shift.
+      const int32_t dx = A[k][0] - static_cast<int32_t>((int64_t{xr} * A[k][2]) >> 16);
+      const int32_t dy = A[k][1] - static_cast<int32_t>((int64_t{yr} * A[k][2]) >> 16);
+      const int64_t vx = (dx * fu) >> 22, vy = (dy * fu) >> 22;
       if (abs64(vx) >= kMaxScreenSlope || abs64(vy) >= kMaxScreenSlope) return false;
       mx[k] = static_cast<int32_t>(vx);
       my[k] = static_cast<int32_t>(vy);

@@ -25,6 +25,8 @@
 //   3. blend: every pixel left covered takes the mean of the covered
 //             pixels of its 3 x 3 block (after the fill).
 //
+// Means are of the channels as the frame stores them — 8 bits each in
+// RGB888 frames, RGB565's 5, 6 and 5 bits in those — rounded half up.
 // Integer only, a row at a time through a ring of rows (the frame is
 // rewritten in place), no allocation: `resolve_scratch_bytes` for the rows,
 // the coverage bitmap is the caller's (`coverage_bytes`; row-major, one bit a
@@ -41,11 +43,14 @@ namespace stipple {
 
 inline size_t coverage_row_bytes(uint16_t width) { return (size_t{width} + 7) / 8; }
 inline size_t coverage_bytes(uint16_t width, uint16_t height) { return coverage_row_bytes(width) * height; }
-// Seven rows of 8 bytes a pixel: three as drawn, three filled, one empty.
-inline size_t resolve_scratch_bytes(uint16_t width) { return 7 * 8 * size_t{width}; }
+// Seven rows of a pixel's lanes (8 bytes in RGB888 frames, 4 in RGB565):
+// three as drawn, three filled, one empty.
+inline size_t resolve_scratch_bytes(uint16_t width, PixelFormat format) {
+  return 7 * (format == PixelFormat::kRgb565 ? 4 : 8) * size_t{width};
+}
 
 // Resolves `frame` (height rows of `stride` bytes in `format`) in place.
-// `scratch` is 8-byte aligned and resolve_scratch_bytes(width) long.
+// `scratch` is 8-byte aligned and resolve_scratch_bytes(width, format) long.
 void resolve_frame(uint8_t* frame, size_t stride, PixelFormat format, uint16_t width, uint16_t height,
                    const uint8_t* coverage, uint32_t clear_rgb, void* scratch);
 

@@ -1,7 +1,9 @@
 # Fails when the per-point path of the client calls a run-time helper for
 # division or floating point: the functions that run once per generated
-# point — Client::draw_points in the affine and reciprocal projection modes,
-# PointRaster::add / split / push and the tile pass — must branch to none of
+# point — PointRenderer::draw_points in the affine and reciprocal projection
+# modes (the bins), the tile pass's point loops (draw_tile_node_scalar and
+# the NEON loop, inlined into PointRenderer::draw_tile_nodes / tile_nodes_of
+# or not), PointRaster::add / split / push and the tile pass — must branch to none of
 # __aeabi_idiv, __aeabi_uidiv, __aeabi_ldivmod, __aeabi_uldivmod, __aeabi_f*,
 # __aeabi_d*, __aeabi_*2f, __divsi3, __addsf3 ... (per-node and init code may
 # divide). The exact-division mode divides per point: with HW_DIVIDE=0
@@ -31,7 +33,8 @@ foreach(line IN LISTS lines)
   if(line MATCHES "^[0-9a-f]+ <(.*)>:$")
     set(current "${CMAKE_MATCH_1}")
     set(per_point FALSE)
-    if(current MATCHES "draw_points<\\(stipple::Projection\\)${per_point_modes}," OR current MATCHES "PointRaster::(add|split|push|draw_tiles)")
+    if(current MATCHES "draw_points<\\(stipple::Projection\\)${per_point_modes}," OR current MATCHES "PointRaster::(add|split|push|draw_tiles)"
+       OR current MATCHES "(draw_tile_node|draw_tile_nodes|tile_nodes_of)<")
       set(per_point TRUE)
       math(EXPR per_point_functions "${per_point_functions} + 1")
     endif()

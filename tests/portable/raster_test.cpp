@@ -5,6 +5,7 @@
 #include <random>
 #include <vector>
 
+#include "raster/point_kernel_avx2.h"
 #include "raster/point_raster.h"
 
 namespace stipple {
@@ -158,6 +159,40 @@ TEST(Raster, TiledEqualsNaiveForRandomPoints) {
       fr.draw(0x334455);
       ASSERT_EQ(fr.pixels, naive(c, pts, 0x334455)) << "format " << static_cast<int>(f) << " tile " << int{tile_log2};
     }
+}
+
+}  // namespace
+}  // namespace stipple
+
+namespace stipple {
+namespace {
+
+// The tiles' clear and write-out in AVX2 (RasterConfig::avx2, where the CPU
+// has it) give the scalar loops' pixels and coverage: odd widths (a tile's
+// row ending mid-register), both formats, every tile size.
+TEST(Raster, Avx2TileFinishWritesTheScalarPixels) {
+  if (!avx2::supported()) GTEST_SKIP() << "no AVX2 on this CPU (or not x86-64)";
+  for (PixelFormat f : {PixelFormat::kRgb565, PixelFormat::kRgb888}) {
+    for (const uint8_t tile_log2 : {uint8_t{3}, uint8_t{5}, uint8_t{6}, uint8_t{7}}) {
+      std::vector<uint8_t> pixels[2], coverage[2];
+      for (int wide = 0; wide < 2; ++wide) {
+        RasterConfig c{100, 37, tile_log2, f, 4000};
+        c.avx2 = wide == 1;
+        Frame fr(c);
+        std::mt19937 points(11);
+        fr.raster.begin_frame();
+        for (int i = 0; i < 3000; ++i)
+          fr.raster.add(ScreenPoint{static_cast<int32_t>(points() % 1700) - 50, static_cast<int32_t>(points() % 700) - 50,
+                                    static_cast<uint32_t>(points()), static_cast<uint32_t>(points())},
+                        1 + static_cast<int>(points() % 3));
+        coverage[wide].assign(static_cast<size_t>((c.width + 7) / 8) * c.height, 0xAA);
+        fr.raster.draw(0x123456, fr.pixels.data(), static_cast<size_t>(c.width) * bytes_per_pixel(f), coverage[wide].data());
+        pixels[wide] = fr.pixels;
+      }
+      EXPECT_EQ(pixels[0], pixels[1]) << int(tile_log2);
+      EXPECT_EQ(coverage[0], coverage[1]) << int(tile_log2);
+    }
+  }
 }
 
 }  // namespace

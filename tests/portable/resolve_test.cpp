@@ -22,7 +22,7 @@ struct Picture {
 
   Picture(uint16_t w, uint16_t h, PixelFormat f = PixelFormat::kRgb888)
       : width(w), height(h), format(f), pixels(size_t{w} * h * bytes_per_pixel(f), 0), coverage(coverage_bytes(w, h), 0),
-        scratch(resolve_scratch_bytes(w) / 8) {}
+        scratch(resolve_scratch_bytes(w, f) / 8) {}
   size_t stride() const { return size_t{width} * bytes_per_pixel(format); }
   // Covers a pixel with a colour.
   void set(int x, int y, uint32_t rgb) {
@@ -120,7 +120,12 @@ TEST(Resolve, BlendsBothPixelFormatsAlike) {
       }
     p.resolve();
     // Everything covered: every pixel is the rounded mean of its 3 x 3 block
-    // inside the frame (rounded half up, then stored in the format).
+    // inside the frame (rounded half up), channel by channel as the format
+    // stores it: 8-bit channels, or RGB565's 5, 6 and 5 bits.
+    const uint32_t shift[3] = {f == PixelFormat::kRgb565 ? 11u : 16u, f == PixelFormat::kRgb565 ? 5u : 8u, 0u};
+    const uint32_t mask[3] = {f == PixelFormat::kRgb565 ? 31u : 255u, f == PixelFormat::kRgb565 ? 63u : 255u,
+                              f == PixelFormat::kRgb565 ? 31u : 255u};
+    const auto stored = [&](uint32_t rgb) { return f == PixelFormat::kRgb565 ? uint32_t{rgb565(rgb)} : rgb; };
     for (int y = 0; y < 20; ++y)
       for (int x = 0; x < 24; ++x) {
         uint32_t sum[3] = {0, 0, 0}, n = 0;
@@ -128,15 +133,13 @@ TEST(Resolve, BlendsBothPixelFormatsAlike) {
           for (int dx = -1; dx <= 1; ++dx) {
             const int xx = x + dx, yy = y + dy;
             if (xx < 0 || yy < 0 || xx >= 24 || yy >= 20) continue;
-            const uint32_t v = drawn[yy * 24 + xx];
-            sum[0] += v >> 16;
-            sum[1] += (v >> 8) & 255;
-            sum[2] += v & 255;
+            const uint32_t v = stored(drawn[yy * 24 + xx]);
+            for (int c = 0; c < 3; ++c) sum[c] += (v >> shift[c]) & mask[c];
             ++n;
           }
         uint32_t mean = 0;
-        for (int c = 0; c < 3; ++c) mean = mean << 8 | (2 * sum[c] + n) / (2 * n);
-        const uint32_t expect = f == PixelFormat::kRgb565 ? rgb888_from_565(rgb565(mean)) : mean;
+        for (int c = 0; c < 3; ++c) mean |= (2 * sum[c] + n) / (2 * n) << shift[c];
+        const uint32_t expect = f == PixelFormat::kRgb565 ? rgb888_from_565(static_cast<uint16_t>(mean)) : mean;
         ASSERT_EQ(p.at(x, y), expect) << x << "," << y;
       }
   }

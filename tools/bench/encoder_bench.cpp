@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -28,7 +29,9 @@
 #include "tools/server/link_timing.h"
 #include "tools/server/server.h"
 #include "platform/loopback/loopback_transport.h"
+#include "raster/point_kernel_avx2.h"
 #include "raster/point_raster.h"
+#include "raster/resolve.h"
 #include <lzf.h>
 
 #include "tools/encoder/classify.h"
@@ -222,8 +225,9 @@ BENCHMARK(BM_FloorDiv)->Arg(0)->Arg(1);
 
 void BM_RasterFrame(benchmark::State& state) {
   const bool large = state.range(0) != 0;
-  const RasterConfig c{static_cast<uint16_t>(large ? 640 : 240), static_cast<uint16_t>(large ? 480 : 320), 5,
-                       large ? PixelFormat::kRgb888 : PixelFormat::kRgb565, 30000};
+  RasterConfig c{static_cast<uint16_t>(large ? 640 : 240), static_cast<uint16_t>(large ? 480 : 320), 6,
+                 large ? PixelFormat::kRgb888 : PixelFormat::kRgb565, 30000};
+  c.avx2 = state.range(1) != 0 && avx2::supported();  // the tiles' clear and write-out in AVX2
   std::vector<uint64_t> arena(point_raster_bytes(c) / 8 + 1);
   PointRaster raster;
   if (raster.init(c, arena.data(), arena.size() * 8) != RasterStatus::kOk) state.SkipWithError("init");
@@ -241,15 +245,17 @@ void BM_RasterFrame(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(pts.size()));
 }
-BENCHMARK(BM_RasterFrame)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RasterFrame)->Args({0, 0})->Args({1, 0})->Args({0, 1})->Args({1, 1})->Unit(benchmark::kMicrosecond);
 
 // One client frame of the scan at 640 x 480 RGB888 from the default view,
 // the cut's projected-size threshold chosen so that about 30,000 nodes are
-// in view (the issue's setting). Arg 0: projection (0 affine, 1 reciprocal,
-// 2 exact); arg 1: 0 packed cache (decode each frame), 1 decoded cache;
-// arg 2: shading (0 per point, 2 none). Counters: points per frame and
-// points per second; the decode + sample + transform + z-test + write of
-// every point is inside the timed render().
+// in view (the issue's setting), per sampled normal, the resolve off. Arg 0:
+// lanes (0 best — AVX2 where the CPU has it —, 1 the baseline's SSE2, 2
+// scalar); arg 1: point size (1 or 2 px); arg 2: 0 packed cache (unpacked
+// each frame), 1 unpacked cache; arg 3: projection (0 affine, 1
+// reciprocal, 2 exact). Counters: points per frame and points per second;
+// the set-up of every node, the sampling, transform, shading, z-test and
+// write of every point are inside the timed render().
 // The cut of the simple projected-size rule whose threshold (1/16 px) gives
 // nearest 30,000 nodes for `camera`: the frame benchmarks' load.
 std::vector<uint32_t> cut_near_30000(const SpgView& view, const NodeDecoder& decoder, const Camera& camera) {
@@ -284,10 +290,16 @@ void BM_ClientFrame(benchmark::State& state) {
   const std::vector<uint8_t>& spg = encoded_scan();
   const SpgView view = parsed_scan();
   ClientConfig c;
-  c.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 21};
-  c.projection = static_cast<Projection>(state.range(0));
-  c.cache_decoded = state.range(1) != 0;
-  c.shading = static_cast<ShadingMode>(state.range(2));
+  c.raster.width = 640;
+  c.raster.height = 480;
+  c.raster.format = PixelFormat::kRgb888;
+  c.raster.max_points = 1u << 21;
+  c.lanes = static_cast<PointLanes>(state.range(0));
+  c.point_size = static_cast<uint8_t>(state.range(1));
+  c.cache_decoded = state.range(2) != 0;
+  c.projection = static_cast<Projection>(state.range(3));
+  c.shading = ShadingMode::kPerPoint;
+  c.resolve = false;
   c.node_capacity = view.header.node_count;
   const FrameScene scene(view);
   const Camera& camera = scene.camera;
@@ -314,20 +326,53 @@ void BM_ClientFrame(benchmark::State& state) {
   state.counters["ns_per_point"] = benchmark::Counter(static_cast<double>(stats.points), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert) ;
 }
 BENCHMARK(BM_ClientFrame)
-    ->Args({0, 0, 0})
-    ->Args({0, 1, 0})
-    ->Args({0, 1, 2})
-    ->Args({1, 1, 0})
-    ->Args({2, 1, 0})
+    ->ArgNames({"lanes", "px", "unpacked", "projection"})
+    ->Args({0, 2, 0, 0})
+    ->Args({0, 1, 0, 0})
+    ->Args({1, 2, 0, 0})
+    ->Args({1, 1, 0, 0})
+    ->Args({2, 2, 0, 0})
+    ->Args({2, 1, 0, 0})
+    ->Args({0, 2, 1, 0})
+    ->Args({0, 2, 0, 1})
+    ->Args({0, 2, 0, 2})
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
+
+// The screen-space resolve of a finished frame (raster/resolve.h): the
+// coverage of arg 0's share of the pixels (percent) in scattered blobs, at
+// 240 x 320 RGB565 (arg 1 = 0) or 640 x 480 RGB888 (1).
+void BM_Resolve(benchmark::State& state) {
+  const bool large = state.range(1) != 0;
+  const uint16_t w = large ? 640 : 240, h = large ? 480 : 320;
+  const PixelFormat f = large ? PixelFormat::kRgb888 : PixelFormat::kRgb565;
+  std::vector<uint8_t> frame(size_t{w} * h * bytes_per_pixel(f)), coverage(coverage_bytes(w, h), 0);
+  std::vector<uint64_t> scratch(resolve_scratch_bytes(w, f) / 8 + 1);
+  std::mt19937 rng(3);
+  for (uint8_t& b : frame) b = static_cast<uint8_t>(rng());
+  // A disc in the middle covering the share, with pinholes.
+  const double radius = std::sqrt(static_cast<double>(state.range(0)) / 100.0 * w * h / 3.14159265);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (std::hypot(x - w / 2.0, y - h / 2.0) < radius && rng() % 16 != 0)
+        coverage[size_t(y) * coverage_row_bytes(w) + x / 8] |= static_cast<uint8_t>(1u << (x % 8));
+  const std::vector<uint8_t> drawn = frame;
+  for (auto _ : state) {
+    frame = drawn;
+    resolve_frame(frame.data(), size_t{w} * bytes_per_pixel(f), f, w, h, coverage.data(), 0, scratch.data());
+    benchmark::DoNotOptimize(frame.data());
+  }
+  state.SetItemsProcessed(state.iterations() * int64_t{w} * h);
+}
+BENCHMARK(BM_Resolve)->Args({30, 0})->Args({30, 1})->Unit(benchmark::kMicrosecond);
 
 // The frame's cost as the fit issue 15 states it — constant + per node x
 // nodes + per point x points — so a higher point count per node cannot
 // flatter a per-point figure. Twelve frames of BM_ClientFrame's scene (the
 // packed cache, the defaults otherwise; arg 0: 0 the default shading, 1 per
-// sampled normal with the resolve off, the issue's measurement): a quarter,
+// sampled normal with the resolve off, the issue's measurement; arg 1: the
+// lanes, as BM_ClientFrame's arg 0): a quarter,
 // half or all of the cut's nodes (every 4th, 2nd, each) at quality 0.5, 1, 2
 // and 4; each the median of 5 frames; least squares over the twelve.
 // Reported in microseconds and nanoseconds (wall clock: run it on a quiet
@@ -346,7 +391,11 @@ void BM_FrameFit(benchmark::State& state) {
     for (uint32_t every : {4u, 2u, 1u}) {
       for (int quality : {128, 256, 512, 1024}) {
         ClientConfig c;
-        c.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 22};
+        c.raster.width = 640;
+        c.raster.height = 480;
+        c.raster.format = PixelFormat::kRgb888;
+        c.raster.max_points = 1u << 22;
+        c.lanes = static_cast<PointLanes>(state.range(1));
         c.node_capacity = view.header.node_count;
         c.quality_q8 = static_cast<uint16_t>(quality);
         if (state.range(0) == 1) {
@@ -401,7 +450,14 @@ void BM_FrameFit(benchmark::State& state) {
   state.counters["ns_per_node"] = fit[1] * 1e9;
   state.counters["ns_per_point"] = fit[2] * 1e9;
 }
-BENCHMARK(BM_FrameFit)->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FrameFit)
+    ->ArgNames({"issue", "lanes"})
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Args({1, 2})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 #ifdef STIPPLE_BENCH_GL
 // The GL client's frame (platform/gl) on whatever EGL offers (Mesa's

@@ -80,6 +80,7 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
         .integer("points", fixed.stats.points)
         .integer("points_dropped", fixed.stats.points_dropped)
         .integer("nodes_in_tiles", fixed.stats.nodes_in_tiles)
+        .integer("nodes_in_lanes", fixed.stats.nodes_in_lanes)
         .integer("arena_bytes", static_cast<long long>(fixed.arena_bytes))
         .num("seconds", fixed_seconds)
         .num("frame_seconds_median", frame_median)

@@ -19,6 +19,7 @@ struct RenderOptions {
   ViewSpec view;
   bool sized = false;  // --size was given
   bool tile_nodes_given = false;  // --tile-nodes was given (the handheld's default is kHandheldTileNodes: its arena)
+  bool lanes_given = false;       // --lanes was given (the handheld's default is its device's: baseline)
 };
 
 // The help lines of these options (view, cut, client), for a program's usage.

@@ -78,6 +78,7 @@ int run(int argc, char** argv) {
   std::string output, fbdev, error, v;
   if (!parse_render_options(args, o, error)) return fail(error);
   if (!o.tile_nodes_given) o.config.tile_nodes = kHandheldTileNodes;  // the PDA's arena (raster/client.h)
+  if (!o.lanes_given) o.config.lanes = PointLanes::kBaseline;          // the PDA's lanes, and no x86 node tables
   const bool crc = args.flag("--crc"), memory = args.flag("--memory");
   unsigned long long frames = 1;
   if (args.value("--frames", v) && (!cli::parse_uint(v, 100000, frames) || frames == 0))

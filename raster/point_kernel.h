@@ -1,0 +1,393 @@
+// stipple raster — the point formula: what sample j of a node becomes.
+//
+// Per node and frame the renderer forms a few constants (`PointShade`, and
+// the position terms below); per point, with g the position sample, n the
+// normal sample and q the colour sample of the Gaussian tables (Q12):
+//
+//   x = x0 + (mx . g) >> 16,  y = y0 + (my . g) >> 16             Q4 pixels
+//   depth = depth0 + (dz . g) >> dshift                           the tile word's depth
+//   al = clamp((sn1 n_1) >> 12, +-4 rad), be = likewise            Q12 radians
+//   (cos, sinc) = table[(al^2 + be^2) >> 17]                      theta^2 cell
+//   l = (cos l0 + sinc ((al lt1 + be lt2) >> 14)) >> 12          L.n, Q14
+//   h = the same with H                                           H.n, Q14
+//   rgb = shade(base + (ca . q) >> 19, diffuse[l], specular[h])
+//
+// (the exponential map of docs/sampling.md: L.n = cos(theta) L.n0 +
+// sinc(theta) (al L.t1 + be L.t2), raster/shading.h). Every value is an
+// int32 whose bound is stated where it is formed and proved in
+// docs/fixed_point.md, "The point formula"; for nodes that stay inside two
+// tiles a side, whose slopes and depth terms fit 16 bits, the position terms
+// are int32 as well, and such a node is drawn by `draw_tile_node`: inside the
+// tile pass, straight into the hot tile's words, 4 points at a time in SSE2
+// or NEON lanes where the target has them, scalar elsewhere — the same
+// bytes on every target. Larger nodes take the renderer's per-point path
+// through the bins, with the same formula in int64 where a term needs it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "core/fixed_range.h"
+#include "core/gaussian_table.h"
+#include "raster/point_raster.h"
+#include "raster/shading.h"
+
+namespace stipple {
+
+// Which normal each point is shaded by.
+enum class PointNormals : uint8_t { kNode, kSampled, kSurface };
+
+// A node's per-point shading and colour constants.
+struct PointShade {
+  int16_t sn[2] = {};       // sigma_n1, sigma_n2: Q12 radians, <= 4 rad
+  int16_t lt[2] = {};       // L.t1, L.t2: Q14
+  int16_t ht[2] = {};       // H.t1, H.t2: Q14
+  int16_t l0 = 0, h0 = 0;   // L.n0, H.n0: Q12
+  // kSurface: the normal's angles per position sample component — sigma_n
+  // times the normal's turn along each axis — in Q12 radians per sigma
+  // (|.| <= 16416): al = (surface[0] . g) >> 12.
+  int16_t surface[2][3] = {};
+  int16_t ca[3][3] = {};    // colour axes: 8-bit levels per sigma, Q7 (|.| <= 32767, saturated)
+  uint32_t base_rgb = 0;    // the node's colour, 0xRRGGBB
+  uint32_t node_rgb = 0;    // the node's colour shaded by its mean normal (PointNormals::kNode)
+  uint16_t intensity = 256, specular = 0;  // the mean normal's diffuse (Q8) and specular terms
+};
+
+// The tables the formula reads: the Gaussian samples, also as pairs of
+// int16 in 32-bit words (low half first) for the SIMD lanes' multiply-adds —
+// (g0, g1), (g2, 0), (n0, n1), (q0, q1), (q2, 0) — with kLaneSlack zero
+// entries past the last sample, so 4 lanes may always be loaded.
+inline constexpr uint32_t kLaneSlack = 8;
+struct PointTables {
+  const Gaussian3Q12* position = nullptr;
+  const Gaussian2Q12* normal = nullptr;
+  const Gaussian3Q12* color = nullptr;
+  const ShadingTables* shading = nullptr;
+  const uint32_t *g01 = nullptr, *g2 = nullptr, *n01 = nullptr, *q01 = nullptr, *q2 = nullptr;
+  // Every node's base colour is this frame's grey (the model has no colour,
+  // or it is ignored): the loops need not read it per node.
+  bool uniform_base = false;
+  uint32_t base_rgb = 0;
+  // Where that base is a grey (r = g = b = v) and specular terms stay below
+  // 256, shading it is two lookups (the scalar loop's shortcut, the same
+  // values as shade()): grey_diffuse[i] = (v diffuse[i]) >> 8 and
+  // grey_shade[d + s] = min(d + s, 255) as 0xRRGGBB. Null otherwise.
+  const uint16_t* grey_diffuse = nullptr;  // kIntensityEntries
+  const uint32_t* grey_shade = nullptr;    // kGreyShades
+  const uint32_t* grey_shade565 = nullptr; // the same as RGB565
+};
+inline constexpr int kGreyShades = 511;
+
+// The grey shortcut's tables for base colour `rgb` (false: not a grey, or a
+// specular term above 255): kIntensityEntries diffuse terms, kGreyShades
+// shades as 0xRRGGBB and as many as RGB565.
+bool build_grey_shades(const ShadingTables& shading, uint32_t rgb, uint16_t* diffuse, uint32_t* shades,
+                       uint32_t* shades565);
+
+// Bytes of the paired tables for `samples` samples; fills them from the Gaussian tables.
+size_t point_lane_bytes(uint32_t samples);
+void build_point_lanes(const Gaussian3Q12* position, const Gaussian2Q12* normal, const Gaussian3Q12* color,
+                       uint32_t samples, void* storage, PointTables* out);
+
+// A node drawn inside the tile pass (PointRenderer::draw_node says which):
+// every slope and depth term fits 16 bits and the node's depths stay inside
+// the depth word, so each position term is an int32 (pairs of int16 for the
+// SIMD lanes' multiply-adds: element 3 is zero).
+struct TileNode {
+  int16_t mx[4] = {}, my[4] = {};  // 1/256 px per sigma: sum |.| < 2^15, so |m . g| < 2^29
+  int16_t dz[4] = {};              // depth per sigma, scaled by 2^dshift: |dz . g| < 2^30.4
+  int32_t x0_q4 = 0, y0_q4 = 0;    // the mean's square's corner: x0 - (size - 1) * 8, Q4
+  uint32_t depth0 = 0;             // the mean's depth; every point's is in [0, 2^32 - 2]
+  int16_t span[4] = {};            // pixels covered, inclusive: x lo, x hi, y lo, y hi
+  uint16_t count = 0;
+  uint8_t dshift = 0;
+  PointShade shade;
+};
+
+// The tile pass's nodes as a structure of arrays: one array of 32-bit words
+// per field (int16 pairs low half first), so that SIMD lanes load or store
+// one field of several nodes at once. `TileNode` is one node's view.
+enum class TileField : uint8_t {
+  kMx01, kMx2, kMy01, kMy2, kDz01, kDz2,  // (m0, m1), (m2, 0) pairs
+  kX0, kY0, kDepth0,
+  kSpanX, kSpanY,                         // (lo, hi) pairs
+  kCountShift,                            // count | dshift << 16
+  kSn, kLt, kHt, kL0H0,                   // pairs
+  kBaseRgb, kNodeRgb, kLighting,          // lighting: intensity | specular << 16
+  kS0_01, kS0_2, kS1_01, kS1_2,           // kSurface
+  kCa01R, kCa01G, kCa01B, kCa2R, kCa2G, kCa2B,  // colour per point
+  kCount
+};
+inline constexpr int kTileFields = static_cast<int>(TileField::kCount);
+
+class TileNodes {
+ public:
+  static size_t bytes(uint32_t capacity) { return size_t{4} * kTileFields * capacity; }
+  void init(void* storage, uint32_t capacity) {
+    words_ = static_cast<uint32_t*>(storage);
+    capacity_ = capacity;
+  }
+  uint32_t* field(TileField f) { return words_ + static_cast<size_t>(f) * capacity_; }
+  const uint32_t* field(TileField f) const { return words_ + static_cast<size_t>(f) * capacity_; }
+  uint32_t capacity() const { return capacity_; }
+
+  void store(uint32_t i, const TileNode& n);
+  TileNode load(uint32_t i) const;
+
+ private:
+  uint32_t* words_ = nullptr;
+  uint32_t capacity_ = 0;
+};
+
+inline uint32_t int16_pair(int32_t lo, int32_t hi) {
+  return static_cast<uint16_t>(lo) | uint32_t{static_cast<uint16_t>(hi)} << 16;
+}
+inline int16_t pair_lo(uint32_t w) { return static_cast<int16_t>(w & 0xFFFFu); }
+inline int16_t pair_hi(uint32_t w) { return static_cast<int16_t>(w >> 16); }
+
+inline void TileNodes::store(uint32_t i, const TileNode& n) {
+  const auto set = [&](TileField f, uint32_t v) { field(f)[i] = v; };
+  set(TileField::kMx01, int16_pair(n.mx[0], n.mx[1]));
+  set(TileField::kMx2, int16_pair(n.mx[2], 0));
+  set(TileField::kMy01, int16_pair(n.my[0], n.my[1]));
+  set(TileField::kMy2, int16_pair(n.my[2], 0));
+  set(TileField::kDz01, int16_pair(n.dz[0], n.dz[1]));
+  set(TileField::kDz2, int16_pair(n.dz[2], 0));
+  set(TileField::kX0, static_cast<uint32_t>(n.x0_q4));
+  set(TileField::kY0, static_cast<uint32_t>(n.y0_q4));
+  set(TileField::kDepth0, n.depth0);
+  set(TileField::kSpanX, int16_pair(n.span[0], n.span[1]));
+  set(TileField::kSpanY, int16_pair(n.span[2], n.span[3]));
+  set(TileField::kCountShift, n.count | uint32_t{n.dshift} << 16);
+  const PointShade& s = n.shade;
+  set(TileField::kSn, int16_pair(s.sn[0], s.sn[1]));
+  set(TileField::kLt, int16_pair(s.lt[0], s.lt[1]));
+  set(TileField::kHt, int16_pair(s.ht[0], s.ht[1]));
+  set(TileField::kL0H0, int16_pair(s.l0, s.h0));
+  set(TileField::kBaseRgb, s.base_rgb);
+  set(TileField::kNodeRgb, s.node_rgb);
+  set(TileField::kLighting, s.intensity | uint32_t{s.specular} << 16);
+  set(TileField::kS0_01, int16_pair(s.surface[0][0], s.surface[0][1]));
+  set(TileField::kS0_2, int16_pair(s.surface[0][2], 0));
+  set(TileField::kS1_01, int16_pair(s.surface[1][0], s.surface[1][1]));
+  set(TileField::kS1_2, int16_pair(s.surface[1][2], 0));
+  for (int c = 0; c < 3; ++c) {
+    set(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c), int16_pair(s.ca[0][c], s.ca[1][c]));
+    set(static_cast<TileField>(static_cast<int>(TileField::kCa2R) + c), int16_pair(s.ca[2][c], 0));
+  }
+}
+
+inline TileNode TileNodes::load(uint32_t i) const {
+  const auto get = [&](TileField f) { return field(f)[i]; };
+  TileNode n;
+  const uint32_t m01 = get(TileField::kMx01), m2 = get(TileField::kMx2), y01 = get(TileField::kMy01),
+                 y2 = get(TileField::kMy2), d01 = get(TileField::kDz01), d2 = get(TileField::kDz2);
+  n.mx[0] = pair_lo(m01), n.mx[1] = pair_hi(m01), n.mx[2] = pair_lo(m2);
+  n.my[0] = pair_lo(y01), n.my[1] = pair_hi(y01), n.my[2] = pair_lo(y2);
+  n.dz[0] = pair_lo(d01), n.dz[1] = pair_hi(d01), n.dz[2] = pair_lo(d2);
+  n.x0_q4 = static_cast<int32_t>(get(TileField::kX0));
+  n.y0_q4 = static_cast<int32_t>(get(TileField::kY0));
+  n.depth0 = get(TileField::kDepth0);
+  const uint32_t sx = get(TileField::kSpanX), sy = get(TileField::kSpanY), cs = get(TileField::kCountShift);
+  n.span[0] = pair_lo(sx), n.span[1] = pair_hi(sx), n.span[2] = pair_lo(sy), n.span[3] = pair_hi(sy);
+  n.count = static_cast<uint16_t>(cs);
+  n.dshift = static_cast<uint8_t>(cs >> 16);
+  PointShade& s = n.shade;
+  const uint32_t sn = get(TileField::kSn), lt = get(TileField::kLt), ht = get(TileField::kHt), lh = get(TileField::kL0H0);
+  s.sn[0] = pair_lo(sn), s.sn[1] = pair_hi(sn), s.lt[0] = pair_lo(lt), s.lt[1] = pair_hi(lt);
+  s.ht[0] = pair_lo(ht), s.ht[1] = pair_hi(ht), s.l0 = pair_lo(lh), s.h0 = pair_hi(lh);
+  s.base_rgb = get(TileField::kBaseRgb);
+  s.node_rgb = get(TileField::kNodeRgb);
+  const uint32_t li = get(TileField::kLighting);
+  s.intensity = static_cast<uint16_t>(li);
+  s.specular = static_cast<uint16_t>(li >> 16);
+  const uint32_t a = get(TileField::kS0_01), b = get(TileField::kS0_2), c = get(TileField::kS1_01), d = get(TileField::kS1_2);
+  s.surface[0][0] = pair_lo(a), s.surface[0][1] = pair_hi(a), s.surface[0][2] = pair_lo(b);
+  s.surface[1][0] = pair_lo(c), s.surface[1][1] = pair_hi(c), s.surface[1][2] = pair_lo(d);
+  for (int ch = 0; ch < 3; ++ch) {
+    const uint32_t p = get(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + ch));
+    const uint32_t q = get(static_cast<TileField>(static_cast<int>(TileField::kCa2R) + ch));
+    s.ca[0][ch] = pair_lo(p), s.ca[1][ch] = pair_hi(p), s.ca[2][ch] = pair_lo(q);
+  }
+  return n;
+}
+
+inline uint32_t clamp255(int32_t v) { return v < 0 ? 0u : v > 255 ? 255u : static_cast<uint32_t>(v); }
+
+// Colour after shading: channel * intensity (Q8) + specular, saturated.
+inline uint32_t shade(uint32_t r, uint32_t g, uint32_t b, uint32_t intensity, uint32_t specular) {
+  const uint32_t rr = ((r * intensity) >> 8) + specular, gg = ((g * intensity) >> 8) + specular,
+                 bb = ((b * intensity) >> 8) + specular;
+  return ((rr > 255 ? 255 : rr) << 16) | ((gg > 255 ? 255 : gg) << 8) | (bb > 255 ? 255 : bb);
+}
+
+// sigma_n n >> 12 clamped to 4 rad (Q12): the cos/sinc table ends at
+// theta^2 = 16, so a larger angle reads its last cell either way.
+// sigma_n <= 2^14, |n| <= 2^15: the product is below 2^29.
+inline int32_t clamp_angle_q12(int32_t v) { return v > 16384 ? 16384 : v < -16384 ? -16384 : v; }
+inline int32_t normal_angle_q12(int32_t sigma_n, int32_t n) { return clamp_angle_q12((sigma_n * n) >> 12); }
+
+// L.n of the sampled normal at angles (al, be): |al|, |be| <= 2^14 and
+// |(t1, t2)| <= 2^14 (+ rounding) give |al t1 + be t2| <= 2^28.6 and a
+// Q12 term below 23,200 (it fits 16 bits); cos l0 + sinc term < 2^28.6.
+inline int32_t lit_q14(CosSincQ14 cs, int32_t al, int32_t be, int32_t t1, int32_t t2, int32_t n0_q12) {
+  const int32_t along = (al * t1 + be * t2) >> 14;
+  return (cs.cos * n0_q12 + cs.sinc * along) >> 12;
+}
+
+// A node's terms as int16 pairs in 32-bit words (low half first), the way
+// the scalar loops read them: a 3-term dot product of a sample's pairs is
+// then two 16 x 16-bit multiply-accumulates and one multiply (ARMv5TE's
+// SMULxy/SMLAxy; plain multiplies elsewhere) instead of three loads, three
+// sign-extensions and three multiplies.
+inline int32_t pair_dot(uint32_t g01, uint32_t g2, uint32_t a01, uint32_t a2) {
+  return static_cast<int16_t>(g01) * static_cast<int16_t>(a01) +
+         (static_cast<int32_t>(g01) >> 16) * (static_cast<int32_t>(a01) >> 16) +
+         static_cast<int16_t>(g2) * static_cast<int16_t>(a2);
+}
+
+struct PackedShade {
+  uint32_t sn = 0, lt = 0, ht = 0;            // (sigma_n1, sigma_n2), (L.t1, L.t2), (H.t1, H.t2)
+  int32_t l0 = 0, h0 = 0;
+  uint32_t s0_01 = 0, s0_2 = 0, s1_01 = 0, s1_2 = 0;  // surface[0], surface[1]
+  uint32_t ca01[3] = {}, ca2[3] = {};         // colour axes per channel
+  uint32_t r = 0, g = 0, b = 0;               // base colour
+  uint32_t node_rgb = 0, intensity = 256, specular = 0;
+  explicit PackedShade(const PointShade& s)
+      : sn(int16_pair(s.sn[0], s.sn[1])), lt(int16_pair(s.lt[0], s.lt[1])), ht(int16_pair(s.ht[0], s.ht[1])),
+        l0(s.l0), h0(s.h0), s0_01(int16_pair(s.surface[0][0], s.surface[0][1])), s0_2(int16_pair(s.surface[0][2], 0)),
+        s1_01(int16_pair(s.surface[1][0], s.surface[1][1])), s1_2(int16_pair(s.surface[1][2], 0)),
+        r(s.base_rgb >> 16), g((s.base_rgb >> 8) & 0xFFu), b(s.base_rgb & 0xFFu), node_rgb(s.node_rgb),
+        intensity(s.intensity), specular(s.specular) {
+    for (int c = 0; c < 3; ++c) {
+      ca01[c] = int16_pair(s.ca[0][c], s.ca[1][c]);
+      ca2[c] = int16_pair(s.ca[2][c], 0);
+    }
+  }
+};
+
+// The colour of sample j (the formula's last three lines) from the node's
+// packed terms and the sample's position pairs, as 0xRRGGBB — or, for
+// kRgb565, as RGB565: what the scalar loops run.
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565 = false>
+[[gnu::always_inline]] inline uint32_t point_color(const PackedShade& s, const PointTables& t, uint32_t j, uint32_t g01,
+                                                   uint32_t g2) {
+  const auto encode = [](uint32_t rgb) { return kRgb565 ? uint32_t{rgb565(rgb)} : rgb; };
+  constexpr bool kShadePoints = kNormals != PointNormals::kNode;
+  if constexpr (!kColorPoints && !kShadePoints) {
+    return encode(s.node_rgb);
+  } else {
+    uint32_t r = s.r, g = s.g, b = s.b;
+    if constexpr (kColorPoints) {
+      const uint32_t q01 = t.q01[j], q2 = t.q2[j];
+      r = clamp255(static_cast<int32_t>(r) + (pair_dot(q01, q2, s.ca01[0], s.ca2[0]) >> 19));
+      g = clamp255(static_cast<int32_t>(g) + (pair_dot(q01, q2, s.ca01[1], s.ca2[1]) >> 19));
+      b = clamp255(static_cast<int32_t>(b) + (pair_dot(q01, q2, s.ca01[2], s.ca2[2]) >> 19));
+    }
+    if constexpr (!kShadePoints) {
+      return encode(shade(r, g, b, s.intensity, s.specular));
+    } else {
+      int32_t al, be;
+      if constexpr (kNormals == PointNormals::kSurface) {
+        al = clamp_angle_q12(pair_dot(g01, g2, s.s0_01, s.s0_2) >> 12);
+        be = clamp_angle_q12(pair_dot(g01, g2, s.s1_01, s.s1_2) >> 12);
+      } else {
+        const uint32_t n01 = t.n01[j];
+        al = clamp_angle_q12((static_cast<int16_t>(n01) * static_cast<int16_t>(s.sn)) >> 12);
+        be = clamp_angle_q12(((static_cast<int32_t>(n01) >> 16) * (static_cast<int32_t>(s.sn) >> 16)) >> 12);
+      }
+      const uint32_t cell = static_cast<uint32_t>(al * al + be * be) >> kCosSincShift;
+      const CosSincQ14 cs = t.shading->cos_sinc[cell < kCosSincEntries ? cell : kCosSincEntries - 1];
+      const int il = intensity_index(
+          lit_q14(cs, al, be, static_cast<int16_t>(s.lt), static_cast<int32_t>(s.lt) >> 16, s.l0));
+      const uint32_t specular =
+          kSpecular ? t.shading->specular[intensity_index(
+                          lit_q14(cs, al, be, static_cast<int16_t>(s.ht), static_cast<int32_t>(s.ht) >> 16, s.h0))]
+                    : 0;
+      if constexpr (!kColorPoints) {
+        if (t.grey_shade != nullptr) return (kRgb565 ? t.grey_shade565 : t.grey_shade)[t.grey_diffuse[il] + specular];
+      }
+      return encode(shade(r, g, b, t.shading->diffuse[il], specular));
+    }
+  }
+}
+
+// Depth-tests a point's square (first pixel x, y within the tile) into the
+// tile's words: whole when the node lies `inside` the tile, else clipped to it.
+template <class Word>
+[[gnu::always_inline]] inline void ztest_point(Word* words, int tile_log2, int size, uint32_t wh, bool inside, int32_t x, int32_t y, Word w) {
+  const int tile = 1 << tile_log2;
+  if (inside) {
+#if STIPPLE_CHECK_RANGES
+    if (x < 0 || y < 0 || x + size > tile || y + size > tile) __builtin_trap();  // outside the span it was filed by
+#endif
+    ztest_square(words + (y << tile_log2) + x, tile, wh, w);
+  } else {
+    const int32_t xa = x < 0 ? 0 : x, ya = y < 0 ? 0 : y;
+    const int32_t xb = x + size > tile ? tile : x + size, yb = y + size > tile ? tile : y + size;
+    if (xa < xb && ya < yb)
+      ztest_square(words + (ya << tile_log2) + xa, tile, static_cast<uint32_t>((xb - xa) | (yb - ya) << 4), w);
+  }
+}
+
+// Draws node `n`'s points into the words of the tile whose first pixel is
+// (px0, py0) — 2^tile_log2 words a row, pack_word's format — each a square of
+// `size` px (1..3), clipped to the tile when the node's span leaves it.
+// Scalar, one point at a time: the reference for the lanes below and what
+// ARMv5 runs.
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
+void draw_tile_node_scalar(const TileNode& n, const PointTables& t, int size, Word* words, int tile_log2, int px0,
+                           int py0) {
+  const int tile = 1 << tile_log2;
+  const int32_t x0 = n.x0_q4 - (px0 << 4), y0 = n.y0_q4 - (py0 << 4);
+  const bool inside = n.span[0] >= px0 && n.span[1] < px0 + tile && n.span[2] >= py0 && n.span[3] < py0 + tile;
+  const uint32_t wh = static_cast<uint32_t>(size | size << 4);
+  const uint32_t mx01 = int16_pair(n.mx[0], n.mx[1]), mx2 = int16_pair(n.mx[2], 0);
+  const uint32_t my01 = int16_pair(n.my[0], n.my[1]), my2 = int16_pair(n.my[2], 0);
+  const uint32_t dz01 = int16_pair(n.dz[0], n.dz[1]), dz2 = int16_pair(n.dz[2], 0);
+  const uint32_t depth0 = n.depth0, dshift = n.dshift;
+  const PackedShade shade(n.shade);
+  for (uint32_t j = 0; j < n.count; ++j) {
+    const uint32_t g01 = t.g01[j], g2 = t.g2[j];
+    const int32_t x = (x0 + (pair_dot(g01, g2, mx01, mx2) >> 16)) >> 4;
+    const int32_t y = (y0 + (pair_dot(g01, g2, my01, my2) >> 16)) >> 4;
+    const uint32_t depth = depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift);
+    const uint32_t color = point_color<kNormals, kColorPoints, kSpecular, sizeof(Word) == 4>(shade, t, j, g01, g2);
+    ztest_point(words, tile_log2, size, wh, inside, x, y, pack_word<Word>(depth, color));
+  }
+}
+
+}  // namespace stipple
+
+// The same loop in the target's SIMD lanes, where it has them.
+#if defined(__SSE2__)
+#include "raster/point_kernel_sse2.h"
+#elif defined(__ARM_NEON)
+#include "raster/point_kernel_neon.h"
+#endif
+
+namespace stipple {
+
+// The baseline lanes this build draws points in (PointLanes::kBaseline).
+#if defined(__SSE2__)
+inline constexpr const char* kBaselineLanes = "sse2";
+#elif defined(__ARM_NEON)
+inline constexpr const char* kBaselineLanes = "neon";
+#else
+inline constexpr const char* kBaselineLanes = "scalar";
+#endif
+
+// The tile pass's per-node loop on this target.
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
+inline void draw_tile_node(const TileNode& n, const PointTables& t, int size, Word* words, int tile_log2, int px0,
+                           int py0) {
+#if defined(__SSE2__)
+  sse2::draw_tile_node<kNormals, kColorPoints, kSpecular>(n, t, size, words, tile_log2, px0, py0);
+#elif defined(__ARM_NEON)
+  neon::draw_tile_node<kNormals, kColorPoints, kSpecular>(n, t, size, words, tile_log2, px0, py0);
+#else
+  draw_tile_node_scalar<kNormals, kColorPoints, kSpecular>(n, t, size, words, tile_log2, px0, py0);
+#endif
+}
+
+}  // namespace stipple

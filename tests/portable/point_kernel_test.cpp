@@ -1,0 +1,218 @@
+// The point formula's loops (raster/point_kernel.h): the SIMD lanes of this
+// target — SSE2 or NEON, AVX2 where the CPU has it — draw exactly the tile
+// words of the scalar loop, for random nodes and nodes at every bound the
+// formula states (slopes and depth terms at 16 bits, the depth word's ends,
+// sigma_n at 4 rad, the surface and colour terms at their ends, squares clipped
+// at the tile's edges), in both word formats, every point size and shading.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <random>
+#include <vector>
+
+#include "raster/point_kernel.h"
+#include "raster/point_kernel_avx2.h"
+
+namespace stipple {
+namespace {
+
+constexpr int kTileLog2 = 6, kTile = 1 << kTileLog2;
+constexpr int kPx0 = 128, kPy0 = 64;  // the tile's first pixel
+constexpr uint32_t kSamples = 256;
+
+struct Tables {
+  std::vector<Gaussian3Q12> position, color;
+  std::vector<Gaussian2Q12> normal;
+  ShadingTables shading;
+  std::vector<uint64_t> lanes;
+  PointTables t;
+  Tables() : position(kSamples), color(kSamples), normal(kSamples), lanes(point_lane_bytes(kSamples) / 8 + 1) {
+    build_gaussian3_table(GaussianSource::kSobol, position.data(), kSamples);
+    build_gaussian3_table(GaussianSource::kSobol, color.data(), kSamples, kColorSobolDim);
+    build_gaussian2_table(GaussianSource::kSobol, normal.data(), kSamples);
+    EXPECT_TRUE(build_shading_tables(Lighting{}, &shading));
+    t = PointTables{position.data(), normal.data(), color.data(), &shading};
+    build_point_lanes(position.data(), normal.data(), color.data(), kSamples, lanes.data(), &t);
+  }
+};
+
+int16_t bounded(std::mt19937& rng, int32_t limit) {  // uniform in [-limit, limit]
+  return static_cast<int16_t>(static_cast<int32_t>(rng() % (2u * static_cast<uint32_t>(limit) + 1)) - limit);
+}
+
+// Three values whose magnitudes sum below 2^15 (the tile pass's slopes).
+void slopes(std::mt19937& rng, int16_t m[4], bool extreme) {
+  int32_t left = extreme ? 32767 : static_cast<int32_t>(rng() % 32768);
+  for (int k = 0; k < 3; ++k) {
+    const int32_t v = k == 2 ? left : static_cast<int32_t>(rng() % static_cast<uint32_t>(left + 1));
+    m[k] = static_cast<int16_t>(rng() & 1 ? -v : v);
+    left -= v;
+  }
+  m[3] = 0;
+}
+
+// A node as PointRenderer::draw_node files it: the span from the slopes,
+// the depths inside the word.
+TileNode random_node(std::mt19937& rng, int size, bool extreme) {
+  TileNode n;
+  slopes(rng, n.mx, extreme && rng() % 2);
+  slopes(rng, n.my, extreme && rng() % 2);
+  for (int k = 0; k < 3; ++k) n.dz[k] = extreme && rng() % 2 ? (rng() & 1 ? 32767 : -32768) : bounded(rng, 32767);
+  n.dshift = static_cast<uint8_t>(extreme && rng() % 2 ? (rng() & 1 ? 0 : 12) : rng() % 13);
+  const int64_t reach = ((int64_t{std::abs(n.dz[0])} + std::abs(n.dz[1]) + std::abs(n.dz[2])) * kGaussianClip) >> n.dshift;
+  const int64_t lo = reach + 1, hi = int64_t{0xFFFFFFFE} - reach;
+  const int64_t pick = extreme && rng() % 2 ? (rng() & 1 ? lo : hi) : lo + static_cast<int64_t>(rng() % static_cast<uint64_t>(hi - lo + 1));
+  n.depth0 = static_cast<uint32_t>(pick);
+  // The mean anywhere the node still touches the tile or its neighbours.
+  n.x0_q4 = (kPx0 - 24) * 16 + static_cast<int32_t>(rng() % ((kTile + 48) * 16));
+  n.y0_q4 = (kPy0 - 24) * 16 + static_cast<int32_t>(rng() % ((kTile + 48) * 16));
+  const auto span = [&](int32_t p0, const int16_t m[4], int16_t* out) {
+    const int64_t d = ((int64_t{std::abs(m[0])} + std::abs(m[1]) + std::abs(m[2])) * kGaussianClip) >> 16;
+    out[0] = static_cast<int16_t>((p0 - d - 1) >> 4);
+    out[1] = static_cast<int16_t>(((p0 + d) >> 4) + size - 1);
+  };
+  span(n.x0_q4, n.mx, n.span);
+  span(n.y0_q4, n.my, n.span + 2);
+  n.count = static_cast<uint16_t>(extreme && rng() % 2 ? kSamples : 1 + rng() % 40);
+  PointShade& s = n.shade;
+  for (int k = 0; k < 2; ++k) s.sn[k] = static_cast<int16_t>(extreme && rng() % 2 ? 16384 : rng() % 16385);
+  // L.t and H.t: the tangential part of a unit vector, |(t1, t2)| <= 2^14.
+  for (int16_t* t : {s.lt, s.ht}) {
+    const double a = static_cast<double>(rng() % 6283) / 1000.0;
+    const double r = extreme && rng() % 2 ? 1.0 : static_cast<double>(rng() % 1001) / 1000.0;
+    t[0] = static_cast<int16_t>(std::lround(16384 * r * std::cos(a) * 0.9999));
+    t[1] = static_cast<int16_t>(std::lround(16384 * r * std::sin(a) * 0.9999));
+  }
+  s.l0 = bounded(rng, 4096);
+  s.h0 = bounded(rng, 4096);
+  for (auto& row : s.surface)
+    for (int16_t& v : row) v = extreme && rng() % 2 ? (rng() & 1 ? 16416 : -16416) : bounded(rng, 16416);
+  for (auto& row : s.ca)
+    for (int16_t& v : row) v = extreme && rng() % 2 ? (rng() & 1 ? 32767 : -32767) : bounded(rng, 32767);
+  s.base_rgb = rng() & 0xFFFFFF;
+  s.intensity = static_cast<uint16_t>(64 + rng() % 193);
+  s.specular = static_cast<uint16_t>(rng() % 256);
+  s.node_rgb = rng() & 0xFFFFFF;
+  return n;
+}
+
+template <class Word>
+std::vector<Word> fresh_tile(uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::vector<Word> words(kTile * kTile);
+  for (Word& w : words) w = static_cast<Word>((uint64_t{rng()} << 32 | rng()) | (sizeof(Word) == 8 ? uint64_t{1} << 63 : 0));
+  return words;
+}
+
+template <PointNormals kNormals, bool kColor, bool kSpecular, class Word>
+void compare(const Tables& tables, const std::vector<TileNode>& nodes, int size, const char* what) {
+  const std::vector<Word> start = fresh_tile<Word>(static_cast<uint32_t>(nodes.size()));
+  std::vector<Word> scalar = start, lanes = start;
+  for (const TileNode& n : nodes) {
+    draw_tile_node_scalar<kNormals, kColor, kSpecular>(n, tables.t, size, scalar.data(), kTileLog2, kPx0, kPy0);
+    draw_tile_node<kNormals, kColor, kSpecular>(n, tables.t, size, lanes.data(), kTileLog2, kPx0, kPy0);
+  }
+  ASSERT_NE(scalar, start) << what << ": no point drew";
+  EXPECT_EQ(scalar, lanes) << what << ", " << size << " px: the baseline lanes differ from the scalar loop";
+  if constexpr (avx2::kBuilt) {
+    if (!avx2::supported()) return;
+    std::vector<uint64_t> storage(TileNodes::bytes(static_cast<uint32_t>(nodes.size())) / 8 + 1);
+    TileNodes soa;
+    soa.init(storage.data(), static_cast<uint32_t>(nodes.size()));
+    std::vector<uint32_t> list(nodes.size());
+    for (uint32_t i = 0; i < nodes.size(); ++i) {
+      soa.store(i, nodes[i]);
+      list[i] = i;
+    }
+    std::vector<Word> wide = start;
+    avx2::draw_tile<kNormals, kColor, kSpecular>(soa, list.data(), static_cast<uint32_t>(list.size()), tables.t, size,
+                                                 wide.data(), kTileLog2, kPx0, kPy0);
+    EXPECT_EQ(scalar, wide) << what << ", " << size << " px: the AVX2 lanes differ from the scalar loop";
+  }
+}
+
+template <class Word>
+void every_mode(const Tables& tables, const std::vector<TileNode>& nodes, int size) {
+  compare<PointNormals::kNode, false, false, Word>(tables, nodes, size, "per node");
+  compare<PointNormals::kNode, true, true, Word>(tables, nodes, size, "per node, colour");
+  compare<PointNormals::kSampled, false, true, Word>(tables, nodes, size, "sampled");
+  compare<PointNormals::kSampled, true, false, Word>(tables, nodes, size, "sampled, colour, no specular");
+  compare<PointNormals::kSurface, false, true, Word>(tables, nodes, size, "surface");
+  compare<PointNormals::kSurface, true, true, Word>(tables, nodes, size, "surface, colour");
+}
+
+TEST(PointKernel, LanesDrawTheScalarWordsForRandomAndExtremeNodes) {
+  const Tables tables;
+  for (int size = 1; size <= 3; ++size) {
+    for (bool extreme : {false, true}) {
+      std::mt19937 rng(static_cast<uint32_t>(size * 7 + extreme));
+      std::vector<TileNode> nodes;
+      for (int i = 0; i < 400; ++i) nodes.push_back(random_node(rng, size, extreme));
+      every_mode<uint32_t>(tables, nodes, size);
+      every_mode<uint64_t>(tables, nodes, size);
+    }
+  }
+}
+
+// Both loops keep every point within the span its node was filed with: a
+// point outside would be drawn into the wrong tile's words (the checked
+// build traps on it in the scalar loop).
+TEST(PointKernel, EveryPointFallsWithinItsNodesSpan) {
+  const Tables tables;
+  std::mt19937 rng(5);
+  for (int i = 0; i < 2000; ++i) {
+    const int size = 1 + i % 3;
+    const TileNode n = random_node(rng, size, i % 2 == 0);
+    for (uint32_t j = 0; j < n.count; ++j) {
+      const Gaussian3Q12 g = tables.position[j];
+      const int32_t x = (n.x0_q4 + ((n.mx[0] * g.v[0] + n.mx[1] * g.v[1] + n.mx[2] * g.v[2]) >> 16)) >> 4;
+      const int32_t y = (n.y0_q4 + ((n.my[0] * g.v[0] + n.my[1] * g.v[1] + n.my[2] * g.v[2]) >> 16)) >> 4;
+      ASSERT_GE(x, n.span[0]);
+      ASSERT_LE(x + size - 1, n.span[1]);
+      ASSERT_GE(y, n.span[2]);
+      ASSERT_LE(y + size - 1, n.span[3]);
+    }
+  }
+}
+
+TEST(PointKernel, TileNodesStoreAndLoadEveryField) {
+  std::mt19937 rng(9);
+  std::vector<uint64_t> storage(TileNodes::bytes(16) / 8 + 1);
+  TileNodes soa;
+  soa.init(storage.data(), 16);
+  for (uint32_t i = 0; i < 16; ++i) {
+    const TileNode n = random_node(rng, 2, i % 2 == 1);
+    soa.store(i, n);
+    const TileNode b = soa.load(i);
+    const PointShade &s = n.shade, &t = b.shade;
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(n.mx[k], b.mx[k]);
+      EXPECT_EQ(n.my[k], b.my[k]);
+      EXPECT_EQ(n.dz[k], b.dz[k]);
+      EXPECT_EQ(n.span[k], b.span[k]);
+    }
+    EXPECT_EQ(n.x0_q4, b.x0_q4);
+    EXPECT_EQ(n.y0_q4, b.y0_q4);
+    EXPECT_EQ(n.depth0, b.depth0);
+    EXPECT_EQ(n.count, b.count);
+    EXPECT_EQ(n.dshift, b.dshift);
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_EQ(s.sn[k], t.sn[k]);
+      EXPECT_EQ(s.lt[k], t.lt[k]);
+      EXPECT_EQ(s.ht[k], t.ht[k]);
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(s.surface[k][c], t.surface[k][c]);
+    }
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) EXPECT_EQ(s.ca[k][c], t.ca[k][c]);
+    EXPECT_EQ(s.l0, t.l0);
+    EXPECT_EQ(s.h0, t.h0);
+    EXPECT_EQ(s.base_rgb, t.base_rgb);
+    EXPECT_EQ(s.node_rgb, t.node_rgb);
+    EXPECT_EQ(s.intensity, t.intensity);
+    EXPECT_EQ(s.specular, t.specular);
+  }
+}
+
+}  // namespace
+}  // namespace stipple
