@@ -13,7 +13,8 @@
 // below is of two Q14 x Q14 products (< 2^29 each): int32 throughout, on
 // ARMv5 as on x86-64 (docs/fixed_point.md, "The per-node set-up").
 //
-// `setup_node` then projects (raster/projection.h), sizes the node in
+// The set-up (PointRenderer::draw_node; eight nodes at a time in
+// raster/node_lanes.h) then projects (raster/projection.h), sizes the node in
 // points (raster/points_per_node.h) and forms the per-point constants of
 // the point formula (raster/point_kernel.h).
 #pragma once

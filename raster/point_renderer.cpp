@@ -94,6 +94,15 @@ inline Span pixel_span(int32_t p0_q4, int32_t sum_abs_m, int size) {
 
 inline int32_t abs32(int32_t v) { return v < 0 ? -v : v; }
 
+// One mean axis's camera-space terms: R's column `axis` times d = mean_a -
+// eye_a (|d| <= 2^29 + 2^24), each rounded from Q14. A node's camera-space
+// mean is their sum over the three axes (every partial sum within int32);
+// draw_node forms them per node, the node lanes read them from a per-frame
+// table over the field's values — the same terms either way.
+inline void mean_axis_terms(const Camera& camera, int axis, int64_t d, int32_t out[3]) {
+  for (int i = 0; i < 3; ++i) out[i] = static_cast<int32_t>((camera.rotation[i][axis] * d + (1 << 13)) >> 14);
+}
+
 inline int bit_length(uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); }
 
 }  // namespace
@@ -174,7 +183,9 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   build_point_lanes(g_position_, g_normal_, g_color_, config.samples, base + l.lanes, &tables_);
   uint16_t* grey_diffuse = reinterpret_cast<uint16_t*>(base + l.grey);
   uint32_t* grey_shades = reinterpret_cast<uint32_t*>(base + l.grey + align8(2 * kIntensityEntries));
-  grey_ok_ = build_grey_shades(*shading_, config.grey_rgb, grey_diffuse, grey_shades, grey_shades + kGreyShades);
+  grey_shades_ = build_grey_shades(*shading_, config.grey_rgb, grey_diffuse, grey_shades, grey_shades + kGreyShades)
+                     ? grey_shades
+                     : nullptr;
   tables_.grey_diffuse = grey_diffuse;
   ppn_ = &ppn_table(config.source, config.point_size);
   if (lane_ppn_ != nullptr) {
@@ -212,12 +223,12 @@ struct PointRenderer::FrameSetup {
 template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
 void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uint32_t max_points, FrameStats& stats) {
   const NodeDecoder& decoder = *f.decoder;
-  // The mean in camera space, each axis's term rounded: R (mean - eye) /
-  // 2^14 (|mean - eye| < 2^29.9, so every partial sum is within int32).
+  // The mean in camera space, each axis's terms rounded (mean_axis_terms).
   int32_t c[3] = {0, 0, 0};
   for (int a = 0; a < 3; ++a) {
-    const int32_t d = decoder.mean_axis_mu(a, fields.v[a]) - f.camera.eye[a];  // |.| <= 2^29 + 2^24
-    for (int i = 0; i < 3; ++i) c[i] += static_cast<int32_t>((int64_t{f.camera.rotation[i][a]} * d + (1 << 13)) >> 14);
+    int32_t t[3];
+    mean_axis_terms(f.camera, a, int64_t{decoder.mean_axis_mu(a, fields.v[a])} - f.camera.eye[a], t);
+    for (int i = 0; i < 3; ++i) c[i] += t[i];
   }
   if (!NodeProjection::in_view(f.camera, c)) {
     ++stats.nodes_culled;
@@ -474,13 +485,11 @@ NodeLaneFrame PointRenderer::lane_frame(const FrameSetup& f, const NodeCache& ca
   for (int i = 0; i < kFieldCount; ++i)
     lf.window[i] = cache.decoded() ? FieldWindow{static_cast<uint8_t>(2 * i), 0, 0xFFFF}
                                    : field_window(header.layout, static_cast<Field>(i));
-  // Each mean field value's camera-space terms (draw_node's, rounded).
+  // Each mean field value's camera-space terms (draw_node's).
   for (int a = 0; a < 3; ++a) {
     int32_t* t = mean_terms_ + size_t{3} * a * (size_t{1} << kMeanTermBits);
-    for (uint32_t q = 0; q < (1u << header.layout.bits[a]); ++q) {
-      const int64_t d = int64_t{decoder.mean_axis_mu(a, q)} - f.camera.eye[a];
-      for (int i = 0; i < 3; ++i) t[3 * q + i] = static_cast<int32_t>((f.camera.rotation[i][a] * d + (1 << 13)) >> 14);
-    }
+    for (uint32_t q = 0; q < (1u << header.layout.bits[a]); ++q)
+      mean_axis_terms(f.camera, a, int64_t{decoder.mean_axis_mu(a, q)} - f.camera.eye[a], t + 3 * q);
     lf.mean[a] = t;
   }
   lf.position = angles_.position_table();
@@ -562,10 +571,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   f.decoder = &cache.decoder();
   tables_.uniform_base = !f.model_color;
   tables_.base_rgb = config_.grey_rgb & 0xFFFFFFu;
-  tables_.grey_shade = grey_ok_ && !f.model_color
-                           ? reinterpret_cast<const uint32_t*>(reinterpret_cast<const uint8_t*>(tables_.grey_diffuse) +
-                                                               align8(2 * kIntensityEntries))
-                           : nullptr;
+  tables_.grey_shade = f.model_color ? nullptr : grey_shades_;
   tables_.grey_shade565 = tables_.grey_shade ? tables_.grey_shade + kGreyShades : nullptr;
   if (!angles_.build(f.camera, cache.decoder(), f.light, f.half)) return RenderStatus::kBadConfig;  // fields too wide
 

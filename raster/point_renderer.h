@@ -161,7 +161,7 @@ class PointRenderer {
   uint16_t* reciprocal_ = nullptr;  // 1024 entries
   const PpnTable* ppn_ = nullptr;
   PointTables tables_;
-  bool grey_ok_ = false;            // the grey shortcut's tables hold (PointTables::grey_shade)
+  const uint32_t* grey_shades_ = nullptr;  // the grey shortcut's tables (PointTables::grey_shade), null when the grey is not one
   FrameAngles angles_;
   TileNodes tile_nodes_;            // config_.tile_nodes of them
   uint32_t* tile_list_ = nullptr;   // one tile's nodes (the AVX2 loop's input)
