@@ -102,6 +102,11 @@ struct TileNode {
   uint16_t count = 0;
   uint8_t dshift = 0;
   PointShade shade;
+  // Whether every square lies in the tile of `tile` px at (px0, py0): its
+  // points need no clip there.
+  bool inside_tile(int px0, int py0, int tile) const {
+    return span[0] >= px0 && span[1] < px0 + tile && span[2] >= py0 && span[3] < py0 + tile;
+  }
 };
 
 // The tile pass's nodes as a structure of arrays: one array of 32-bit words
@@ -340,7 +345,7 @@ void draw_tile_node_scalar(const TileNode& n, const PointTables& t, int size, Wo
                            int py0) {
   const int tile = 1 << tile_log2;
   const int32_t x0 = n.x0_q4 - (px0 << 4), y0 = n.y0_q4 - (py0 << 4);
-  const bool inside = n.span[0] >= px0 && n.span[1] < px0 + tile && n.span[2] >= py0 && n.span[3] < py0 + tile;
+  const bool inside = n.inside_tile(px0, py0, tile);
   const uint32_t wh = static_cast<uint32_t>(size | size << 4);
   const uint32_t mx01 = int16_pair(n.mx[0], n.mx[1]), mx2 = int16_pair(n.mx[2], 0);
   const uint32_t my01 = int16_pair(n.my[0], n.my[1]), my2 = int16_pair(n.my[2], 0);

@@ -63,7 +63,7 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
 void draw_tile_node(const TileNode& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
   constexpr bool kShadePoints = kNormals != PointNormals::kNode;
   const int tile = 1 << tile_log2;
-  const bool inside = n.span[0] >= px0 && n.span[1] < px0 + tile && n.span[2] >= py0 && n.span[3] < py0 + tile;
+  const bool inside = n.inside_tile(px0, py0, tile);
   const uint32_t wh = static_cast<uint32_t>(size | size << 4);
   const int32x4_t x0 = vdupq_n_s32(n.x0_q4 - (px0 << 4)), y0 = vdupq_n_s32(n.y0_q4 - (py0 << 4));
   const uint32x4_t depth0 = vdupq_n_u32(n.depth0);

@@ -73,7 +73,7 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
 void draw_tile_node(const TileNode& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
   constexpr bool kShadePoints = kNormals != PointNormals::kNode;
   const int tile = 1 << tile_log2;
-  const bool inside = n.span[0] >= px0 && n.span[1] < px0 + tile && n.span[2] >= py0 && n.span[3] < py0 + tile;
+  const bool inside = n.inside_tile(px0, py0, tile);
   const uint32_t wh = static_cast<uint32_t>(size | size << 4);
   const __m128i mx01 = pair_of(n.mx[0], n.mx[1]), mx2 = pair_of(n.mx[2], 0);
   const __m128i my01 = pair_of(n.my[0], n.my[1]), my2 = pair_of(n.my[2], 0);
