@@ -115,6 +115,28 @@ struct Packing {
 };
 constexpr Packing kPacking;
 
+// An 8 x 8 transpose of 32-bit elements: v[i] lane k becomes v[k] lane i.
+inline void transpose8(V v[8]) {
+  V t[8], u[8];
+#pragma GCC unroll 4
+  for (int i = 0; i < 4; ++i) {
+    t[2 * i] = _mm256_unpacklo_epi32(v[2 * i], v[2 * i + 1]);
+    t[2 * i + 1] = _mm256_unpackhi_epi32(v[2 * i], v[2 * i + 1]);
+  }
+#pragma GCC unroll 2
+  for (int h = 0; h < 2; ++h) {  // rows 0-3, then 4-7
+    u[4 * h] = _mm256_unpacklo_epi64(t[4 * h], t[4 * h + 2]);
+    u[4 * h + 1] = _mm256_unpackhi_epi64(t[4 * h], t[4 * h + 2]);
+    u[4 * h + 2] = _mm256_unpacklo_epi64(t[4 * h + 1], t[4 * h + 3]);
+    u[4 * h + 3] = _mm256_unpackhi_epi64(t[4 * h + 1], t[4 * h + 3]);
+  }
+#pragma GCC unroll 4
+  for (int k = 0; k < 4; ++k) {
+    v[k] = _mm256_permute2x128_si256(u[k], u[4 + k], 0x20);
+    v[4 + k] = _mm256_permute2x128_si256(u[k], u[4 + k], 0x31);
+  }
+}
+
 }  // namespace
 
 template <PointNormals kNormals, bool kSpecular>
@@ -410,12 +432,12 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
   const V tile = band(live, band(band(small, band(fits, band(above, below))), band(on_screen, few_tiles)));
   fallback = bor(fallback, band(live, _mm256_xor_si256(tile, ones)));
 
-  // The TileNodes of the tile lanes, left-packed from `base` (TileNodes::store).
+  // The TileNodes of the tile lanes, left-packed from `base` (TileNodes::store):
+  // fields 0-23 of the 8 lanes, as three 8 x 8 transposes to 8-word pieces of rows.
   const uint32_t tile_mask = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(tile)));
   const V order = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kPacking.order[tile_mask])));
-  const auto put = [&](TileField which, V v) {
-    _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.field(which) + base), _mm256_permutevar8x32_epi32(v, order));
-  };
+  V fields[24] = {};
+  const auto put = [&](TileField which, V v) { fields[static_cast<int>(which)] = v; };
   put(TileField::kMx01, pair(mx[0], mx[1]));
   put(TileField::kMx2, band(mx[2], set1(0xFFFF)));
   put(TileField::kMy01, pair(my[0], my[1]));
@@ -435,13 +457,23 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
   put(TileField::kBaseRgb, set1(static_cast<int32_t>(f.base_rgb)));
   put(TileField::kNodeRgb, node_rgb);
   put(TileField::kLighting, bor(intensity, _mm256_slli_epi32(specular, 16)));
-    if constexpr (kNormals == PointNormals::kSurface) {
+  if constexpr (kNormals == PointNormals::kSurface) {
     put(TileField::kS0_01, pair(surface[0][0], surface[0][1]));
     put(TileField::kS0_2, band(surface[0][2], set1(0xFFFF)));
     put(TileField::kS1_01, pair(surface[1][0], surface[1][1]));
     put(TileField::kS1_2, band(surface[1][2], set1(0xFFFF)));
   }
-  // (The per-point colour fields are not read: the lanes take no model colour.)
+  // (Field 23 on, the per-point colour's, is not read: the lanes take no model colour.)
+  static_assert(static_cast<int>(TileField::kS1_2) < 24, "the lanes write fields 0-23");
+#pragma GCC unroll 3
+  for (int piece = 0; piece < 3; ++piece) {
+    V rows[8];
+#pragma GCC unroll 8
+    for (int i = 0; i < 8; ++i) rows[i] = _mm256_permutevar8x32_epi32(fields[8 * piece + i], order);
+    transpose8(rows);
+#pragma GCC unroll 8
+    for (int k = 0; k < 8; ++k) _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.row(base + k) + 8 * piece), rows[k]);
+  }
 
   NodeLaneBatch& r = batches[batch];
   r.tile_mask = tile_mask;

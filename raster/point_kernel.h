@@ -109,9 +109,11 @@ struct TileNode {
   }
 };
 
-// The tile pass's nodes as a structure of arrays: one array of 32-bit words
-// per field (int16 pairs low half first), so that SIMD lanes load or store
-// one field of several nodes at once. `TileNode` is one node's view.
+// The tile pass's nodes: one row of 32-bit words a node (int16 pairs low
+// half first), kTileFields words long. A tile's nodes are set up in the
+// cache's order, not the screen's, so the tile pass reads them scattered:
+// a row is 2-3 cache lines, where a structure of arrays cost a line per
+// field read (docs/fixed_point.md, "Speed"). `TileNode` is one node's view.
 enum class TileField : uint8_t {
   kMx01, kMx2, kMy01, kMy2, kDz01, kDz2,  // (m0, m1), (m2, 0) pairs
   kX0, kY0, kDepth0,
@@ -132,8 +134,10 @@ class TileNodes {
     words_ = static_cast<uint32_t*>(storage);
     capacity_ = capacity;
   }
-  uint32_t* field(TileField f) { return words_ + static_cast<size_t>(f) * capacity_; }
-  const uint32_t* field(TileField f) const { return words_ + static_cast<size_t>(f) * capacity_; }
+  // Node i's row: its field f is row(i)[f].
+  uint32_t* row(uint32_t i) { return words_ + size_t{i} * kTileFields; }
+  const uint32_t* row(uint32_t i) const { return words_ + size_t{i} * kTileFields; }
+  const uint32_t* words() const { return words_; }
   uint32_t capacity() const { return capacity_; }
 
   void store(uint32_t i, const TileNode& n);
@@ -151,7 +155,8 @@ inline int16_t pair_lo(uint32_t w) { return static_cast<int16_t>(w & 0xFFFFu); }
 inline int16_t pair_hi(uint32_t w) { return static_cast<int16_t>(w >> 16); }
 
 inline void TileNodes::store(uint32_t i, const TileNode& n) {
-  const auto set = [&](TileField f, uint32_t v) { field(f)[i] = v; };
+  uint32_t* const r = row(i);
+  const auto set = [&](TileField f, uint32_t v) { r[static_cast<int>(f)] = v; };
   set(TileField::kMx01, int16_pair(n.mx[0], n.mx[1]));
   set(TileField::kMx2, int16_pair(n.mx[2], 0));
   set(TileField::kMy01, int16_pair(n.my[0], n.my[1]));
@@ -183,7 +188,8 @@ inline void TileNodes::store(uint32_t i, const TileNode& n) {
 }
 
 inline TileNode TileNodes::load(uint32_t i) const {
-  const auto get = [&](TileField f) { return field(f)[i]; };
+  const uint32_t* const r = row(i);
+  const auto get = [&](TileField f) { return r[static_cast<int>(f)]; };
   TileNode n;
   const uint32_t m01 = get(TileField::kMx01), m2 = get(TileField::kMx2), y01 = get(TileField::kMy01),
                  y2 = get(TileField::kMy2), d01 = get(TileField::kDz01), d2 = get(TileField::kDz2);

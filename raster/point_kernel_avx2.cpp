@@ -70,20 +70,21 @@ template <int kSize, class Word>
       if (w < at[x]) at[x] = w;
 }
 
-// Eight points: lane k is sample lane_j[k] of node lane_node[k] — or, for
-// kRun, samples lane_j[0] .. + 7 of node lane_node[0], whose constants are
-// then broadcast and whose samples are loaded, not gathered; the first
-// `active` lanes are drawn, as squares of kSize px.
+// Eight points: lane k is sample lane_j[k] of the node whose row starts
+// at word lane_row[k] — or, for kRun, samples lane_j[0] .. + 7 of the node
+// at lane_row[0], whose constants are then broadcast and whose samples are
+// loaded, not gathered; the first `active` lanes are drawn, as squares of
+// kSize px.
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, bool kRun, class Word>
-[[gnu::always_inline]] inline void draw_lanes(const TileNodes& nodes, const int32_t* lane_node, const int32_t* lane_j,
+[[gnu::always_inline]] inline void draw_lanes(const TileNodes& nodes, const int32_t* lane_row, const int32_t* lane_j,
                                               uint32_t active, const PointTables& t, Word* words, int tile_log2, int px0,
                                               int py0) {
   constexpr bool kShadePoints = kNormals != PointNormals::kNode;
-  const __m256i nd = _mm256_load_si256(reinterpret_cast<const __m256i*>(lane_node));
+  const __m256i rows = _mm256_load_si256(reinterpret_cast<const __m256i*>(lane_row));
   const __m256i jj = _mm256_load_si256(reinterpret_cast<const __m256i*>(lane_j));
   const auto field = [&](TileField f) {
-    if constexpr (kRun) return _mm256_set1_epi32(static_cast<int32_t>(nodes.field(f)[lane_node[0]]));
-    else return gather(nodes.field(f), nd);
+    if constexpr (kRun) return _mm256_set1_epi32(static_cast<int32_t>(nodes.words()[lane_row[0] + static_cast<int>(f)]));
+    else return gather(nodes.words() + static_cast<int>(f), rows);
   };
   const auto sample = [&](const uint32_t* table) {
     if constexpr (kRun) return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(table + lane_j[0]));
@@ -198,11 +199,11 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, b
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, class Word>
 [[gnu::noinline]] uint32_t draw_runs(const TileNodes& nodes, uint32_t node, uint32_t count, const PointTables& t,
                                      Word* words, int tile_log2, int px0, int py0) {
-  alignas(32) int32_t run_node[8] = {static_cast<int32_t>(node)}, run_j[8] = {};
+  alignas(32) int32_t run_row[8] = {static_cast<int32_t>(node * kTileFields)}, run_j[8] = {};
   uint32_t j = 0;
   for (; j + 8 <= count; j += 8) {
     run_j[0] = static_cast<int32_t>(j);
-    draw_lanes<kNormals, kColorPoints, kSpecular, kSize, true>(nodes, run_node, run_j, 8, t, words, tile_log2, px0, py0);
+    draw_lanes<kNormals, kColorPoints, kSpecular, kSize, true>(nodes, run_row, run_j, 8, t, words, tile_log2, px0, py0);
   }
   return j;
 }
@@ -212,13 +213,13 @@ void draw_tile_sized(const TileNodes& nodes, const uint32_t* list, uint32_t n, c
                      int tile_log2, int px0, int py0) {
   // The lanes are filed 8 at a time from each node's run of samples; the
   // buffers hold 16 so that a run's store may overrun the 8 in use.
-  alignas(32) int32_t lane_node[16] = {}, lane_j[16] = {};
+  alignas(32) int32_t lane_row[16] = {}, lane_j[16] = {};
   const __m256i iota = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  const uint32_t* count_shift = nodes.field(TileField::kCountShift);
   uint32_t k = 0;
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t node = list[i];
-    uint32_t count = count_shift[node] & 0xFFFFu;
+    const int32_t row = static_cast<int32_t>(node * kTileFields);
+    uint32_t count = nodes.row(node)[static_cast<int>(TileField::kCountShift)] & 0xFFFFu;
     uint32_t first = 0;
     if (count >= 8) {
       // A node's samples 8 at a time in lanes of their own, the rest
@@ -227,29 +228,29 @@ void draw_tile_sized(const TileNodes& nodes, const uint32_t* list, uint32_t n, c
       count -= first;
       if (count == 0) continue;
     } else if (count <= 8 - k) {  // the node's run fits the lanes left (most small nodes)
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_node + k), _mm256_set1_epi32(static_cast<int32_t>(node)));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_row + k), _mm256_set1_epi32(row));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_j + k), iota);
       k += count;
       if (k == 8) {
-        draw_lanes<kNormals, kColorPoints, kSpecular, kSize, false>(nodes, lane_node, lane_j, 8, t, words, tile_log2, px0, py0);
+        draw_lanes<kNormals, kColorPoints, kSpecular, kSize, false>(nodes, lane_row, lane_j, 8, t, words, tile_log2, px0, py0);
         k = 0;
       }
       continue;
     }
     for (uint32_t j = 0; j < count;) {
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_node + k), _mm256_set1_epi32(static_cast<int32_t>(node)));
+      _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_row + k), _mm256_set1_epi32(row));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_j + k),
                           _mm256_add_epi32(_mm256_set1_epi32(static_cast<int32_t>(first + j)), iota));
       const uint32_t take = count - j < 8 - k ? count - j : 8 - k;
       k += take;
       j += take;
       if (k == 8) {
-        draw_lanes<kNormals, kColorPoints, kSpecular, kSize, false>(nodes, lane_node, lane_j, 8, t, words, tile_log2, px0, py0);
+        draw_lanes<kNormals, kColorPoints, kSpecular, kSize, false>(nodes, lane_row, lane_j, 8, t, words, tile_log2, px0, py0);
         k = 0;
       }
     }
   }
-  if (k > 0) draw_lanes<kNormals, kColorPoints, kSpecular, kSize, false>(nodes, lane_node, lane_j, k, t, words, tile_log2, px0, py0);
+  if (k > 0) draw_lanes<kNormals, kColorPoints, kSpecular, kSize, false>(nodes, lane_row, lane_j, k, t, words, tile_log2, px0, py0);
 }
 
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
