@@ -60,37 +60,56 @@ inline uint32x4_t rgb565_4(uint32x4_t rgb) {
 }
 
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
-void draw_tile_node(const TileNode& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
+void draw_tile_node(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
   constexpr bool kShadePoints = kNormals != PointNormals::kNode;
   const int tile = 1 << tile_log2;
   const bool inside = n.inside_tile(px0, py0, tile);
   const uint32_t wh = static_cast<uint32_t>(size | size << 4);
-  const int32x4_t x0 = vdupq_n_s32(n.x0_q4 - (px0 << 4)), y0 = vdupq_n_s32(n.y0_q4 - (py0 << 4));
-  const uint32x4_t depth0 = vdupq_n_u32(n.depth0);
-  const int32x4_t dshift = vdupq_n_s32(-static_cast<int32_t>(n.dshift));
-  const PointShade& s = n.shade;
+  const int32x4_t x0 = vdupq_n_s32(n.x0_q4() - (px0 << 4)), y0 = vdupq_n_s32(n.y0_q4() - (py0 << 4));
+  const uint32x4_t depth0 = vdupq_n_u32(n.depth0());
+  const int32x4_t dshift = vdupq_n_s32(-static_cast<int32_t>(n.dshift()));
+  const uint32_t count = n.count();
+  // The node's int16 terms: (first, second) of each pair word.
+  const auto lo = [&](TileField f) { return n.lo(f); };
+  const auto hi = [&](TileField f) { return n.hi(f); };
+  const int16_t mx[3] = {lo(TileField::kMx01), hi(TileField::kMx01), lo(TileField::kMx2)};
+  const int16_t my[3] = {lo(TileField::kMy01), hi(TileField::kMy01), lo(TileField::kMy2)};
+  const int16_t dz[3] = {lo(TileField::kDz01), hi(TileField::kDz01), lo(TileField::kDz2)};
+  const int16_t sn[2] = {lo(TileField::kSn), hi(TileField::kSn)};
+  const int16_t lt[2] = {lo(TileField::kLt), hi(TileField::kLt)}, ht[2] = {lo(TileField::kHt), hi(TileField::kHt)};
+  const int16_t l0 = lo(TileField::kL0H0), h0 = hi(TileField::kL0H0);
+  const int16_t surface[2][3] = {{lo(TileField::kS0_01), hi(TileField::kS0_01), lo(TileField::kS0_2)},
+                                 {lo(TileField::kS1_01), hi(TileField::kS1_01), lo(TileField::kS1_2)}};
+  int16_t ca[3][3];
+  for (int c = 0; c < 3; ++c) {
+    ca[0][c] = lo(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c));
+    ca[1][c] = hi(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c));
+    ca[2][c] = lo(static_cast<TileField>(static_cast<int>(TileField::kCa2R) + c));
+  }
+  const uint32_t base_rgb = n[TileField::kBaseRgb], node_rgb = n[TileField::kNodeRgb];
   uint32x4_t base[3];
-  for (int c = 0; c < 3; ++c) base[c] = vdupq_n_u32((s.base_rgb >> (16 - 8 * c)) & 0xFFu);
-  const uint32x4_t node_intensity = vdupq_n_u32(s.intensity), node_specular = vdupq_n_u32(s.specular);
+  for (int c = 0; c < 3; ++c) base[c] = vdupq_n_u32((base_rgb >> (16 - 8 * c)) & 0xFFu);
+  const uint32x4_t node_intensity = vdupq_n_u32(n[TileField::kLighting] & 0xFFFFu);
+  const uint32x4_t node_specular = vdupq_n_u32(n[TileField::kLighting] >> 16);
   alignas(16) int32_t xs[4], ys[4];
   alignas(16) Word ws[4];
-  for (uint32_t j = 0; j < n.count; j += 4) {
+  for (uint32_t j = 0; j < count; j += 4) {
     const int16x4x2_t g01 = load_pairs(t.g01 + j), g2p = load_pairs(t.g2 + j);
     const int16x4_t g0 = g01.val[0], g1 = g01.val[1], g2 = g2p.val[0];
-    const int32x4_t x = vshrq_n_s32(vaddq_s32(vshrq_n_s32(dot3(g0, g1, g2, n.mx[0], n.mx[1], n.mx[2]), 16), x0), 4);
-    const int32x4_t y = vshrq_n_s32(vaddq_s32(vshrq_n_s32(dot3(g0, g1, g2, n.my[0], n.my[1], n.my[2]), 16), y0), 4);
+    const int32x4_t x = vshrq_n_s32(vaddq_s32(vshrq_n_s32(dot3(g0, g1, g2, mx[0], mx[1], mx[2]), 16), x0), 4);
+    const int32x4_t y = vshrq_n_s32(vaddq_s32(vshrq_n_s32(dot3(g0, g1, g2, my[0], my[1], my[2]), 16), y0), 4);
     const uint32x4_t depth =
-        vaddq_u32(vreinterpretq_u32_s32(vshlq_s32(dot3(g0, g1, g2, n.dz[0], n.dz[1], n.dz[2]), dshift)), depth0);
+        vaddq_u32(vreinterpretq_u32_s32(vshlq_s32(dot3(g0, g1, g2, dz[0], dz[1], dz[2]), dshift)), depth0);
     uint32x4_t rgb;
     if constexpr (!kColorPoints && !kShadePoints) {
-      rgb = vdupq_n_u32(s.node_rgb);
+      rgb = vdupq_n_u32(node_rgb);
     } else {
       uint32x4_t ch[3] = {base[0], base[1], base[2]};
       if constexpr (kColorPoints) {
         const int16x4x2_t q01 = load_pairs(t.q01 + j), q2p = load_pairs(t.q2 + j);
         for (int c = 0; c < 3; ++c) {
           const int32x4_t v = vaddq_s32(vreinterpretq_s32_u32(base[c]),
-                                        vshrq_n_s32(dot3(q01.val[0], q01.val[1], q2p.val[0], s.ca[0][c], s.ca[1][c], s.ca[2][c]), 19));
+                                        vshrq_n_s32(dot3(q01.val[0], q01.val[1], q2p.val[0], ca[0][c], ca[1][c], ca[2][c]), 19));
           ch[c] = vreinterpretq_u32_s32(vminq_s32(vmaxq_s32(v, vdupq_n_s32(0)), vdupq_n_s32(255)));
         }
       }
@@ -98,12 +117,12 @@ void draw_tile_node(const TileNode& n, const PointTables& t, int size, Word* wor
       if constexpr (kShadePoints) {
         int32x4_t al, be;
         if constexpr (kNormals == PointNormals::kSurface) {
-          al = vshrq_n_s32(dot3(g0, g1, g2, s.surface[0][0], s.surface[0][1], s.surface[0][2]), 12);
-          be = vshrq_n_s32(dot3(g0, g1, g2, s.surface[1][0], s.surface[1][1], s.surface[1][2]), 12);
+          al = vshrq_n_s32(dot3(g0, g1, g2, surface[0][0], surface[0][1], surface[0][2]), 12);
+          be = vshrq_n_s32(dot3(g0, g1, g2, surface[1][0], surface[1][1], surface[1][2]), 12);
         } else {
           const int16x4x2_t nn = load_pairs(t.n01 + j);
-          al = vshrq_n_s32(vmull_n_s16(nn.val[0], s.sn[0]), 12);
-          be = vshrq_n_s32(vmull_n_s16(nn.val[1], s.sn[1]), 12);
+          al = vshrq_n_s32(vmull_n_s16(nn.val[0], sn[0]), 12);
+          be = vshrq_n_s32(vmull_n_s16(nn.val[1], sn[1]), 12);
         }
         const int32x4_t lim = vdupq_n_s32(16384), nlim = vdupq_n_s32(-16384);
         al = vminq_s32(vmaxq_s32(al, nlim), lim);
@@ -111,8 +130,8 @@ void draw_tile_node(const TileNode& n, const PointTables& t, int size, Word* wor
         const uint32x4_t cell = vminq_u32(vshrq_n_u32(vreinterpretq_u32_s32(vmlaq_s32(vmulq_s32(al, al), be, be)), kCosSincShift),
                                           vdupq_n_u32(kCosSincEntries - 1));
         const int32x4_t cs = gather(t.shading->cos_sinc, vreinterpretq_s32_u32(cell));
-        intensity = gather(t.shading->diffuse, intensity_index4(lit4(cs, al, be, s.lt[0], s.lt[1], s.l0)));
-        specular = kSpecular ? gather(t.shading->specular, intensity_index4(lit4(cs, al, be, s.ht[0], s.ht[1], s.h0)))
+        intensity = gather(t.shading->diffuse, intensity_index4(lit4(cs, al, be, lt[0], lt[1], l0)));
+        specular = kSpecular ? gather(t.shading->specular, intensity_index4(lit4(cs, al, be, ht[0], ht[1], h0)))
                              : vdupq_n_u32(0);
       }
       rgb = vorrq_u32(vorrq_u32(vshlq_n_u32(shade_channel(ch[0], intensity, specular), 16),
@@ -126,7 +145,7 @@ void draw_tile_node(const TileNode& n, const PointTables& t, int size, Word* wor
     }
     vst1q_s32(xs, x);
     vst1q_s32(ys, y);
-    const uint32_t lanes = n.count - j < 4 ? n.count - j : 4;
+    const uint32_t lanes = count - j < 4 ? count - j : 4;
     for (uint32_t k = 0; k < lanes; ++k) ztest_point(words, tile_log2, size, wh, inside, xs[k], ys[k], ws[k]);
   }
 }

@@ -70,38 +70,41 @@ inline __m128i rgb565_4(__m128i rgb) {
 }
 
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
-void draw_tile_node(const TileNode& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
+void draw_tile_node(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
   constexpr bool kShadePoints = kNormals != PointNormals::kNode;
   const int tile = 1 << tile_log2;
   const bool inside = n.inside_tile(px0, py0, tile);
   const uint32_t wh = static_cast<uint32_t>(size | size << 4);
-  const __m128i mx01 = pair_of(n.mx[0], n.mx[1]), mx2 = pair_of(n.mx[2], 0);
-  const __m128i my01 = pair_of(n.my[0], n.my[1]), my2 = pair_of(n.my[2], 0);
-  const __m128i dz01 = pair_of(n.dz[0], n.dz[1]), dz2 = pair_of(n.dz[2], 0);
-  const __m128i x0 = _mm_set1_epi32(n.x0_q4 - (px0 << 4)), y0 = _mm_set1_epi32(n.y0_q4 - (py0 << 4));
-  const __m128i depth0 = _mm_set1_epi32(static_cast<int32_t>(n.depth0)), dshift = _mm_cvtsi32_si128(n.dshift);
-  const PointShade& s = n.shade;
-  const __m128i sn = pair_of(s.sn[0], s.sn[1]), lt = pair_of(s.lt[0], s.lt[1]), ht = pair_of(s.ht[0], s.ht[1]);
-  const __m128i l0 = pair_of(s.l0, 0), h0 = pair_of(s.h0, 0);
-  const __m128i s0_01 = pair_of(s.surface[0][0], s.surface[0][1]), s0_2 = pair_of(s.surface[0][2], 0);
-  const __m128i s1_01 = pair_of(s.surface[1][0], s.surface[1][1]), s1_2 = pair_of(s.surface[1][2], 0);
+  const auto word = [&](TileField f) { return _mm_set1_epi32(static_cast<int32_t>(n[f])); };
+  const __m128i mx01 = word(TileField::kMx01), mx2 = word(TileField::kMx2);
+  const __m128i my01 = word(TileField::kMy01), my2 = word(TileField::kMy2);
+  const __m128i dz01 = word(TileField::kDz01), dz2 = word(TileField::kDz2);
+  const __m128i x0 = _mm_set1_epi32(n.x0_q4() - (px0 << 4)), y0 = _mm_set1_epi32(n.y0_q4() - (py0 << 4));
+  const __m128i depth0 = _mm_set1_epi32(static_cast<int32_t>(n.depth0())), dshift = _mm_cvtsi32_si128(static_cast<int>(n.dshift()));
+  const uint32_t count = n.count();
+  const __m128i sn = word(TileField::kSn), lt = word(TileField::kLt), ht = word(TileField::kHt);
+  const __m128i l0 = pair_of(n.lo(TileField::kL0H0), 0), h0 = pair_of(n.hi(TileField::kL0H0), 0);
+  const __m128i s0_01 = word(TileField::kS0_01), s0_2 = word(TileField::kS0_2);
+  const __m128i s1_01 = word(TileField::kS1_01), s1_2 = word(TileField::kS1_2);
+  const uint32_t base_rgb = n[TileField::kBaseRgb];
   __m128i base[3], ca01[3], ca2[3];
   for (int c = 0; c < 3; ++c) {
-    base[c] = _mm_set1_epi32(static_cast<int32_t>((s.base_rgb >> (16 - 8 * c)) & 0xFFu));
-    ca01[c] = pair_of(s.ca[0][c], s.ca[1][c]);
-    ca2[c] = pair_of(s.ca[2][c], 0);
+    base[c] = _mm_set1_epi32(static_cast<int32_t>((base_rgb >> (16 - 8 * c)) & 0xFFu));
+    ca01[c] = word(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c));
+    ca2[c] = word(static_cast<TileField>(static_cast<int>(TileField::kCa2R) + c));
   }
-  const __m128i node_intensity = _mm_set1_epi32(s.intensity), node_specular = _mm_set1_epi32(s.specular);
+  const __m128i node_intensity = _mm_set1_epi32(static_cast<int32_t>(n[TileField::kLighting] & 0xFFFFu));
+  const __m128i node_specular = _mm_set1_epi32(static_cast<int32_t>(n[TileField::kLighting] >> 16));
   alignas(16) int32_t xs[4], ys[4];
   alignas(16) Word ws[4];
-  for (uint32_t j = 0; j < n.count; j += 4) {
+  for (uint32_t j = 0; j < count; j += 4) {
     const __m128i g01 = load4(t.g01 + j), g2 = load4(t.g2 + j);
     const __m128i x = _mm_srai_epi32(_mm_add_epi32(_mm_srai_epi32(dot3(g01, g2, mx01, mx2), 16), x0), 4);
     const __m128i y = _mm_srai_epi32(_mm_add_epi32(_mm_srai_epi32(dot3(g01, g2, my01, my2), 16), y0), 4);
     const __m128i depth = _mm_add_epi32(_mm_sra_epi32(dot3(g01, g2, dz01, dz2), dshift), depth0);
     __m128i rgb;
     if constexpr (!kColorPoints && !kShadePoints) {
-      rgb = _mm_set1_epi32(static_cast<int32_t>(s.node_rgb));
+      rgb = word(TileField::kNodeRgb);
     } else {
       __m128i ch[3] = {base[0], base[1], base[2]};
       if constexpr (kColorPoints) {
@@ -148,7 +151,7 @@ void draw_tile_node(const TileNode& n, const PointTables& t, int size, Word* wor
     }
     _mm_store_si128(reinterpret_cast<__m128i*>(xs), x);
     _mm_store_si128(reinterpret_cast<__m128i*>(ys), y);
-    const uint32_t lanes = n.count - j < 4 ? n.count - j : 4;
+    const uint32_t lanes = count - j < 4 ? count - j : 4;
     for (uint32_t k = 0; k < lanes; ++k) ztest_point(words, tile_log2, size, wh, inside, xs[k], ys[k], ws[k]);
   }
 }

@@ -420,7 +420,7 @@ void PointRenderer::draw_tile_nodes(uint32_t tile, int px0, int py0, Word* words
     }
   }
   for (uint32_t link = raster_.first_link(tile); link != PointRaster::kNoLink; link = raster_.next_link(link)) {
-    const TileNode n = tile_nodes_.load(raster_.item_of(link));
+    const TileRow n(tile_nodes_.row(raster_.item_of(link)));
     if (lanes_ == PointLanes::kScalar)
       draw_tile_node_scalar<kNormals, kColorPoints, kSpecular>(n, t, config_.point_size, words, internal_.tile_log2, px0, py0);
     else

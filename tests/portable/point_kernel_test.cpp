@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -108,8 +109,17 @@ std::vector<Word> fresh_tile(uint32_t seed) {
 template <PointNormals kNormals, bool kColor, bool kSpecular, class Word>
 void compare(const Tables& tables, const std::vector<TileNode>& nodes, int size, const char* what) {
   const std::vector<Word> start = fresh_tile<Word>(static_cast<uint32_t>(nodes.size()));
+  std::vector<uint64_t> storage(TileNodes::bytes(static_cast<uint32_t>(nodes.size())) / 8 + 1);
+  TileNodes rows;
+  rows.init(storage.data(), static_cast<uint32_t>(nodes.size()));
+  std::vector<uint32_t> list(nodes.size());
+  for (uint32_t i = 0; i < nodes.size(); ++i) {
+    rows.store(i, nodes[i]);
+    list[i] = i;
+  }
   std::vector<Word> scalar = start, lanes = start;
-  for (const TileNode& n : nodes) {
+  for (uint32_t i = 0; i < nodes.size(); ++i) {
+    const TileRow n(rows.row(i));
     draw_tile_node_scalar<kNormals, kColor, kSpecular>(n, tables.t, size, scalar.data(), kTileLog2, kPx0, kPy0);
     draw_tile_node<kNormals, kColor, kSpecular>(n, tables.t, size, lanes.data(), kTileLog2, kPx0, kPy0);
   }
@@ -117,16 +127,8 @@ void compare(const Tables& tables, const std::vector<TileNode>& nodes, int size,
   EXPECT_EQ(scalar, lanes) << what << ", " << size << " px: the baseline lanes differ from the scalar loop";
   if constexpr (avx2::kBuilt) {
     if (!avx2::supported()) return;
-    std::vector<uint64_t> storage(TileNodes::bytes(static_cast<uint32_t>(nodes.size())) / 8 + 1);
-    TileNodes soa;
-    soa.init(storage.data(), static_cast<uint32_t>(nodes.size()));
-    std::vector<uint32_t> list(nodes.size());
-    for (uint32_t i = 0; i < nodes.size(); ++i) {
-      soa.store(i, nodes[i]);
-      list[i] = i;
-    }
     std::vector<Word> wide = start;
-    avx2::draw_tile<kNormals, kColor, kSpecular>(soa, list.data(), static_cast<uint32_t>(list.size()), tables.t, size,
+    avx2::draw_tile<kNormals, kColor, kSpecular>(rows, list.data(), static_cast<uint32_t>(list.size()), tables.t, size,
                                                  wide.data(), kTileLog2, kPx0, kPy0);
     EXPECT_EQ(scalar, wide) << what << ", " << size << " px: the AVX2 lanes differ from the scalar loop";
   }
@@ -179,12 +181,12 @@ TEST(PointKernel, EveryPointFallsWithinItsNodesSpan) {
 TEST(PointKernel, TileNodesStoreAndLoadEveryField) {
   std::mt19937 rng(9);
   std::vector<uint64_t> storage(TileNodes::bytes(16) / 8 + 1);
-  TileNodes soa;
-  soa.init(storage.data(), 16);
+  TileNodes rows;
+  rows.init(storage.data(), 16);
   for (uint32_t i = 0; i < 16; ++i) {
     const TileNode n = random_node(rng, 2, i % 2 == 1);
-    soa.store(i, n);
-    const TileNode b = soa.load(i);
+    rows.store(i, n);
+    const TileNode b = rows.load(i);
     const PointShade &s = n.shade, &t = b.shade;
     for (int k = 0; k < 4; ++k) {
       EXPECT_EQ(n.mx[k], b.mx[k]);
@@ -211,6 +213,19 @@ TEST(PointKernel, TileNodesStoreAndLoadEveryField) {
     EXPECT_EQ(s.node_rgb, t.node_rgb);
     EXPECT_EQ(s.intensity, t.intensity);
     EXPECT_EQ(s.specular, t.specular);
+    // The loops' view of the row: the same node, and the same shading terms as the binned path's.
+    const TileRow r(rows.row(i));
+    EXPECT_EQ(r.x0_q4(), n.x0_q4);
+    EXPECT_EQ(r.y0_q4(), n.y0_q4);
+    EXPECT_EQ(r.depth0(), n.depth0);
+    EXPECT_EQ(r.count(), n.count);
+    EXPECT_EQ(r.dshift(), n.dshift);
+    for (int px0 : {n.span[0] - 1, static_cast<int>(n.span[0])})
+      for (int py0 : {n.span[2] - 1, static_cast<int>(n.span[2])})
+        EXPECT_EQ(r.inside_tile(px0, py0, 64),
+                  n.span[0] >= px0 && n.span[1] < px0 + 64 && n.span[2] >= py0 && n.span[3] < py0 + 64);
+    const PackedShade from_row(r), from_shade(s);
+    EXPECT_EQ(0, std::memcmp(&from_row, &from_shade, sizeof(PackedShade)));
   }
 }
 
