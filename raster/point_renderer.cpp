@@ -95,12 +95,13 @@ inline Span pixel_span(int32_t p0_q4, int32_t sum_abs_m, int size) {
 inline int32_t abs32(int32_t v) { return v < 0 ? -v : v; }
 
 // One mean axis's camera-space terms: R's column `axis` times d = mean_a -
-// eye_a (|d| <= 2^29 + 2^24), each rounded from Q14. A node's camera-space
+// eye_a (|d| <= 2^29 + 2^24: int32, so each product is one 32 x 32-bit
+// multiply into 64, ARMv5's SMULL), each rounded from Q14. A node's camera-space
 // mean is their sum over the three axes (every partial sum within int32);
 // draw_node forms them per node, the node lanes read them from a per-frame
 // table over the field's values — the same terms either way.
-inline void mean_axis_terms(const Camera& camera, int axis, int64_t d, int32_t out[3]) {
-  for (int i = 0; i < 3; ++i) out[i] = static_cast<int32_t>((camera.rotation[i][axis] * d + (1 << 13)) >> 14);
+inline void mean_axis_terms(const Camera& camera, int axis, int32_t d, int32_t out[3]) {
+  for (int i = 0; i < 3; ++i) out[i] = static_cast<int32_t>((int64_t{camera.rotation[i][axis]} * d + (1 << 13)) >> 14);
 }
 
 inline int bit_length(uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); }
@@ -207,6 +208,9 @@ struct PointRenderer::PointSetup {
   uint32_t count;
   int32_t near;
   int size;
+  // kAffine: every slope and depth term fits 16 bits and every depth the
+  // depth word — the tile pass's int32 point formula holds (point_kernel.h).
+  bool int32_terms = false;
   PointShade shade;
 };
 
@@ -227,7 +231,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   int32_t c[3] = {0, 0, 0};
   for (int a = 0; a < 3; ++a) {
     int32_t t[3];
-    mean_axis_terms(f.camera, a, int64_t{decoder.mean_axis_mu(a, fields.v[a])} - f.camera.eye[a], t);
+    mean_axis_terms(f.camera, a, decoder.mean_axis_mu(a, fields.v[a]) - f.camera.eye[a], t);
     for (int i = 0; i < 3; ++i) c[i] += t[i];
   }
   if (!NodeProjection::in_view(f.camera, c)) {
@@ -362,37 +366,29 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
     // A node whose terms fit 16 bits and whose depths stay inside the depth
     // word waits for the tile pass of the (at most 2 x 2) tiles it touches;
     // its points count against the frame's budget now.
+    // Such a node beyond the tile pass's room takes the bins with the tile
+    // pass's int32 formula (draw_points).
     const int32_t sx = abs32(proj.mx[0]) + abs32(proj.mx[1]) + abs32(proj.mx[2]);  // below 2^30
     const int32_t sy = abs32(proj.my[0]) + abs32(proj.my[1]) + abs32(proj.my[2]);
-    if (tile_node_count_ < config_.tile_nodes && sx < (1 << 15) && sy < (1 << 15) &&
-        s.dshift >= 0) {
-      const int32_t reach = ((abs32(s.dz[0]) + abs32(s.dz[1]) + abs32(s.dz[2])) * kGaussianClip) >> s.dshift;
+    const int32_t reach = sx < (1 << 15) && sy < (1 << 15) && s.dshift >= 0
+                              ? ((abs32(s.dz[0]) + abs32(s.dz[1]) + abs32(s.dz[2])) * kGaussianClip) >> s.dshift
+                              : -1;
+    s.int32_terms = reach >= 0 && s.depth0 - reach - 1 >= 0 && s.depth0 + reach <= 0xFFFFFFFE;
+    if (s.int32_terms && tile_node_count_ < config_.tile_nodes) {
       const Span spx = pixel_span(proj.x0_q4, sx, s.size), spy = pixel_span(proj.y0_q4, sy, s.size);
       const int sh_t = internal_.tile_log2;
       const int32_t tx0 = (spx.lo < 0 ? 0 : spx.lo) >> sh_t, ty0 = (spy.lo < 0 ? 0 : spy.lo) >> sh_t;
       const int32_t tx1 = (spx.hi >= internal_.width ? internal_.width - 1 : spx.hi) >> sh_t;
       const int32_t ty1 = (spy.hi >= internal_.height ? internal_.height - 1 : spy.hi) >> sh_t;
       const uint32_t tiles = static_cast<uint32_t>((tx1 - tx0 + 1) * (ty1 - ty0 + 1));
-      if (s.depth0 - reach - 1 >= 0 && s.depth0 + reach <= 0xFFFFFFFE && spx.hi >= 0 && spy.hi >= 0 &&
+      if (spx.hi >= 0 && spy.hi >= 0 &&
           spx.lo < internal_.width && spy.lo < internal_.height && tx1 - tx0 <= 1 && ty1 - ty0 <= 1 &&
           raster_.links_free() >= tiles && raster_.reserve(s.count)) {
-        TileNode n;
-        for (int k = 0; k < 3; ++k) {
-          n.mx[k] = static_cast<int16_t>(proj.mx[k]);
-          n.my[k] = static_cast<int16_t>(proj.my[k]);
-          n.dz[k] = static_cast<int16_t>(s.dz[k]);
-        }
-        n.x0_q4 = proj.x0_q4 - (s.size - 1) * 8;
-        n.y0_q4 = proj.y0_q4 - (s.size - 1) * 8;
-        n.depth0 = static_cast<uint32_t>(s.depth0);
-        n.span[0] = static_cast<int16_t>(spx.lo);
-        n.span[1] = static_cast<int16_t>(spx.hi);
-        n.span[2] = static_cast<int16_t>(spy.lo);
-        n.span[3] = static_cast<int16_t>(spy.hi);
-        n.count = static_cast<uint16_t>(s.count);
-        n.dshift = static_cast<uint8_t>(s.dshift);
-        n.shade = sh;
-        tile_nodes_.store(tile_node_count_, n);
+        const int32_t span[4] = {spx.lo, spx.hi, spy.lo, spy.hi};
+        tile_nodes_.store_terms(tile_node_count_, proj.mx, proj.my, s.dz, proj.x0_q4 - (s.size - 1) * 8,
+                                proj.y0_q4 - (s.size - 1) * 8, static_cast<uint32_t>(s.depth0), span, s.count,
+                                static_cast<uint32_t>(s.dshift));
+        tile_nodes_.store_shade(tile_node_count_, sh);
         for (int32_t ty = ty0; ty <= ty1; ++ty)
           for (int32_t tx = tx0; tx <= tx1; ++tx)
             raster_.add_node(static_cast<uint32_t>(ty * raster_.tiles_x() + tx), tile_node_count_);
@@ -450,6 +446,26 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
   // 2^62: the depth of a node deeper than the whole depth range.
   const int64_t limit = s.dshift >= 0 ? 0 : int64_t{1} << (62 + s.dshift);
   uint32_t drawn = 0;
+  if constexpr (P == Projection::kAffine) {
+    if (s.int32_terms) {
+      // The tile pass's formula (draw_tile_node_scalar), the same values:
+      // |m . g| < 2^29, and the depth stays within [0, 2^32 - 2].
+      const uint32_t mx01 = int16_pair(proj.mx[0], proj.mx[1]), mx2 = int16_pair(proj.mx[2], 0);
+      const uint32_t my01 = int16_pair(proj.my[0], proj.my[1]), my2 = int16_pair(proj.my[2], 0);
+      const uint32_t dz01 = int16_pair(s.dz[0], s.dz[1]), dz2 = int16_pair(s.dz[2], 0);
+      const uint32_t depth0 = static_cast<uint32_t>(s.depth0);
+      const int dshift = s.dshift;
+      for (uint32_t j = 0; j < s.count; ++j) {
+        const uint32_t g01 = t.g01[j], g2 = t.g2[j];
+        const int32_t x = proj.x0_q4 + (pair_dot(g01, g2, mx01, mx2) >> 16);
+        const int32_t y = proj.y0_q4 + (pair_dot(g01, g2, my01, my2) >> 16);
+        const uint32_t depth = depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift);
+        if (sink.put(x, y, depth, point_color<kNormals, kColorPoints, kSpecular>(shade, t, j, g01, g2))) ++drawn;
+        else ++stats.points_dropped;
+      }
+      return drawn;
+    }
+  }
   for (uint32_t j = 0; j < s.count; ++j) {
     const Gaussian3Q12 g = g_position_[j];
     const int64_t dg = int64_t{s.dz[0]} * g.v[0] + int64_t{s.dz[1]} * g.v[1] + int64_t{s.dz[2]} * g.v[2];
@@ -489,7 +505,7 @@ NodeLaneFrame PointRenderer::lane_frame(const FrameSetup& f, const NodeCache& ca
   for (int a = 0; a < 3; ++a) {
     int32_t* t = mean_terms_ + size_t{3} * a * (size_t{1} << kMeanTermBits);
     for (uint32_t q = 0; q < (1u << header.layout.bits[a]); ++q)
-      mean_axis_terms(f.camera, a, int64_t{decoder.mean_axis_mu(a, q)} - f.camera.eye[a], t + 3 * q);
+      mean_axis_terms(f.camera, a, decoder.mean_axis_mu(a, q) - f.camera.eye[a], t + 3 * q);
     lf.mean[a] = t;
   }
   lf.position = angles_.position_table();

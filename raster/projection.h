@@ -80,17 +80,28 @@ struct NodeProjection {
     // u = 2^46 / Z < 2^34, floored — without a divide instruction where
     // the build has none (core/divide.h: the same quotient).
     const int64_t u = floor_div(int64_t{1} << 46, Z);
+    // Z > 2^15 (every node but the nearest): u < 2^31 and f / Z below
+    // 2^31, so each product below is one 32 x 32-bit multiply into 64
+    // (ARMv5's SMULL) — the same values as in int64.
+    if (u < (int64_t{1} << 31)) return slopes(c, static_cast<int32_t>(u));
+    return slopes(c, u);
+  }
+
+ private:
+  // The rest of setup, from u = 2^46 / Z (int32_t or int64_t).
+  template <class U>
+  bool slopes(const int32_t c[3], U u) {
     // X/Z, Y/Z in Q16: below 2^19 (|X|, |Y| <= 8 Z).
-    const int32_t xr = static_cast<int32_t>((X * u) >> 30), yr = static_cast<int32_t>((Y * u) >> 30);
+    const int32_t xr = static_cast<int32_t>((int64_t{c[0]} * u) >> 30), yr = static_cast<int32_t>((int64_t{c[1]} * u) >> 30);
     x0_q4 = cx_q4 + narrow<int32_t>((int64_t{focal_q4} * xr) >> 16);
     y0_q4 = cy_q4 + narrow<int32_t>((int64_t{focal_q4} * yr) >> 16);
-    const int64_t fu = (focal_q4 * u) >> 20;                    // f / Z in Q26 (Q4 focal): below 2^34
+    const U fu = static_cast<U>((int64_t{focal_q4} * u) >> 20);  // f / Z in Q26 (Q4 focal): below 2^34 (2^31 for an int32 u)
     for (int k = 0; k < 3; ++k) {
       // (A - (X/Z) A_z): below 2^25 * 9 = 2^28.2 for |A| <= 2^25 + 2^11;
       // times f / Z below 2^62.2; 256 f / Z (A - (X/Z) A_z) after the shift.
       const int32_t dx = A[k][0] - static_cast<int32_t>((int64_t{xr} * A[k][2]) >> 16);
       const int32_t dy = A[k][1] - static_cast<int32_t>((int64_t{yr} * A[k][2]) >> 16);
-      const int64_t vx = (dx * fu) >> 22, vy = (dy * fu) >> 22;
+      const int64_t vx = (int64_t{dx} * fu) >> 22, vy = (int64_t{dy} * fu) >> 22;
       if (abs64(vx) >= kMaxScreenSlope || abs64(vy) >= kMaxScreenSlope) return false;
       mx[k] = static_cast<int32_t>(vx);
       my[k] = static_cast<int32_t>(vy);
@@ -98,6 +109,7 @@ struct NodeProjection {
     return true;
   }
 
+ public:
   // Sample g on the screen. False when the point is behind the near plane
   // or (per-point modes) outside the ~165 degree cone.
   template <Projection P>
