@@ -71,7 +71,8 @@ template <int kSize, class Word>
 }
 
 // Eight points: lane k is sample lane_j[k] of the node whose row starts
-// at word lane_row[k] — or, for kRun, samples lane_j[0] .. + 7 of the node
+// at word lane_row[k] (an int32: the raster holds at most 2^26 tile nodes,
+// 29 words each, below 2^31) — or, for kRun, samples lane_j[0] .. + 7 of the node
 // at lane_row[0], whose constants are then broadcast and whose samples are
 // loaded, not gathered; the first `active` lanes are drawn, as squares of
 // kSize px.
