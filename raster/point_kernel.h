@@ -108,7 +108,8 @@ struct TileNode {
 // half first), kTileFields words long. A tile's nodes are set up in the
 // cache's order, not the screen's, so the tile pass reads them scattered:
 // a row is 2-3 cache lines, where a structure of arrays cost a line per
-// field read (docs/fixed_point.md, "Speed"). `TileNode` is one node's view.
+// field read (docs/fixed_point.md, "Speed"). `TileNode` is one node's
+// fields as store takes them; the loops read a row through `TileRow`.
 enum class TileField : uint8_t {
   kMx01, kMx2, kMy01, kMy2, kDz01, kDz2,  // (m0, m1), (m2, 0) pairs
   kX0, kY0, kDepth0,
@@ -136,7 +137,6 @@ class TileNodes {
   uint32_t capacity() const { return capacity_; }
 
   void store(uint32_t i, const TileNode& n);
-  TileNode load(uint32_t i) const;
   // store's two halves from their parts (each int16 term in an int32): the
   // point formula's position terms (span: x lo, x hi, y lo, y hi), and the
   // node's shading.
@@ -223,42 +223,6 @@ inline void TileNodes::store(uint32_t i, const TileNode& n) {
   const int32_t span[4] = {n.span[0], n.span[1], n.span[2], n.span[3]};
   store_terms(i, mx, my, dz, n.x0_q4, n.y0_q4, n.depth0, span, n.count, n.dshift);
   store_shade(i, n.shade);
-}
-
-inline TileNode TileNodes::load(uint32_t i) const {
-  const uint32_t* const r = row(i);
-  const auto get = [&](TileField f) { return r[static_cast<int>(f)]; };
-  TileNode n;
-  const uint32_t m01 = get(TileField::kMx01), m2 = get(TileField::kMx2), y01 = get(TileField::kMy01),
-                 y2 = get(TileField::kMy2), d01 = get(TileField::kDz01), d2 = get(TileField::kDz2);
-  n.mx[0] = pair_lo(m01), n.mx[1] = pair_hi(m01), n.mx[2] = pair_lo(m2);
-  n.my[0] = pair_lo(y01), n.my[1] = pair_hi(y01), n.my[2] = pair_lo(y2);
-  n.dz[0] = pair_lo(d01), n.dz[1] = pair_hi(d01), n.dz[2] = pair_lo(d2);
-  n.x0_q4 = static_cast<int32_t>(get(TileField::kX0));
-  n.y0_q4 = static_cast<int32_t>(get(TileField::kY0));
-  n.depth0 = get(TileField::kDepth0);
-  const uint32_t sx = get(TileField::kSpanX), sy = get(TileField::kSpanY), cs = get(TileField::kCountShift);
-  n.span[0] = pair_lo(sx), n.span[1] = pair_hi(sx), n.span[2] = pair_lo(sy), n.span[3] = pair_hi(sy);
-  n.count = static_cast<uint16_t>(cs);
-  n.dshift = static_cast<uint8_t>(cs >> 16);
-  PointShade& s = n.shade;
-  const uint32_t sn = get(TileField::kSn), lt = get(TileField::kLt), ht = get(TileField::kHt), lh = get(TileField::kL0H0);
-  s.sn[0] = pair_lo(sn), s.sn[1] = pair_hi(sn), s.lt[0] = pair_lo(lt), s.lt[1] = pair_hi(lt);
-  s.ht[0] = pair_lo(ht), s.ht[1] = pair_hi(ht), s.l0 = pair_lo(lh), s.h0 = pair_hi(lh);
-  s.base_rgb = get(TileField::kBaseRgb);
-  s.node_rgb = get(TileField::kNodeRgb);
-  const uint32_t li = get(TileField::kLighting);
-  s.intensity = static_cast<uint16_t>(li);
-  s.specular = static_cast<uint16_t>(li >> 16);
-  const uint32_t a = get(TileField::kS0_01), b = get(TileField::kS0_2), c = get(TileField::kS1_01), d = get(TileField::kS1_2);
-  s.surface[0][0] = pair_lo(a), s.surface[0][1] = pair_hi(a), s.surface[0][2] = pair_lo(b);
-  s.surface[1][0] = pair_lo(c), s.surface[1][1] = pair_hi(c), s.surface[1][2] = pair_lo(d);
-  for (int ch = 0; ch < 3; ++ch) {
-    const uint32_t p = get(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + ch));
-    const uint32_t q = get(static_cast<TileField>(static_cast<int>(TileField::kCa2R) + ch));
-    s.ca[0][ch] = pair_lo(p), s.ca[1][ch] = pair_hi(p), s.ca[2][ch] = pair_lo(q);
-  }
-  return n;
 }
 
 inline uint32_t clamp255(int32_t v) { return v < 0 ? 0u : v > 255 ? 255u : static_cast<uint32_t>(v); }

@@ -70,21 +70,19 @@ void draw_tile_node(const TileRow& n, const PointTables& t, int size, Word* word
   const int32x4_t dshift = vdupq_n_s32(-static_cast<int32_t>(n.dshift()));
   const uint32_t count = n.count();
   // The node's int16 terms: (first, second) of each pair word.
-  const auto lo = [&](TileField f) { return n.lo(f); };
-  const auto hi = [&](TileField f) { return n.hi(f); };
-  const int16_t mx[3] = {lo(TileField::kMx01), hi(TileField::kMx01), lo(TileField::kMx2)};
-  const int16_t my[3] = {lo(TileField::kMy01), hi(TileField::kMy01), lo(TileField::kMy2)};
-  const int16_t dz[3] = {lo(TileField::kDz01), hi(TileField::kDz01), lo(TileField::kDz2)};
-  const int16_t sn[2] = {lo(TileField::kSn), hi(TileField::kSn)};
-  const int16_t lt[2] = {lo(TileField::kLt), hi(TileField::kLt)}, ht[2] = {lo(TileField::kHt), hi(TileField::kHt)};
-  const int16_t l0 = lo(TileField::kL0H0), h0 = hi(TileField::kL0H0);
-  const int16_t surface[2][3] = {{lo(TileField::kS0_01), hi(TileField::kS0_01), lo(TileField::kS0_2)},
-                                 {lo(TileField::kS1_01), hi(TileField::kS1_01), lo(TileField::kS1_2)}};
+  const int16_t mx[3] = {n.lo(TileField::kMx01), n.hi(TileField::kMx01), n.lo(TileField::kMx2)};
+  const int16_t my[3] = {n.lo(TileField::kMy01), n.hi(TileField::kMy01), n.lo(TileField::kMy2)};
+  const int16_t dz[3] = {n.lo(TileField::kDz01), n.hi(TileField::kDz01), n.lo(TileField::kDz2)};
+  const int16_t sn[2] = {n.lo(TileField::kSn), n.hi(TileField::kSn)};
+  const int16_t lt[2] = {n.lo(TileField::kLt), n.hi(TileField::kLt)}, ht[2] = {n.lo(TileField::kHt), n.hi(TileField::kHt)};
+  const int16_t l0 = n.lo(TileField::kL0H0), h0 = n.hi(TileField::kL0H0);
+  const int16_t surface[2][3] = {{n.lo(TileField::kS0_01), n.hi(TileField::kS0_01), n.lo(TileField::kS0_2)},
+                                 {n.lo(TileField::kS1_01), n.hi(TileField::kS1_01), n.lo(TileField::kS1_2)}};
   int16_t ca[3][3];
   for (int c = 0; c < 3; ++c) {
-    ca[0][c] = lo(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c));
-    ca[1][c] = hi(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c));
-    ca[2][c] = lo(static_cast<TileField>(static_cast<int>(TileField::kCa2R) + c));
+    ca[0][c] = n.lo(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c));
+    ca[1][c] = n.hi(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c));
+    ca[2][c] = n.lo(static_cast<TileField>(static_cast<int>(TileField::kCa2R) + c));
   }
   const uint32_t base_rgb = n[TileField::kBaseRgb], node_rgb = n[TileField::kNodeRgb];
   uint32x4_t base[3];
