@@ -27,6 +27,10 @@
 #include <cstddef>
 #include <cstdint>
 
+#if defined(__ARM_FEATURE_DSP)
+#include <arm_acle.h>  // SMLAxy (pair_dot)
+#endif
+
 #include "core/fixed_range.h"
 #include "core/gaussian_table.h"
 #include "raster/point_raster.h"
@@ -243,9 +247,19 @@ inline int32_t normal_angle_q12(int32_t sigma_n, int32_t n) { return clamp_angle
 // L.n of the sampled normal at angles (al, be): |al|, |be| <= 2^14 and
 // |(t1, t2)| <= 2^14 (+ rounding) give |al t1 + be t2| <= 2^28.6 and a
 // Q12 term below 23,200 (it fits 16 bits); cos l0 + sinc term < 2^28.6.
-inline int32_t lit_q14(CosSincQ14 cs, int32_t al, int32_t be, int32_t t1, int32_t t2, int32_t n0_q12) {
-  const int32_t along = (al * t1 + be * t2) >> 14;
+// `t12` is the (t1, t2) pair; every operand fits 16 bits, so on 32-bit ARM
+// with the DSP multiplies (pair_dot, below) it is four of them, the table's
+// entry one 32-bit load.
+inline int32_t lit_q14(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t12, int32_t n0_q12) {
+#if defined(__ARM_FEATURE_DSP) && !defined(__ARM_BIG_ENDIAN)
+  using Word [[gnu::may_alias]] = uint32_t;
+  const uint32_t c = *reinterpret_cast<const Word*>(&cs);  // cos | sinc << 16
+  const int32_t along = __smlabt(be, static_cast<int32_t>(t12), static_cast<int16_t>(al) * static_cast<int16_t>(t12)) >> 14;
+  return __smlatb(static_cast<int32_t>(c), along, static_cast<int16_t>(c) * static_cast<int16_t>(n0_q12)) >> 12;
+#else
+  const int32_t along = (al * static_cast<int16_t>(t12) + be * (static_cast<int32_t>(t12) >> 16)) >> 14;
   return (cs.cos * n0_q12 + cs.sinc * along) >> 12;
+#endif
 }
 
 // A node's terms as int16 pairs in 32-bit words (low half first), the way
@@ -253,10 +267,22 @@ inline int32_t lit_q14(CosSincQ14 cs, int32_t al, int32_t be, int32_t t1, int32_
 // then two 16 x 16-bit multiply-accumulates and one multiply (ARMv5TE's
 // SMULxy/SMLAxy; plain multiplies elsewhere) instead of three loads, three
 // sign-extensions and three multiplies.
+//
+// On ARMv5TE and later 32-bit ARM the ACLE's multiply-accumulates say so
+// outright: written as C, the compiler hoists the node's halves out of the
+// loop, sign-extended, and a point loop's 20-odd terms then live on the
+// stack (docs/fixed_point.md, "ARMv5"). The sums are the same: every
+// caller's terms keep them below 2^31, where SMLAxy does not saturate.
 inline int32_t pair_dot(uint32_t g01, uint32_t g2, uint32_t a01, uint32_t a2) {
+#if defined(__ARM_FEATURE_DSP)
+  const int32_t lo = static_cast<int16_t>(g01) * static_cast<int16_t>(a01);  // SMULBB
+  return __smlabb(static_cast<int32_t>(g2), static_cast<int32_t>(a2),
+                  __smlatt(static_cast<int32_t>(g01), static_cast<int32_t>(a01), lo));
+#else
   return static_cast<int16_t>(g01) * static_cast<int16_t>(a01) +
          (static_cast<int32_t>(g01) >> 16) * (static_cast<int32_t>(a01) >> 16) +
          static_cast<int16_t>(g2) * static_cast<int16_t>(a2);
+#endif
 }
 
 struct PackedShade {
@@ -322,13 +348,9 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565
         be = clamp_angle_q12(((static_cast<int32_t>(n01) >> 16) * (static_cast<int32_t>(s.sn) >> 16)) >> 12);
       }
       const uint32_t cell = static_cast<uint32_t>(al * al + be * be) >> kCosSincShift;
-      const CosSincQ14 cs = t.shading->cos_sinc[cell < kCosSincEntries ? cell : kCosSincEntries - 1];
-      const int il = intensity_index(
-          lit_q14(cs, al, be, static_cast<int16_t>(s.lt), static_cast<int32_t>(s.lt) >> 16, s.l0));
-      const uint32_t specular =
-          kSpecular ? t.shading->specular[intensity_index(
-                          lit_q14(cs, al, be, static_cast<int16_t>(s.ht), static_cast<int32_t>(s.ht) >> 16, s.h0))]
-                    : 0;
+      const CosSincQ14& cs = t.shading->cos_sinc[cell < kCosSincEntries ? cell : kCosSincEntries - 1];
+      const int il = intensity_index(lit_q14(cs, al, be, s.lt, s.l0));
+      const uint32_t specular = kSpecular ? t.shading->specular[intensity_index(lit_q14(cs, al, be, s.ht, s.h0))] : 0;
       if constexpr (!kColorPoints) {
         if (t.grey_shade != nullptr) return (kRgb565 ? t.grey_shade565 : t.grey_shade)[t.grey_diffuse[il] + specular];
       }

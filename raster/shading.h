@@ -31,7 +31,8 @@ inline constexpr int kCosSincEntries = 2048;  // theta^2 in [0, 16), steps of 2^
 inline constexpr int kCosSincShift = 17;      // theta^2 in Q24 -> index
 inline constexpr int kIntensityEntries = 257; // l in [-1, 1], steps of 2^-7
 
-struct CosSincQ14 {
+// 4-aligned: the scalar loops on 32-bit ARM load an entry as one word.
+struct alignas(4) CosSincQ14 {
   int16_t cos, sinc;
 };
 
