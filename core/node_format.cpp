@@ -13,17 +13,29 @@ namespace {
 
 constexpr int kPaddedBytes = kMaxRecordBytes + 4;
 
-// Four bytes, little-endian: one load on little-endian targets (every
-// supported one), byte by byte elsewhere.
+// Targets without unaligned loads (ARMv5) compile each 4-byte memcpy below
+// and the record's copy into library calls — nine a node for the paper's
+// 13-byte record, about 350 instructions. There each field is read byte by
+// byte straight from the record: only the bytes it spans (the record's own,
+// never past it), each one load.
+#if defined(__arm__) && !defined(__ARM_FEATURE_UNALIGNED)
+constexpr bool kFieldsByBytes = true;
+#else
+constexpr bool kFieldsByBytes = false;
+#endif
+
+// Four bytes, little-endian: one load on little-endian targets with
+// unaligned loads, byte by byte elsewhere.
 inline uint32_t load_window32(const uint8_t* p) {
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-  uint32_t v;
-  std::memcpy(&v, p, 4);
-  return v;
-#else
+  if constexpr (!kFieldsByBytes) {
+    uint32_t v;
+    std::memcpy(&v, p, 4);
+    return v;
+  }
+#endif
   return static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) | (static_cast<uint32_t>(p[2]) << 16) |
          (static_cast<uint32_t>(p[3]) << 24);
-#endif
 }
 
 // The fields of a record from `buf`, a copy of it followed by four zero
@@ -42,16 +54,38 @@ inline uint32_t load_window32(const uint8_t* p) {
   return fields;
 }
 
+// read_fields on kFieldsByBytes targets: from the record itself, `bytes` long.
+[[gnu::always_inline]] inline NodeFields read_fields_by_bytes(const RecordLayout& layout, const uint8_t* in, int bytes) {
+  NodeFields fields;
+  int bit = 0;
+#pragma GCC unroll 18
+  for (int f = 0; f < kFieldCount; ++f) {
+    const int w = layout.bits[f];
+    if (w == 0) continue;
+    const int at = bit >> 3, spans = ((bit & 7) + w + 7) >> 3;  // 1..3 bytes
+    uint32_t v = in[at];
+    if (spans > 1 && at + 1 < bytes) v |= static_cast<uint32_t>(in[at + 1]) << 8;
+    if (spans > 2 && at + 2 < bytes) v |= static_cast<uint32_t>(in[at + 2]) << 16;
+    fields.v[f] = static_cast<uint16_t>((v >> (bit & 7)) & ((1u << w) - 1u));
+    bit += w;
+  }
+  return fields;
+}
+
 // unpack_record for one of the paper's layouts: every field's position a
-// constant, the record copied by a fixed-size copy.
+// constant, the record copied by a fixed-size copy (or read by bytes).
 template <bool kNormals, bool kColor, int kThin>
 NodeFields unpack_paper(const uint8_t* in) {
   static constexpr RecordLayout kLayout = paper_layout(kNormals, kColor, kThin);
   constexpr int kBytes = kLayout.record_bytes();
-  uint8_t buf[kBytes + 4];
-  std::memcpy(buf, in, kBytes);
-  std::memset(buf + kBytes, 0, 4);
-  return read_fields(kLayout, buf);
+  if constexpr (kFieldsByBytes) {
+    return read_fields_by_bytes(kLayout, in, kBytes);
+  } else {
+    uint8_t buf[kBytes + 4];
+    std::memcpy(buf, in, kBytes);
+    std::memset(buf + kBytes, 0, 4);
+    return read_fields(kLayout, buf);
+  }
 }
 
 using UnpackFn = NodeFields (*)(const uint8_t*);
@@ -85,6 +119,7 @@ void pack_record(const RecordLayout& layout, const NodeFields& fields, uint8_t* 
 }
 
 NodeFields unpack_record(const RecordLayout& layout, const uint8_t* in) {
+  if constexpr (kFieldsByBytes) return read_fields_by_bytes(layout, in, layout.record_bytes());
   uint8_t buf[kPaddedBytes];
   const int bytes = layout.record_bytes();
   std::memcpy(buf, in, static_cast<size_t>(bytes));
