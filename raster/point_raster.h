@@ -115,7 +115,7 @@ class PointRaster {
   // * 5/4 entries — a point straddling tile edges takes 2 or 4 — plus one
   // partial chunk per tile) — and the point is dropped; a point entirely off
   // screen is accepted and ignored.
-  bool add(const ScreenPoint& p, int size_px) {
+  [[gnu::always_inline]] bool add(const ScreenPoint& p, int size_px) {
     if (count_ >= config_.max_points || free_chunk_ + 4 > chunk_count_) return false;
     const int s = size_px < 1 ? 1 : size_px > 3 ? 3 : size_px;
     // First covered pixel: floor(x - (s - 1) / 2) with x in Q4; arithmetic shift floors.
