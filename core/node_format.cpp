@@ -38,38 +38,39 @@ inline uint32_t load_window32(const uint8_t* p) {
          (static_cast<uint32_t>(p[3]) << 24);
 }
 
-// The fields of a record from `buf`, a copy of it followed by four zero
-// bytes (every field's window inside). Inlined into unpack_record and, with
-// a constant layout, into each paper layout's unrolled unpack.
-[[gnu::always_inline]] inline NodeFields read_fields(const RecordLayout& layout, const uint8_t* buf) {
+// The fields of a record, each from window(byte, spans): the 32-bit
+// little-endian window from the field's first byte, of which it spans 1-3
+// bytes. Inlined into unpack_record and, with a constant layout, into each
+// paper layout's unrolled unpack.
+template <class Window>
+[[gnu::always_inline]] inline NodeFields read_fields_with(const RecordLayout& layout, Window window) {
   NodeFields fields;
   int bit = 0;
 #pragma GCC unroll 18
   for (int f = 0; f < kFieldCount; ++f) {
     const int w = layout.bits[f];
     if (w == 0) continue;
-    fields.v[f] = static_cast<uint16_t>((load_window32(buf + (bit >> 3)) >> (bit & 7)) & ((1u << w) - 1u));
+    fields.v[f] = static_cast<uint16_t>((window(bit >> 3, ((bit & 7) + w + 7) >> 3) >> (bit & 7)) & ((1u << w) - 1u));
     bit += w;
   }
   return fields;
 }
 
-// read_fields on kFieldsByBytes targets: from the record itself, `bytes` long.
+// From `buf`, a copy of the record followed by four zero bytes (every
+// field's window inside).
+[[gnu::always_inline]] inline NodeFields read_fields(const RecordLayout& layout, const uint8_t* buf) {
+  return read_fields_with(layout, [buf](int at, int) { return load_window32(buf + at); });
+}
+
+// On kFieldsByBytes targets: from the record itself, `bytes` long, only the
+// bytes each field spans.
 [[gnu::always_inline]] inline NodeFields read_fields_by_bytes(const RecordLayout& layout, const uint8_t* in, int bytes) {
-  NodeFields fields;
-  int bit = 0;
-#pragma GCC unroll 18
-  for (int f = 0; f < kFieldCount; ++f) {
-    const int w = layout.bits[f];
-    if (w == 0) continue;
-    const int at = bit >> 3, spans = ((bit & 7) + w + 7) >> 3;  // 1..3 bytes
+  return read_fields_with(layout, [in, bytes](int at, int spans) {
     uint32_t v = in[at];
     if (spans > 1 && at + 1 < bytes) v |= static_cast<uint32_t>(in[at + 1]) << 8;
     if (spans > 2 && at + 2 < bytes) v |= static_cast<uint32_t>(in[at + 2]) << 16;
-    fields.v[f] = static_cast<uint16_t>((v >> (bit & 7)) & ((1u << w) - 1u));
-    bit += w;
-  }
-  return fields;
+    return v;
+  });
 }
 
 // unpack_record for one of the paper's layouts: every field's position a
