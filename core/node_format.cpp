@@ -64,7 +64,7 @@ template <class Window>
 
 // On kFieldsByBytes targets: from the record itself, `bytes` long, only the
 // bytes each field spans.
-[[gnu::always_inline]] inline NodeFields read_fields_by_bytes(const RecordLayout& layout, const uint8_t* in, int bytes) {
+[[gnu::always_inline, maybe_unused]] inline NodeFields read_fields_by_bytes(const RecordLayout& layout, const uint8_t* in, int bytes) {
   return read_fields_with(layout, [in, bytes](int at, int spans) {
     uint32_t v = in[at];
     if (spans > 1 && at + 1 < bytes) v |= static_cast<uint32_t>(in[at + 1]) << 8;
