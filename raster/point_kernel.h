@@ -244,22 +244,48 @@ inline uint32_t shade(uint32_t r, uint32_t g, uint32_t b, uint32_t intensity, ui
 inline int32_t clamp_angle_q12(int32_t v) { return v > 16384 ? 16384 : v < -16384 ? -16384 : v; }
 inline int32_t normal_angle_q12(int32_t sigma_n, int32_t n) { return clamp_angle_q12((sigma_n * n) >> 12); }
 
-// L.n of the sampled normal at angles (al, be): |al|, |be| <= 2^14 and
-// |(t1, t2)| <= 2^14 (+ rounding) give |al t1 + be t2| <= 2^28.6 and a
-// Q12 term below 23,200 (it fits 16 bits); cos l0 + sinc term < 2^28.6.
+// The products of two words' low and high int16 halves. On 32-bit ARM with
+// the DSP multiplies each is one SMULBB or SMULTT, said with the ACLE's
+// multiply-accumulate (it has no plain multiply): written as C, GCC hoists
+// a loop-invariant operand's half out of the loop, sign-extended, and the
+// loop then keeps twice as many terms live (docs/fixed_point.md, "ARMv5").
+inline int32_t mul_lo(uint32_t a, uint32_t b) {
+#if defined(__ARM_FEATURE_DSP)
+  return __smlabb(static_cast<int32_t>(a), static_cast<int32_t>(b), 0);
+#else
+  return static_cast<int16_t>(a) * static_cast<int16_t>(b);
+#endif
+}
+inline int32_t mul_hi(uint32_t a, uint32_t b) {
+#if defined(__ARM_FEATURE_DSP)
+  return __smlatt(static_cast<int32_t>(a), static_cast<int32_t>(b), 0);
+#else
+  return (static_cast<int32_t>(a) >> 16) * (static_cast<int32_t>(b) >> 16);
+#endif
+}
+
+// The intensity table's index (intensity_index) of L.n for the sampled
+// normal at angles (al, be): |al|, |be| <= 2^14 and |(t1, t2)| <= 2^14
+// (+ rounding) give |al t1 + be t2| <= 2^28.6 and a Q12 term below 23,200
+// (it fits 16 bits); cos l0 + sinc term < 2^28.6, the Q26 L.n. Its Q14
+// value is that >> 12, and intensity_index's (l + 16448) >> 7 of it is
+// (L.n_Q26 + 16448 * 2^12) >> 19 exactly (floors of divisions by powers of
+// two compose), one shift instead of two (the sum stays below 2^29).
 // `t12` is the (t1, t2) pair; every operand fits 16 bits, so on 32-bit ARM
 // with the DSP multiplies (pair_dot, below) it is four of them, the table's
 // entry one 32-bit load.
-inline int32_t lit_q14(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t12, int32_t n0_q12) {
+inline int lit_index(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t12, int32_t n0_q12) {
 #if defined(__ARM_FEATURE_DSP) && !defined(__ARM_BIG_ENDIAN)
   using Word [[gnu::may_alias]] = uint32_t;
   const uint32_t c = *reinterpret_cast<const Word*>(&cs);  // cos | sinc << 16
-  const int32_t along = __smlabt(be, static_cast<int32_t>(t12), static_cast<int16_t>(al) * static_cast<int16_t>(t12)) >> 14;
-  return __smlatb(static_cast<int32_t>(c), along, static_cast<int16_t>(c) * static_cast<int16_t>(n0_q12)) >> 12;
+  const int32_t along = __smlabt(be, static_cast<int32_t>(t12), mul_lo(static_cast<uint32_t>(al), t12)) >> 14;
+  const int32_t l_q26 = __smlatb(static_cast<int32_t>(c), along, mul_lo(c, static_cast<uint32_t>(n0_q12)));
 #else
   const int32_t along = (al * static_cast<int16_t>(t12) + be * (static_cast<int32_t>(t12) >> 16)) >> 14;
-  return (cs.cos * n0_q12 + cs.sinc * along) >> 12;
+  const int32_t l_q26 = cs.cos * n0_q12 + cs.sinc * along;
 #endif
+  const int32_t i = (l_q26 + ((16384 + 64) << 12)) >> 19;
+  return i < 0 ? 0 : i > kIntensityEntries - 1 ? kIntensityEntries - 1 : i;
 }
 
 // A node's terms as int16 pairs in 32-bit words (low half first), the way
@@ -275,9 +301,8 @@ inline int32_t lit_q14(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t1
 // caller's terms keep them below 2^31, where SMLAxy does not saturate.
 inline int32_t pair_dot(uint32_t g01, uint32_t g2, uint32_t a01, uint32_t a2) {
 #if defined(__ARM_FEATURE_DSP)
-  const int32_t lo = static_cast<int16_t>(g01) * static_cast<int16_t>(a01);  // SMULBB
   return __smlabb(static_cast<int32_t>(g2), static_cast<int32_t>(a2),
-                  __smlatt(static_cast<int32_t>(g01), static_cast<int32_t>(a01), lo));
+                  __smlatt(static_cast<int32_t>(g01), static_cast<int32_t>(a01), mul_lo(g01, a01)));
 #else
   return static_cast<int16_t>(g01) * static_cast<int16_t>(a01) +
          (static_cast<int32_t>(g01) >> 16) * (static_cast<int32_t>(a01) >> 16) +
@@ -344,13 +369,13 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565
         be = clamp_angle_q12(pair_dot(g01, g2, s.s1_01, s.s1_2) >> 12);
       } else {
         const uint32_t n01 = t.n01[j];
-        al = clamp_angle_q12((static_cast<int16_t>(n01) * static_cast<int16_t>(s.sn)) >> 12);
-        be = clamp_angle_q12(((static_cast<int32_t>(n01) >> 16) * (static_cast<int32_t>(s.sn) >> 16)) >> 12);
+        al = clamp_angle_q12(mul_lo(n01, s.sn) >> 12);
+        be = clamp_angle_q12(mul_hi(n01, s.sn) >> 12);
       }
       const uint32_t cell = static_cast<uint32_t>(al * al + be * be) >> kCosSincShift;
       const CosSincQ14& cs = t.shading->cos_sinc[cell < kCosSincEntries ? cell : kCosSincEntries - 1];
-      const int il = intensity_index(lit_q14(cs, al, be, s.lt, s.l0));
-      const uint32_t specular = kSpecular ? t.shading->specular[intensity_index(lit_q14(cs, al, be, s.ht, s.h0))] : 0;
+      const int il = lit_index(cs, al, be, s.lt, s.l0);
+      const uint32_t specular = kSpecular ? t.shading->specular[lit_index(cs, al, be, s.ht, s.h0)] : 0;
       if constexpr (!kColorPoints) {
         if (t.grey_shade != nullptr) return (kRgb565 ? t.grey_shade565 : t.grey_shade)[t.grey_diffuse[il] + specular];
       }
@@ -380,32 +405,95 @@ template <class Word>
 // Draws node `n`'s points into the words of the tile whose first pixel is
 // (px0, py0) — 2^tile_log2 words a row, pack_word's format — each a square of
 // `size` px (1..3), clipped to the tile when the node's span leaves it.
-// Scalar, one point at a time: the reference for the lanes below and what
-// ARMv5 runs.
-template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
-void draw_tile_node_scalar(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0,
-                           int py0) {
+// Scalar: the reference for the lanes below and what ARMv5 runs.
+//
+// It runs in two passes over each chunk of kScalarChunk points: where each
+// point lands (the node's position terms), then the colour and the z-test
+// of those that land in the tile (its shading terms and the tables). One
+// pass kept some 20 terms live a point, and on 32-bit ARM, with 13
+// registers to hold them, reloaded a dozen from the stack every point;
+// each pass's terms fit the registers, and a chunk's positions lie on the
+// stack between them (docs/fixed_point.md, "ARMv5").
+inline constexpr uint32_t kScalarChunk = 32;
+
+// A chunk's points that land in the tile, as draw_tile_node_scalar's first
+// pass leaves them: the sample; where, in the tile — for a node inside it
+// the first pixel's word, else (x, y) as an int16 pair, to be clipped —;
+// the depth.
+struct ScalarChunk {
+  uint16_t sample[kScalarChunk];
+  uint32_t at[kScalarChunk], depth[kScalarChunk];
+};
+
+// The first pass over samples [first, end): returns how many landed.
+template <bool kInside>
+[[gnu::always_inline]] inline uint32_t place_points(const TileRow& n, const PointTables& t, int size, int tile_log2,
+                                                    int px0, int py0, uint32_t first, uint32_t end, ScalarChunk& out) {
   const int tile = 1 << tile_log2;
   const int32_t x0 = n.x0_q4() - (px0 << 4), y0 = n.y0_q4() - (py0 << 4);
-  const bool inside = n.inside_tile(px0, py0, tile);
-  const uint32_t wh = static_cast<uint32_t>(size | size << 4);
   const uint32_t mx01 = n[TileField::kMx01], mx2 = n[TileField::kMx2];
   const uint32_t my01 = n[TileField::kMy01], my2 = n[TileField::kMy2];
   const uint32_t dz01 = n[TileField::kDz01], dz2 = n[TileField::kDz2];
-  const uint32_t depth0 = n.depth0(), dshift = n.dshift(), count = n.count();
-  const PackedShade shade(n);
-  for (uint32_t j = 0; j < count; ++j) {
+  const uint32_t depth0 = n.depth0(), dshift = n.dshift();
+  uint32_t kept = 0;
+  for (uint32_t j = first; j < end; ++j) {
     const uint32_t g01 = t.g01[j], g2 = t.g2[j];
     const int32_t x = (x0 + (pair_dot(g01, g2, mx01, mx2) >> 16)) >> 4;
     const int32_t y = (y0 + (pair_dot(g01, g2, my01, my2) >> 16)) >> 4;
-    // A node across a tile's edge is drawn in each tile it touches: a point
-    // whose square lies wholly in another tile is that tile's to shade
-    // (on the bunny at 240 x 320, a quarter of the points this loop meets).
-    if (!inside && (x <= -size || y <= -size || x >= tile || y >= tile)) continue;
-    const uint32_t depth = depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift);
-    const uint32_t color = point_color<kNormals, kColorPoints, kSpecular, sizeof(Word) == 4>(shade, t, j, g01, g2);
-    ztest_point(words, tile_log2, size, wh, inside, x, y, pack_word<Word>(depth, color));
+    // A node across a tile's edge is drawn in each tile it touches: a
+    // point whose square lies wholly in another tile is that tile's to
+    // shade (on the bunny at 240 x 320, a quarter of the points met here).
+    if constexpr (kInside) {
+#if STIPPLE_CHECK_RANGES
+      if (x < 0 || y < 0 || x + size > tile || y + size > tile) __builtin_trap();  // outside the span it was filed by
+#endif
+      out.at[kept] = static_cast<uint32_t>((y << tile_log2) + x);
+    } else {
+      if (x <= -size || y <= -size || x >= tile || y >= tile) continue;
+      out.at[kept] = int16_pair(x, y);
+    }
+    out.sample[kept] = static_cast<uint16_t>(j);
+    out.depth[kept] = depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift);
+    ++kept;
   }
+  return kept;
+}
+
+// The second pass: the colour and the z-test of the `kept` points placed.
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, class Word>
+[[gnu::always_inline]] inline void shade_points(const PackedShade& shade, const PointTables& t, int size, Word* words,
+                                                int tile_log2, const ScalarChunk& in, uint32_t kept) {
+  const uint32_t wh = static_cast<uint32_t>(size | size << 4);
+  for (uint32_t k = 0; k < kept; ++k) {
+    const uint32_t j = in.sample[k];
+    const uint32_t color = point_color<kNormals, kColorPoints, kSpecular, sizeof(Word) == 4>(shade, t, j, t.g01[j], t.g2[j]);
+    const Word w = pack_word<Word>(in.depth[k], color);
+    if constexpr (kInside)
+      ztest_square(words + in.at[k], 1 << tile_log2, wh, w);
+    else
+      ztest_point(words, tile_log2, size, wh, false, pair_lo(in.at[k]), pair_hi(in.at[k]), w);
+  }
+}
+
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, class Word>
+void draw_tile_node_chunks(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
+  const uint32_t count = n.count();
+  const PackedShade shade(n);
+  ScalarChunk chunk;
+  for (uint32_t first = 0; first < count; first += kScalarChunk) {
+    const uint32_t end = count - first < kScalarChunk ? count : first + kScalarChunk;
+    const uint32_t kept = place_points<kInside>(n, t, size, tile_log2, px0, py0, first, end, chunk);
+    shade_points<kNormals, kColorPoints, kSpecular, kInside>(shade, t, size, words, tile_log2, chunk, kept);
+  }
+}
+
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
+void draw_tile_node_scalar(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0,
+                           int py0) {
+  if (n.inside_tile(px0, py0, 1 << tile_log2))
+    draw_tile_node_chunks<kNormals, kColorPoints, kSpecular, true>(n, t, size, words, tile_log2, px0, py0);
+  else
+    draw_tile_node_chunks<kNormals, kColorPoints, kSpecular, false>(n, t, size, words, tile_log2, px0, py0);
 }
 
 }  // namespace stipple
