@@ -345,7 +345,7 @@ struct PackedShade {
 // The colour of sample j (the formula's last three lines) from the node's
 // packed terms and the sample's position pairs, as 0xRRGGBB — or, for
 // kRgb565, as RGB565: what the scalar loops run.
-template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565 = false>
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565 = false, bool kClampAngles = true>
 [[gnu::always_inline]] inline uint32_t point_color(const PackedShade& s, const PointTables& t, uint32_t j, uint32_t g01,
                                                    uint32_t g2) {
   const auto encode = [](uint32_t rgb) { return kRgb565 ? uint32_t{rgb565(rgb)} : rgb; };
@@ -365,12 +365,16 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565
     } else {
       int32_t al, be;
       if constexpr (kNormals == PointNormals::kSurface) {
-        al = clamp_angle_q12(pair_dot(g01, g2, s.s0_01, s.s0_2) >> 12);
-        be = clamp_angle_q12(pair_dot(g01, g2, s.s1_01, s.s1_2) >> 12);
+        al = pair_dot(g01, g2, s.s0_01, s.s0_2) >> 12;
+        be = pair_dot(g01, g2, s.s1_01, s.s1_2) >> 12;
       } else {
         const uint32_t n01 = t.n01[j];
-        al = clamp_angle_q12(mul_lo(n01, s.sn) >> 12);
-        be = clamp_angle_q12(mul_hi(n01, s.sn) >> 12);
+        al = mul_lo(n01, s.sn) >> 12;
+        be = mul_hi(n01, s.sn) >> 12;
+      }
+      if constexpr (kClampAngles) {
+        al = clamp_angle_q12(al);
+        be = clamp_angle_q12(be);
       }
       const uint32_t cell = static_cast<uint32_t>(al * al + be * be) >> kCosSincShift;
       const CosSincQ14& cs = t.shading->cos_sinc[cell < kCosSincEntries ? cell : kCosSincEntries - 1];
@@ -416,6 +420,23 @@ template <class Word>
 // stack between them (docs/fixed_point.md, "ARMv5").
 inline constexpr uint32_t kScalarChunk = 32;
 
+// Whether no point of the node needs clamp_angle_q12: every sample
+// component is within kGaussianClip, so |sigma_n n| >> 12 (kSampled) and
+// |surface_k . g| >> 12 (kSurface) stay within 2^14 where sigma_n, or
+// sum |surface_k|, is at most 2^26 / kGaussianClip (4,681: 1.14 rad) —
+// nearly every node. The clamp is then two compares an angle saved.
+template <PointNormals kNormals>
+inline bool angles_in_range(const PackedShade& s) {
+  constexpr int32_t kMax = (int32_t{1} << 26) / kGaussianClip;
+  const auto abs16 = [](int32_t v) { return v < 0 ? -v : v; };
+  if constexpr (kNormals == PointNormals::kSurface) {
+    const auto sum = [&](uint32_t p01, uint32_t p2) { return abs16(pair_lo(p01)) + abs16(pair_hi(p01)) + abs16(pair_lo(p2)); };
+    return sum(s.s0_01, s.s0_2) <= kMax && sum(s.s1_01, s.s1_2) <= kMax;
+  } else {
+    return abs16(pair_lo(s.sn)) <= kMax && abs16(pair_hi(s.sn)) <= kMax;
+  }
+}
+
 // A chunk's points that land in the tile, as draw_tile_node_scalar's first
 // pass leaves them: the sample; where, in the tile — for a node inside it
 // the first pixel's word, else (x, y) as an int16 pair, to be clipped —;
@@ -460,13 +481,14 @@ template <bool kInside>
 }
 
 // The second pass: the colour and the z-test of the `kept` points placed.
-template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, class Word>
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, bool kClampAngles, class Word>
 [[gnu::always_inline]] inline void shade_points(const PackedShade& shade, const PointTables& t, int size, Word* words,
                                                 int tile_log2, const ScalarChunk& in, uint32_t kept) {
   const uint32_t wh = static_cast<uint32_t>(size | size << 4);
   for (uint32_t k = 0; k < kept; ++k) {
     const uint32_t j = in.sample[k];
-    const uint32_t color = point_color<kNormals, kColorPoints, kSpecular, sizeof(Word) == 4>(shade, t, j, t.g01[j], t.g2[j]);
+    const uint32_t color =
+        point_color<kNormals, kColorPoints, kSpecular, sizeof(Word) == 4, kClampAngles>(shade, t, j, t.g01[j], t.g2[j]);
     const Word w = pack_word<Word>(in.depth[k], color);
     if constexpr (kInside)
       ztest_square(words + in.at[k], 1 << tile_log2, wh, w);
@@ -479,11 +501,16 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside
 void draw_tile_node_chunks(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
   const uint32_t count = n.count();
   const PackedShade shade(n);
+  constexpr bool kShadePoints = kNormals != PointNormals::kNode;
+  const bool clamp = kShadePoints && !angles_in_range<kNormals>(shade);
   ScalarChunk chunk;
   for (uint32_t first = 0; first < count; first += kScalarChunk) {
     const uint32_t end = count - first < kScalarChunk ? count : first + kScalarChunk;
     const uint32_t kept = place_points<kInside>(n, t, size, tile_log2, px0, py0, first, end, chunk);
-    shade_points<kNormals, kColorPoints, kSpecular, kInside>(shade, t, size, words, tile_log2, chunk, kept);
+    if (clamp)
+      shade_points<kNormals, kColorPoints, kSpecular, kInside, true>(shade, t, size, words, tile_log2, chunk, kept);
+    else
+      shade_points<kNormals, kColorPoints, kSpecular, kInside, false>(shade, t, size, words, tile_log2, chunk, kept);
   }
 }
 

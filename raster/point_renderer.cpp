@@ -2,6 +2,8 @@
 // formats and measured errors are in docs/fixed_point.md.
 #include "raster/point_renderer.h"
 
+#include <type_traits>
+
 #include "raster/point_kernel_avx2.h"
 #include "raster/resolve.h"
 
@@ -455,14 +457,21 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
       const uint32_t dz01 = int16_pair(s.dz[0], s.dz[1]), dz2 = int16_pair(s.dz[2], 0);
       const uint32_t depth0 = static_cast<uint32_t>(s.depth0);
       const int dshift = s.dshift;
-      for (uint32_t j = 0; j < s.count; ++j) {
-        const uint32_t g01 = t.g01[j], g2 = t.g2[j];
-        const int32_t x = proj.x0_q4 + (pair_dot(g01, g2, mx01, mx2) >> 16);
-        const int32_t y = proj.y0_q4 + (pair_dot(g01, g2, my01, my2) >> 16);
-        const uint32_t depth = depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift);
-        if (sink.put(x, y, depth, point_color<kNormals, kColorPoints, kSpecular>(shade, t, j, g01, g2))) ++drawn;
-        else ++stats.points_dropped;
-      }
+      const auto points = [&](auto clamp_angles) {
+        for (uint32_t j = 0; j < s.count; ++j) {
+          const uint32_t g01 = t.g01[j], g2 = t.g2[j];
+          const int32_t x = proj.x0_q4 + (pair_dot(g01, g2, mx01, mx2) >> 16);
+          const int32_t y = proj.y0_q4 + (pair_dot(g01, g2, my01, my2) >> 16);
+          const uint32_t depth = depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift);
+          const uint32_t rgb =
+              point_color<kNormals, kColorPoints, kSpecular, false, decltype(clamp_angles)::value>(shade, t, j, g01, g2);
+          if (sink.put(x, y, depth, rgb)) ++drawn;
+          else ++stats.points_dropped;
+        }
+      };
+      // As in the tile pass: the angles' clamp only where a point may need it.
+      if (kNormals != PointNormals::kNode && !angles_in_range<kNormals>(shade)) points(std::true_type{});
+      else points(std::false_type{});
       return drawn;
     }
   }

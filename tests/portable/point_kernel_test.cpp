@@ -77,7 +77,13 @@ TileNode random_node(std::mt19937& rng, int size, bool extreme) {
   span(n.y0_q4, n.my, n.span + 2);
   n.count = static_cast<uint16_t>(extreme && rng() % 2 ? kSamples : 1 + rng() % 40);
   PointShade& s = n.shade;
-  for (int k = 0; k < 2; ++k) s.sn[k] = static_cast<int16_t>(extreme && rng() % 2 ? 16384 : rng() % 16385);
+  // A third of the nodes turn their normals gently, as nearly every real one
+  // does: no angle needs its clamp (angles_in_range), up to that bound exactly.
+  const bool gentle = rng() % 3 == 0;
+  constexpr int32_t kGentle = (int32_t{1} << 26) / kGaussianClip;
+  for (int k = 0; k < 2; ++k)
+    s.sn[k] = static_cast<int16_t>(gentle ? (extreme && rng() % 2 ? kGentle : rng() % (kGentle + 1))
+                                          : extreme && rng() % 2 ? 16384 : rng() % 16385);
   // L.t and H.t: the tangential part of a unit vector, |(t1, t2)| <= 2^14.
   for (int16_t* t : {s.lt, s.ht}) {
     const double a = static_cast<double>(rng() % 6283) / 1000.0;
@@ -87,8 +93,18 @@ TileNode random_node(std::mt19937& rng, int size, bool extreme) {
   }
   s.l0 = bounded(rng, 4096);
   s.h0 = bounded(rng, 4096);
-  for (auto& row : s.surface)
-    for (int16_t& v : row) v = extreme && rng() % 2 ? (rng() & 1 ? 16416 : -16416) : bounded(rng, 16416);
+  for (auto& row : s.surface) {
+    if (gentle) {  // |row| summing to at most kGentle: slopes() scaled
+      int32_t left = extreme && rng() % 2 ? kGentle : static_cast<int32_t>(rng() % (kGentle + 1));
+      for (int k = 0; k < 3; ++k) {
+        const int32_t v = k == 2 ? left : static_cast<int32_t>(rng() % static_cast<uint32_t>(left + 1));
+        row[k] = static_cast<int16_t>(rng() & 1 ? -v : v);
+        left -= v;
+      }
+    } else {
+      for (int16_t& v : row) v = extreme && rng() % 2 ? (rng() & 1 ? 16416 : -16416) : bounded(rng, 16416);
+    }
+  }
   for (auto& row : s.ca)
     for (int16_t& v : row) v = extreme && rng() % 2 ? (rng() & 1 ? 32767 : -32767) : bounded(rng, 32767);
   s.base_rgb = rng() & 0xFFFFFF;
@@ -160,6 +176,45 @@ TEST(PointKernel, LanesDrawTheScalarWordsForRandomAndExtremeNodes) {
 // Both loops keep every point within the span its node was filed with: a
 // point outside would be drawn into the wrong tile's words (the checked
 // build traps on it in the scalar loop).
+TEST(PointKernel, AnglesInRangeNeedNoClampUpToTheirBound) {
+  // At the bound every sample's angles stay within +-4 rad, so the colours
+  // are the clamped formula's; one step past it the clamp is kept.
+  const Tables tables;
+  constexpr int16_t kBound = (int32_t{1} << 26) / kGaussianClip;
+  PointShade s;
+  s.lt[0] = 9000;
+  s.lt[1] = -7000;
+  s.ht[0] = -5000;
+  s.ht[1] = 12000;
+  s.l0 = 3000;
+  s.h0 = -1000;
+  s.base_rgb = 0x806040;
+  for (int sign : {1, -1}) {
+    s.sn[0] = s.sn[1] = static_cast<int16_t>(sign * kBound);
+    s.surface[0][0] = static_cast<int16_t>(sign * kBound);
+    s.surface[0][1] = s.surface[0][2] = 0;
+    s.surface[1][0] = static_cast<int16_t>(-sign * (kBound - 1000));
+    s.surface[1][1] = static_cast<int16_t>(sign * 600);
+    s.surface[1][2] = static_cast<int16_t>(-sign * 400);
+    const PackedShade p(s);
+    ASSERT_TRUE(angles_in_range<PointNormals::kSampled>(p));
+    ASSERT_TRUE(angles_in_range<PointNormals::kSurface>(p));
+    for (uint32_t j = 0; j < kSamples; ++j) {
+      const uint32_t g01 = tables.t.g01[j], g2 = tables.t.g2[j];
+      EXPECT_EQ((point_color<PointNormals::kSampled, true, true, false, true>(p, tables.t, j, g01, g2)),
+                (point_color<PointNormals::kSampled, true, true, false, false>(p, tables.t, j, g01, g2)))
+          << "sample " << j;
+      EXPECT_EQ((point_color<PointNormals::kSurface, true, true, false, true>(p, tables.t, j, g01, g2)),
+                (point_color<PointNormals::kSurface, true, true, false, false>(p, tables.t, j, g01, g2)))
+          << "sample " << j;
+    }
+    s.sn[1] = static_cast<int16_t>(sign * (kBound + 1));
+    EXPECT_FALSE(angles_in_range<PointNormals::kSampled>(PackedShade(s)));
+    s.surface[1][2] = static_cast<int16_t>(-sign * 401);
+    EXPECT_FALSE(angles_in_range<PointNormals::kSurface>(PackedShade(s)));
+  }
+}
+
 TEST(PointKernel, EveryPointFallsWithinItsNodesSpan) {
   const Tables tables;
   std::mt19937 rng(5);
