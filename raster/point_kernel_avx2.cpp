@@ -36,8 +36,8 @@ inline __m256i intensity_index8(__m256i l) {
   return _mm256_min_epi32(_mm256_max_epi32(i, _mm256_setzero_si256()), _mm256_set1_epi32(kIntensityEntries - 1));
 }
 
-// lit_q14 in lanes: `ab` holds (al, be) pairs, `t` (t1, t2) pairs, `n0` the
-// Q12 term in each lane's low half.
+// L.n in Q14 (lit_index, before its table index) in lanes: `ab` holds
+// (al, be) pairs, `t` (t1, t2) pairs, `n0` the Q12 term in each lane's low half.
 inline __m256i lit8(__m256i cs, __m256i ab, __m256i t, __m256i n0) {
   const __m256i along = _mm256_srai_epi32(_mm256_madd_epi16(ab, t), 14);
   return _mm256_srai_epi32(_mm256_madd_epi16(cs, _mm256_or_si256(n0, _mm256_slli_epi32(along, 16))), 12);

@@ -42,8 +42,8 @@ inline int32x4_t intensity_index4(int32x4_t l) {
   return vminq_s32(vmaxq_s32(i, vdupq_n_s32(0)), vdupq_n_s32(kIntensityEntries - 1));
 }
 
-// lit_q14: (cos n0 + sinc ((al t1 + be t2) >> 14)) >> 12, `cs` holding
-// (cos, sinc) int16 pairs.
+// L.n in Q14 (lit_index, before its table index): (cos n0 + sinc ((al t1
+// + be t2) >> 14)) >> 12, `cs` holding (cos, sinc) int16 pairs.
 inline int32x4_t lit4(int32x4_t cs, int32x4_t al, int32x4_t be, int16_t t1, int16_t t2, int16_t n0) {
   const int32x4_t along = vshrq_n_s32(vmlaq_n_s32(vmulq_n_s32(al, t1), be, t2), 14);
   const int32x4_t cosine = vshrq_n_s32(vshlq_n_s32(cs, 16), 16), sinc = vshrq_n_s32(cs, 16);

@@ -47,8 +47,8 @@ inline __m128i intensity_index4(__m128i l) {
   return _mm_min_epi16(_mm_max_epi16(p, _mm_setzero_si128()), _mm_set1_epi16(kIntensityEntries - 1));
 }
 
-// lit_q14 in lanes: `ab` holds (al, be) pairs, `t` the (t1, t2) pair, `n0`
-// the Q12 term in each lane's low half.
+// L.n in Q14 (lit_index, before its table index) in lanes: `ab` holds
+// (al, be) pairs, `t` the (t1, t2) pair, `n0` the Q12 term in each lane's low half.
 inline __m128i lit4(__m128i cs, __m128i ab, __m128i t, __m128i n0) {
   const __m128i along = _mm_srai_epi32(_mm_madd_epi16(ab, t), 14);
   return _mm_srai_epi32(_mm_madd_epi16(cs, _mm_or_si128(n0, _mm_slli_epi32(along, 16))), 12);
