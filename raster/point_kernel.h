@@ -309,6 +309,16 @@ inline int32_t pair_dot(uint32_t g01, uint32_t g2, uint32_t a01, uint32_t a2) {
          static_cast<int16_t>(g2) * static_cast<int16_t>(a2);
 #endif
 }
+// acc + pair_dot(...): on the DSP targets three multiply-accumulates.
+inline int32_t pair_dot_acc(int32_t acc, uint32_t g01, uint32_t g2, uint32_t a01, uint32_t a2) {
+#if defined(__ARM_FEATURE_DSP)
+  return __smlabb(static_cast<int32_t>(g2), static_cast<int32_t>(a2),
+                  __smlatt(static_cast<int32_t>(g01), static_cast<int32_t>(a01),
+                           __smlabb(static_cast<int32_t>(g01), static_cast<int32_t>(a01), acc)));
+#else
+  return acc + pair_dot(g01, g2, a01, a2);
+#endif
+}
 
 struct PackedShade {
   uint32_t sn = 0, lt = 0, ht = 0;            // (sigma_n1, sigma_n2), (L.t1, L.t2), (H.t1, H.t2)
@@ -451,7 +461,11 @@ template <bool kInside>
 [[gnu::always_inline]] inline uint32_t place_points(const TileRow& n, const PointTables& t, int size, int tile_log2,
                                                     int px0, int py0, uint32_t first, uint32_t end, ScalarChunk& out) {
   const int tile = 1 << tile_log2;
-  const int32_t x0 = n.x0_q4() - (px0 << 4), y0 = n.y0_q4() - (py0 << 4);
+  // (x0 + (m . g >> 16)) >> 4 is (x0 2^16 + m . g) >> 20 (floors of
+  // power-of-two divisions compose): the mean's corner, relative to the
+  // tile, within 3 tiles of 128 px (2^12.6 in Q4), times 2^16 is the sum's
+  // start, and the sum stays below 2^29 + 2^28.6.
+  const int32_t x0 = (n.x0_q4() - (px0 << 4)) * 65536, y0 = (n.y0_q4() - (py0 << 4)) * 65536;
   const uint32_t mx01 = n[TileField::kMx01], mx2 = n[TileField::kMx2];
   const uint32_t my01 = n[TileField::kMy01], my2 = n[TileField::kMy2];
   const uint32_t dz01 = n[TileField::kDz01], dz2 = n[TileField::kDz2];
@@ -459,8 +473,8 @@ template <bool kInside>
   uint32_t kept = 0;
   for (uint32_t j = first; j < end; ++j) {
     const uint32_t g01 = t.g01[j], g2 = t.g2[j];
-    const int32_t x = (x0 + (pair_dot(g01, g2, mx01, mx2) >> 16)) >> 4;
-    const int32_t y = (y0 + (pair_dot(g01, g2, my01, my2) >> 16)) >> 4;
+    const int32_t x = pair_dot_acc(x0, g01, g2, mx01, mx2) >> 20;
+    const int32_t y = pair_dot_acc(y0, g01, g2, my01, my2) >> 20;
     // A node across a tile's edge is drawn in each tile it touches: a
     // point whose square lies wholly in another tile is that tile's to
     // shade (on the bunny at 240 x 320, a quarter of the points met here).
