@@ -1,56 +1,67 @@
 #!/usr/bin/env bash
 # Where an ARM build's frame goes, function by function, from qemu-user's
-# single-step execution log (Debian's qemu has no TCG plugins): every guest
-# instruction is one logged block, so counting the logged PCs of `--frames 2`
-# minus those of `--frames 1` gives one frame's instructions per function.
+# block log (Debian's qemu has no TCG plugins): each translated block's
+# instructions are logged once (in_asm) and, unchained, every run of the
+# block (exec), so counting each instruction's runs in `--frames 2` minus
+# those in `--frames 1` gives one frame's instructions per function.
 #   tools/bench/arm_profile.sh HANDHELD MODEL.spg [stipple-handheld options...]
 # e.g. (the ARMv5 preset's handheld program on the bunny):
 #   tools/bench/arm_profile.sh build/armv5/tools/handheld/stipple-handheld \
 #     tests/golden/bunny_v1.spg
 # Prints the frame's total and the 20 costliest functions. QEMU (default
 # qemu-arm), QEMU_LD_PREFIX (default /usr/arm-linux-gnueabi) and NM (default
-# arm-linux-gnueabi-nm) choose the target; the program is a PIE that
-# qemu-user loads at 0x40000000 (LOAD_BASE to change). LINES=NAME also
+# arm-linux-gnueabi-nm) choose the target; the program is a PIE, found where
+# qemu-user loaded it (its page log's start_code). LINES=NAME also
 # prints the 25 costliest source lines of the functions whose names contain
 # NAME (the innermost inlined line; ADDR2LINE, default
 # arm-linux-gnueabi-addr2line) — for a build with debug information, e.g.
 # -DCMAKE_CXX_FLAGS_RELEASE="-O2 -g -DNDEBUG".
 set -euo pipefail
 if [ $# -lt 2 ] || [ "$1" = --help ]; then
-  sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'
   [ "${1:-}" = --help ] && exit 0 || exit 1
 fi
 program=$1 model=$2
 shift 2
 qemu=${QEMU:-qemu-arm} prefix=${QEMU_LD_PREFIX:-/usr/arm-linux-gnueabi} nm=${NM:-arm-linux-gnueabi-nm}
-base=${LOAD_BASE:-0x40000000}
 for tool in "$qemu" "$nm" python3 ${LINES:+"${ADDR2LINE:-arm-linux-gnueabi-addr2line}"}; do
   command -v "$tool" >/dev/null || { echo "arm_profile.sh: $tool is needed" >&2; exit 1; }
 done
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-histogram() {  # PC counts of a run of $1 frames, options after it
+# Runs of each instruction (its guest address) in a run of $1 frames,
+# options after it, and where the program was loaded (base). A block is
+# known by its host code's address; one translated again (after a flush)
+# first hands its runs to its instructions.
+histogram() {
   local frames=$1
   shift
-  "$qemu" -L "$prefix" -singlestep -d nochain,exec -D /dev/stderr "$program" "$model" --frames "$frames" "$@" \
-    -o "$work/frame$frames.ppm" 2>&1 >/dev/null |
-    awk '/^Trace/ { split($4, f, "/"); n[f[2]]++ } END { for (pc in n) print pc, n[pc] }' >"$work/pc$frames"
+  "$qemu" -L "$prefix" -d page,in_asm,exec,nochain -D /dev/stderr "$program" "$model" --frames "$frames" "$@" \
+    -o "$work/frame$frames.ppm" 2>&1 >/dev/null | awk '
+      function hand(b,   k, a, i) { k = split(code[b], a, " "); for (i = 1; i <= k; i++) n[a[i]] += runs[b]; runs[b] = 0 }
+      /^start_code/ { print "base", $2; next }
+      /^IN:/ { block = 1; list = ""; next }
+      block && /^0x[0-9a-f]+: / { list = list " " substr($1, 1, length($1) - 1); next }
+      /^Trace/ { if (block) { if ($3 in code) hand($3); code[$3] = list; block = 0 } runs[$3]++ }
+      END { for (b in code) hand(b); for (pc in n) print pc, n[pc] }' >"$work/pc$frames"
 }
 histogram 1 "$@" &
 histogram 2 "$@" &
 wait
 "$nm" -C --defined-only -n -S "$program" | grep -E '^[0-9a-f]+ [0-9a-f]+ [tTwW] ' >"$work/symbols"
-python3 - "$work" "$base" "$program" "${LINES:-}" "${ADDR2LINE:-arm-linux-gnueabi-addr2line}" <<'EOF'
+python3 - "$work" "$program" "${LINES:-}" "${ADDR2LINE:-arm-linux-gnueabi-addr2line}" <<'EOF'
 import bisect, subprocess, sys
-work, base, program, lines, addr2line = sys.argv[1], int(sys.argv[2], 16), sys.argv[3], sys.argv[4], sys.argv[5]
+work, program, lines, addr2line = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
 symbols = []
 for line in open(f"{work}/symbols"):
     address, size, _, name = line.rstrip("\n").split(" ", 3)
-    symbols.append((int(address, 16) + base, int(size, 16), name))
+    symbols.append((int(address, 16), int(size, 16), name))
 symbols.sort()
 starts = [s[0] for s in symbols]
-def load(path):
-    return {int(pc, 16): int(n) for pc, n in (line.split() for line in open(path))}
+def load(path):  # addresses within the program (its load base taken off)
+    rows = [line.split() for line in open(path)]
+    base = int(next(v for k, v in rows if k == "base"), 16)
+    return {int(pc, 16) - base: int(n) for pc, n in rows if pc != "base"}
 one, two = load(f"{work}/pc1"), load(f"{work}/pc2")
 total, outside, per = 0, 0, {}
 for pc in one.keys() | two.keys():
@@ -70,12 +81,12 @@ if lines:
         i = bisect.bisect_right(starts, pc) - 1
         if i >= 0 and pc < symbols[i][0] + symbols[i][1] and lines in symbols[i][2]:
             pcs.append(pc)
-    out = subprocess.run([addr2line, "-a", "-i", "-e", program], input="".join(f"{pc - base:#x}\n" for pc in pcs),
+    out = subprocess.run([addr2line, "-a", "-i", "-e", program], input="".join(f"{pc:#x}\n" for pc in pcs),
                          capture_output=True, text=True, check=True).stdout.splitlines()
     where, pc = {}, None
     for line in out:  # each address, then its lines from the innermost inlined call outwards
         if line.startswith("0x"):
-            pc = int(line, 16) + base
+            pc = int(line, 16)
         elif pc not in where:
             where[pc] = line
     per_line = {}
