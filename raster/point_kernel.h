@@ -299,26 +299,20 @@ inline int lit_index(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t12,
 // loop, sign-extended, and a point loop's 20-odd terms then live on the
 // stack (docs/fixed_point.md, "ARMv5"). The sums are the same: every
 // caller's terms keep them below 2^31, where SMLAxy does not saturate.
-inline int32_t pair_dot(uint32_t g01, uint32_t g2, uint32_t a01, uint32_t a2) {
-#if defined(__ARM_FEATURE_DSP)
-  return __smlabb(static_cast<int32_t>(g2), static_cast<int32_t>(a2),
-                  __smlatt(static_cast<int32_t>(g01), static_cast<int32_t>(a01), mul_lo(g01, a01)));
-#else
-  return static_cast<int16_t>(g01) * static_cast<int16_t>(a01) +
-         (static_cast<int32_t>(g01) >> 16) * (static_cast<int32_t>(a01) >> 16) +
-         static_cast<int16_t>(g2) * static_cast<int16_t>(a2);
-#endif
-}
-// acc + pair_dot(...): on the DSP targets three multiply-accumulates.
+// pair_dot_acc is `acc` plus the product (the chain starts at it).
 inline int32_t pair_dot_acc(int32_t acc, uint32_t g01, uint32_t g2, uint32_t a01, uint32_t a2) {
 #if defined(__ARM_FEATURE_DSP)
   return __smlabb(static_cast<int32_t>(g2), static_cast<int32_t>(a2),
                   __smlatt(static_cast<int32_t>(g01), static_cast<int32_t>(a01),
                            __smlabb(static_cast<int32_t>(g01), static_cast<int32_t>(a01), acc)));
 #else
-  return acc + pair_dot(g01, g2, a01, a2);
+  return acc + static_cast<int16_t>(g01) * static_cast<int16_t>(a01) +
+         (static_cast<int32_t>(g01) >> 16) * (static_cast<int32_t>(a01) >> 16) +
+         static_cast<int16_t>(g2) * static_cast<int16_t>(a2);
 #endif
 }
+// The sum alone (on the DSP targets SMULBB, then the two accumulates).
+inline int32_t pair_dot(uint32_t g01, uint32_t g2, uint32_t a01, uint32_t a2) { return pair_dot_acc(0, g01, g2, a01, a2); }
 
 struct PackedShade {
   uint32_t sn = 0, lt = 0, ht = 0;            // (sigma_n1, sigma_n2), (L.t1, L.t2), (H.t1, H.t2)
@@ -435,11 +429,14 @@ inline constexpr uint32_t kScalarChunk = 32;
 // |surface_k . g| >> 12 (kSurface) stay within 2^14 where sigma_n, or
 // sum |surface_k|, is at most 2^26 / kGaussianClip (4,681: 1.14 rad) —
 // nearly every node. The clamp is then two compares an angle saved.
+// (Per node normal, kNode, no point turns at all.)
 template <PointNormals kNormals>
 inline bool angles_in_range(const PackedShade& s) {
   constexpr int32_t kMax = (int32_t{1} << 26) / kGaussianClip;
   const auto abs16 = [](int32_t v) { return v < 0 ? -v : v; };
-  if constexpr (kNormals == PointNormals::kSurface) {
+  if constexpr (kNormals == PointNormals::kNode) {
+    return true;
+  } else if constexpr (kNormals == PointNormals::kSurface) {
     const auto sum = [&](uint32_t p01, uint32_t p2) { return abs16(pair_lo(p01)) + abs16(pair_hi(p01)) + abs16(pair_lo(p2)); };
     return sum(s.s0_01, s.s0_2) <= kMax && sum(s.s1_01, s.s1_2) <= kMax;
   } else {
@@ -515,8 +512,7 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside
 void draw_tile_node_chunks(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
   const uint32_t count = n.count();
   const PackedShade shade(n);
-  constexpr bool kShadePoints = kNormals != PointNormals::kNode;
-  const bool clamp = kShadePoints && !angles_in_range<kNormals>(shade);
+  const bool clamp = !angles_in_range<kNormals>(shade);
   ScalarChunk chunk;
   for (uint32_t first = 0; first < count; first += kScalarChunk) {
     const uint32_t end = count - first < kScalarChunk ? count : first + kScalarChunk;

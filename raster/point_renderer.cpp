@@ -470,7 +470,7 @@ uint32_t PointRenderer::draw_points(const PointSetup& s, FrameStats& stats) {
         }
       };
       // As in the tile pass: the angles' clamp only where a point may need it.
-      if (kNormals != PointNormals::kNode && !angles_in_range<kNormals>(shade)) points(std::true_type{});
+      if (!angles_in_range<kNormals>(shade)) points(std::true_type{});
       else points(std::false_type{});
       return drawn;
     }

@@ -173,9 +173,6 @@ TEST(PointKernel, LanesDrawTheScalarWordsForRandomAndExtremeNodes) {
   }
 }
 
-// Both loops keep every point within the span its node was filed with: a
-// point outside would be drawn into the wrong tile's words (the checked
-// build traps on it in the scalar loop).
 TEST(PointKernel, AnglesInRangeNeedNoClampUpToTheirBound) {
   // At the bound every sample's angles stay within +-4 rad, so the colours
   // are the clamped formula's; one step past it the clamp is kept.
@@ -215,6 +212,9 @@ TEST(PointKernel, AnglesInRangeNeedNoClampUpToTheirBound) {
   }
 }
 
+// Both loops keep every point within the span its node was filed with: a
+// point outside would be drawn into the wrong tile's words (the checked
+// build traps on it in the scalar loop).
 TEST(PointKernel, EveryPointFallsWithinItsNodesSpan) {
   const Tables tables;
   std::mt19937 rng(5);
