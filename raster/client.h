@@ -35,11 +35,11 @@ struct ClientConfig : RendererConfig {
   uint8_t max_record_bytes = 0;            // widest record held packed; 0: the paper's layout
 };
 
-// The handheld's tile pass: 2,048 nodes drawn in it (RendererConfig::
-// tile_nodes: 132 bytes each with their tile links; the rest are binned,
-// every point of the budget binnable), which keeps the arena at 240x320
-// RGB565 with 30,000 cached nodes and a 60,000-point budget within 2 MiB,
-// colour or not (docs/fixed_point.md).
+// The handheld's tile pass: rows for 2,048 nodes (RendererConfig::
+// tile_nodes: 136 bytes each with their tile links), more as the tile
+// nodes' points spare the bins, every point of the budget binnable, which
+// keeps the arena at 240x320 RGB565 with 30,000 cached nodes and a
+// 60,000-point budget within 2 MiB, colour or not (docs/fixed_point.md).
 inline constexpr uint32_t kHandheldTileNodes = 2048;
 
 // The two halves of a client configuration.

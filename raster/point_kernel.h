@@ -109,8 +109,9 @@ struct TileNode {
 };
 
 // The tile pass's nodes: one row of 32-bit words a node (int16 pairs low
-// half first), kTileFields words long. A tile's nodes are set up in the
-// cache's order, not the screen's, so the tile pass reads them scattered:
+// half first), kTileFields words long and kTileStride apart (its tile
+// links between). A tile's nodes are set up in the cache's order, not the
+// screen's, so the tile pass reads them scattered:
 // a row is 2-3 cache lines, where a structure of arrays cost a line per
 // field read (docs/fixed_point.md, "Speed"). `TileNode` is one node's
 // fields as store takes them; the loops read a row through `TileRow`.
@@ -126,17 +127,21 @@ enum class TileField : uint8_t {
   kCount
 };
 inline constexpr int kTileFields = static_cast<int>(TileField::kCount);
+// A row's words: its fields, then the links that file it in up to 2 x 2
+// tiles (the raster keeps the rows among its bins: PointRaster's items).
+inline constexpr int kTileLinks = 4;
+inline constexpr int kTileStride = kTileFields + kTileLinks;
 
 class TileNodes {
  public:
-  static size_t bytes(uint32_t capacity) { return size_t{4} * kTileFields * capacity; }
+  static size_t bytes(uint32_t capacity) { return size_t{4} * kTileStride * capacity; }
   void init(void* storage, uint32_t capacity) {
     words_ = static_cast<uint32_t*>(storage);
     capacity_ = capacity;
   }
   // Node i's row: its field f is row(i)[f].
-  uint32_t* row(uint32_t i) { return words_ + size_t{i} * kTileFields; }
-  const uint32_t* row(uint32_t i) const { return words_ + size_t{i} * kTileFields; }
+  uint32_t* row(uint32_t i) { return words_ + size_t{i} * kTileStride; }
+  const uint32_t* row(uint32_t i) const { return words_ + size_t{i} * kTileStride; }
   const uint32_t* words() const { return words_; }
   uint32_t capacity() const { return capacity_; }
 

@@ -71,8 +71,8 @@ template <int kSize, class Word>
 }
 
 // Eight points: lane k is sample lane_j[k] of the node whose row starts
-// at word lane_row[k] (an int32: the raster holds at most 2^26 tile nodes,
-// 29 words each, below 2^31) — or, for kRun, samples lane_j[0] .. + 7 of the node
+// at word lane_row[k] (an int32: the raster's pool, which holds the rows,
+// is at most 2 GiB) — or, for kRun, samples lane_j[0] .. + 7 of the node
 // at lane_row[0], whose constants are then broadcast and whose samples are
 // loaded, not gathered; the first `active` lanes are drawn, as squares of
 // kSize px.
@@ -200,7 +200,7 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, b
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, class Word>
 [[gnu::noinline]] uint32_t draw_runs(const TileNodes& nodes, uint32_t node, uint32_t count, const PointTables& t,
                                      Word* words, int tile_log2, int px0, int py0) {
-  alignas(32) int32_t run_row[8] = {static_cast<int32_t>(node * kTileFields)}, run_j[8] = {};
+  alignas(32) int32_t run_row[8] = {static_cast<int32_t>(node * kTileStride)}, run_j[8] = {};
   uint32_t j = 0;
   for (; j + 8 <= count; j += 8) {
     run_j[0] = static_cast<int32_t>(j);
@@ -219,7 +219,7 @@ void draw_tile_sized(const TileNodes& nodes, const uint32_t* list, uint32_t n, c
   uint32_t k = 0;
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t node = list[i];
-    const int32_t row = static_cast<int32_t>(node * kTileFields);
+    const int32_t row = static_cast<int32_t>(node * kTileStride);
     uint32_t count = nodes.row(node)[static_cast<int>(TileField::kCountShift)] & 0xFFFFu;
     uint32_t first = 0;
     if (count >= 8) {

@@ -12,13 +12,14 @@ namespace {
 constexpr uint32_t kChunk = 64;
 
 struct Layout {
-  size_t entries, chunk_next, tile_head, tile_tail, tile_fill, tile_words, tile_nodes, node_item, node_next, total;
-  uint32_t chunks;
+  size_t entries, chunk_next, tile_head, tile_tail, tile_fill, tile_words, tile_items, total;
+  uint32_t chunks, dedicated;  // chunks in the pool; of them, max_nodes items'
 };
 
 bool valid(const RasterConfig& c) {
   return c.width > 0 && c.height > 0 && c.tile_log2 >= 3 && c.tile_log2 <= 7 && c.max_points > 0 &&
-         c.max_points <= (1u << 26) && c.max_nodes <= (1u << 26) && c.max_links <= (1u << 26);
+         c.max_points <= (1u << 26) && c.max_nodes <= (1u << 26) && c.item_words <= 256 &&
+         (c.max_nodes == 0 || c.item_words > 0);
 }
 
 uint32_t tile_count(const RasterConfig& c) {
@@ -26,16 +27,24 @@ uint32_t tile_count(const RasterConfig& c) {
   return ((c.width + tile - 1) >> c.tile_log2) * ((c.height + tile - 1) >> c.tile_log2);
 }
 
+size_t item_bytes(const RasterConfig& c) { return size_t{4} * (c.item_words + PointRaster::kItemLinks); }
+
 // Entries: one per binned point plus a quarter for points on tile edges (a point of
 // s <= 3 px straddles an edge of a 2^k-pixel tile with probability about
 // 2 (s - 1) / 2^k: 6 % at 32 px and s = 2), in chunks of 64, plus one
-// partial chunk per tile and the 4 that `add` keeps in reserve.
+// partial chunk per tile and the 4 that `add` keeps in reserve; then
+// max_nodes items in whole chunks.
 Layout layout_of(const RasterConfig& c, size_t entry_size) {
   const size_t tiles = tile_count(c);
   const size_t word = c.format == PixelFormat::kRgb565 ? 4 : 8;
   const uint64_t entries = uint64_t{c.max_points} + c.max_points / 4;
+  const uint64_t chunk_bytes = entry_size * kChunk;
+  const uint64_t dedicated = (uint64_t{c.max_nodes} * item_bytes(c) + chunk_bytes - 1) / chunk_bytes;
+  const uint64_t chunks = (entries + kChunk - 1) / kChunk + tiles + 4 + dedicated;
   Layout l{};
-  l.chunks = static_cast<uint32_t>((entries + kChunk - 1) / kChunk + tiles + 4);
+  if (chunks * chunk_bytes > (uint64_t{1} << 31)) return l;  // a pool beyond 2 GiB: entries and items index in 32 bits
+  l.dedicated = static_cast<uint32_t>(dedicated);
+  l.chunks = static_cast<uint32_t>(chunks);
   size_t at = 0;
   l.entries = at;
   at += align8(entry_size * kChunk * l.chunks);
@@ -49,12 +58,8 @@ Layout layout_of(const RasterConfig& c, size_t entry_size) {
   at += align8(4 * tiles);
   l.tile_words = at;
   at += align8(word << (2 * c.tile_log2));
-  l.tile_nodes = at;
+  l.tile_items = at;
   at += c.max_nodes ? align8(4 * tiles) : 0;
-  l.node_item = at;
-  at += align8(4 * size_t{c.max_links});
-  l.node_next = at;
-  at += align8(4 * size_t{c.max_links});
   l.total = at;
   return l;
 }
@@ -98,36 +103,51 @@ size_t point_raster_bytes(const RasterConfig& config) {
   return valid(config) ? layout_of(config, PointRaster::entry_bytes(config.format)).total : 0;
 }
 
+uint32_t point_raster_items(const RasterConfig& config) {
+  if (!valid(config) || config.max_nodes == 0) return 0;
+  const size_t entry = PointRaster::entry_bytes(config.format);
+  return static_cast<uint32_t>(uint64_t{layout_of(config, entry).chunks} * entry * kChunk / item_bytes(config));
+}
+
 RasterStatus PointRaster::init(const RasterConfig& config, void* arena, size_t bytes) {
   static_assert(sizeof(Entry565) == 8 && sizeof(Entry888) == 12, "entries are sized into point_raster_bytes");
   if (!valid(config)) return RasterStatus::kBadConfig;
   const Layout l = layout_of(config, entry_bytes(config.format));
+  if (l.total == 0) return RasterStatus::kBadConfig;
   if (bytes < l.total) return RasterStatus::kArenaTooSmall;
   config_ = config;
   tiles_x_ = (config.width + (1 << config.tile_log2) - 1) >> config.tile_log2;
   tiles_y_ = (config.height + (1 << config.tile_log2) - 1) >> config.tile_log2;
   uint8_t* base = static_cast<uint8_t*>(arena);
   entries_ = base + l.entries;
+  items_ = reinterpret_cast<uint32_t*>(base + l.entries);
   chunk_next_ = reinterpret_cast<uint32_t*>(base + l.chunk_next);
   tile_head_ = reinterpret_cast<uint32_t*>(base + l.tile_head);
   tile_tail_ = reinterpret_cast<uint32_t*>(base + l.tile_tail);
   tile_fill_ = reinterpret_cast<uint32_t*>(base + l.tile_fill);
   tile_words_ = base + l.tile_words;
-  tile_nodes_ = config.max_nodes ? reinterpret_cast<uint32_t*>(base + l.tile_nodes) : nullptr;
-  node_item_ = reinterpret_cast<uint32_t*>(base + l.node_item);
-  node_next_ = reinterpret_cast<uint32_t*>(base + l.node_next);
+  tile_items_ = config.max_nodes ? reinterpret_cast<uint32_t*>(base + l.tile_items) : nullptr;
   chunk_count_ = l.chunks;
+  chunk_bytes_ = static_cast<uint32_t>(entry_bytes(config.format) * kChunk);
+  item_bytes_ = static_cast<uint32_t>(item_bytes(config));
+  item_stride_ = config.item_words + kItemLinks;
+  dedicated_bytes_ = l.dedicated * chunk_bytes_;
+  item_capacity_ = point_raster_items(config);
   begin_frame();
   return RasterStatus::kOk;
 }
 
 void PointRaster::begin_frame() {
   count_ = 0;
-  free_chunk_ = 0;
-  node_count_ = 0;
+  free_chunk_ = chunk_count_;
+  floor_ = 0;
+  item_count_ = 0;
+  item_points_ = 0;
+  item_end_ = 0;
+  item_allow_ = config_.max_nodes ? dedicated_bytes_ : 0;
   for (int t = 0; t < tiles_x_ * tiles_y_; ++t) tile_fill_[t] = 0;
-  if (tile_nodes_)
-    for (int t = 0; t < tiles_x_ * tiles_y_; ++t) tile_nodes_[t] = kNoLink;
+  if (tile_items_)
+    for (int t = 0; t < tiles_x_ * tiles_y_; ++t) tile_items_[t] = kNoLink;
 }
 
 // A point on tile edges or the screen's: clipped to the screen, then one
@@ -170,7 +190,7 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
       const int px0 = tx << sh, py0 = ty << sh;
       const int pw = (px0 + tile > config_.width ? config_.width - px0 : tile);
       const int ph = (py0 + tile > config_.height ? config_.height - py0 : tile);
-      const bool items = tile_nodes_ != nullptr && tile_nodes_[t] != kNoLink;
+      const bool items = tile_items_ != nullptr && tile_items_[t] != kNoLink;
       if (tile_fill_[t] == 0 && !(items && tile_fn != nullptr)) {
         // Nothing drawn here: every row the clear colour (one row of clear
         // words written out), no coverage.

@@ -9,8 +9,14 @@
 // depth+colour words hot, draws its bins and writes the finished tile out.
 //
 // Items a caller draws itself (the renderer's small nodes, whose points it
-// generates inside the tile pass) are filed per tile by `add_node` and
-// handed back, with the tile's words, to the caller's function in `draw`.
+// generates inside the tile pass) are records of the caller's words kept in
+// the same pool, from its bottom up while the bins' chunks are taken from
+// its top down, each filed per tile by links in its last words and handed
+// back, with the tile's words, to the caller's function in `draw`. An item
+// spares the bins its points, so the pool lends the items what those points
+// would have taken: `max_nodes` items always have room, and more as the
+// items' points free it, while every point of the budget still has the
+// bins' room it had without items (take_item).
 //
 // Depth and colour share one word — depth in the high bits, colour in the
 // low — so a point costs one load, one compare and one store, and equal
@@ -40,11 +46,12 @@ struct RasterConfig {
   uint8_t tile_log2 = 6;  // 64 x 64 tiles (docs/fixed_point.md, "Speed")
   PixelFormat format = PixelFormat::kRgb565;
   uint32_t max_points = 1u << 16;  // points per frame; more are refused by add()
-  // Items (the renderer's nodes) filed per tile by add_node, drawn by the
-  // caller's tile function inside the tile pass: 0 for none; an item may be
-  // filed in several tiles, max_links filings in all.
+  // Items (the renderer's nodes) drawn by the caller's tile function inside
+  // the tile pass: item_words words each (and kItemLinks links), max_nodes
+  // of them always room for, more as their points spare the bins (take_item);
+  // max_nodes 0: none.
   uint32_t max_nodes = 0;
-  uint32_t max_links = 0;
+  uint32_t item_words = 0;
   // Clear and write out tiles with AVX2 (PointRenderer sets it where the
   // CPU has it: raster/point_kernel_avx2.h). The same bytes either way.
   bool avx2 = false;
@@ -61,6 +68,9 @@ enum class RasterStatus : uint8_t { kOk = 0, kBadConfig, kArenaTooSmall };
 // Arena bytes `PointRaster::init` needs (8-byte aligned sections), or 0 for an
 // invalid configuration (zero size, tiles outside 8..128 px).
 size_t point_raster_bytes(const RasterConfig& config);
+// The most items a frame can hold (PointRaster::take_item): the pool's
+// bytes over an item's, 0 without items.
+uint32_t point_raster_items(const RasterConfig& config);
 
 constexpr uint16_t rgb565(uint32_t rgb) {
   return static_cast<uint16_t>(((rgb >> 8) & 0xF800u) | ((rgb >> 5) & 0x07E0u) | ((rgb >> 3) & 0x001Fu));
@@ -113,10 +123,10 @@ class PointRaster {
   // Bins a point of `size_px` (1..3). Returns false when the frame's budget
   // is full — max_points points, or the chunk pool (sized for max_points
   // * 5/4 entries — a point straddling tile edges takes 2 or 4 — plus one
-  // partial chunk per tile) — and the point is dropped; a point entirely off
-  // screen is accepted and ignored.
+  // partial chunk per tile, beside the items') — and the point is dropped;
+  // a point entirely off screen is accepted and ignored.
   [[gnu::always_inline]] bool add(const ScreenPoint& p, int size_px) {
-    if (count_ >= config_.max_points || free_chunk_ + 4 > chunk_count_) return false;
+    if (count_ >= config_.max_points || free_chunk_ < floor_ + 4) return false;
     const int s = size_px < 1 ? 1 : size_px > 3 ? 3 : size_px;
     // First covered pixel: floor(x - (s - 1) / 2) with x in Q4; arithmetic shift floors.
     int32_t x0 = (p.x_q4 - (s - 1) * 8) >> 4, y0 = (p.y_q4 - (s - 1) * 8) >> 4;
@@ -134,55 +144,69 @@ class PointRaster {
     split(x0, y0, x1, y1, p.depth, p.rgb);
     return true;
   }
-  // Files item `item` (the caller's index: a node drawn in the tile pass)
-  // in `tile`'s list; false when max_links filings are made.
-  bool add_node(uint32_t tile, uint32_t item) {
-    if (node_count_ >= config_.max_links) return false;
-    const uint32_t link = node_count_++;
-    node_item_[link] = item;
-    node_next_[link] = tile_nodes_[tile];
-    tile_nodes_[tile] = link;
-    return true;
+  // Items: the caller's records, items() of them this frame, item i's words
+  // at item_words(i) (config.item_words long; kItemLinks more follow, the
+  // raster's). An item is filed in at most 2 x 2 tiles.
+  static constexpr int kItemLinks = 4;
+  uint32_t items() const { return item_count_; }
+  uint32_t* item_words(uint32_t item) { return items_ + size_t{item} * item_stride_; }
+  // Whether item items() for `points` points drawn in the tile pass has
+  // room, and taking it, its points counted against the frame's budget.
+  // The items may cover max_nodes items' bytes plus the bins' share (5/4
+  // entries, in whole chunks) of the points of the items before, never a
+  // chunk in use.
+  bool item_room(uint32_t points) const {
+    const uint32_t end = item_end_ + item_bytes_;
+    return points <= config_.max_points - count_ && end <= item_allow_ && end <= free_chunk_ * chunk_bytes_;
   }
-  // Files item `item` in the tile `tile` and, where `wide` and `tall`
-  // say, the tiles to its right and below (a node in up to 2 x 2 tiles),
-  // and counts its `points`: the caller made sure there is room
-  // (links_free, room_for).
-  void add_node_in_tiles(uint32_t tile, bool wide, bool tall, uint32_t item, uint32_t points) {
-    const auto link = [&](uint32_t t) {
-      const uint32_t l = node_count_++;
-      node_item_[l] = item;
-      node_next_[l] = tile_nodes_[t];
-      tile_nodes_[t] = l;
-    };
-    link(tile);
-    if (wide) link(tile + static_cast<uint32_t>(1));
-    if (tall) link(tile + static_cast<uint32_t>(tiles_x_));
-    if (wide && tall) link(tile + static_cast<uint32_t>(tiles_x_) + 1);
+  // take_item where item_room said yes.
+  void take_item(uint32_t points) {
     count_ += points;
+    ++item_count_;
+    grow_items(item_bytes_, points);
   }
-  // Counts n points against the frame's budget without filing them (the
-  // points of an item drawn in the tile pass); false, nothing counted, when
-  // they do not fit. reserve_undo takes them back.
-  bool reserve(uint32_t n) {
-    if (n > config_.max_points - count_) return false;
-    count_ += n;
-    return true;
+  // Files item `item` in `tile`'s list as its filing `slot` (0..3: each
+  // tile of the item's once).
+  void file_item(uint32_t item, int slot, uint32_t tile) {
+    const uint32_t link = item * item_stride_ + config_.item_words + static_cast<uint32_t>(slot);
+    items_[link] = tile_items_[tile];
+    tile_items_[tile] = link;
   }
-  void reserve_undo(uint32_t n) { count_ -= n; }
-  // Whether `n` more points surely fit the frame's budget and pool, however
-  // they straddle tiles (each takes at most 4 entries).
-  bool room_for(uint32_t n) const {
-    return n <= config_.max_points - count_ &&
-           uint64_t{free_chunk_} + 4 + (uint64_t{4} * n >> kChunkLog2) + 2 * static_cast<uint64_t>(tiles_x_ * tiles_y_) <= chunk_count_;
+  // Files item `item` in tile `tile` and, where `wide` and `tall` say, the
+  // tiles to its right and below; took_items takes such items, written and
+  // filed where room_for said there is room, `n` of them, with `points`.
+  void file_item_in_tiles(uint32_t item, uint32_t tile, bool wide, bool tall) {
+    int slot = 0;
+    file_item(item, slot++, tile);
+    if (wide) file_item(item, slot++, tile + 1);
+    if (tall) file_item(item, slot++, tile + static_cast<uint32_t>(tiles_x_));
+    if (wide && tall) file_item(item, slot, tile + static_cast<uint32_t>(tiles_x_) + 1);
   }
-  // Filings add_node can still make this frame.
-  uint32_t links_free() const { return config_.max_links - node_count_; }
+  void took_items(uint32_t n, uint32_t points) {
+    item_count_ += n;
+    count_ += points;
+    grow_items(n * item_bytes_, points);
+  }
+  // Whether `items` more items (written before they are taken) and `points`
+  // more points, each filed as items or binned however they straddle tiles
+  // (at most 4 entries each), surely fit the budget and the pool.
+  bool room_for(uint32_t items, uint32_t points) const {
+    const uint64_t end = item_end_ + uint64_t{items} * item_bytes_;
+    return points <= config_.max_points - count_ && (items == 0 || end <= item_allow_) &&
+           (end + chunk_bytes_ - 1) / chunk_bytes_ + 4 + (uint64_t{4} * points >> kChunkLog2) +
+                   2 * static_cast<uint64_t>(tiles_x_ * tiles_y_) <= free_chunk_;
+  }
   static constexpr uint32_t kNoLink = 0xFFFFFFFFu;
   // A tile's filed items: first link, then next_link(link) until kNoLink.
-  uint32_t first_link(uint32_t tile) const { return tile_nodes_[tile]; }
-  uint32_t next_link(uint32_t link) const { return node_next_[link]; }
-  uint32_t item_of(uint32_t link) const { return node_item_[link]; }
+  // A link is the word, in item_base(), that holds the next: item_of(link)
+  // is link / (item_words + kItemLinks).
+  uint32_t first_link(uint32_t tile) const { return tile_items_[tile]; }
+  uint32_t next_link(uint32_t link) const { return items_[link]; }
+  uint32_t item_of(uint32_t link) const { return link / item_stride_; }
+  // Where the items lie (item i at words() + i * stride words), and the
+  // most a frame can hold.
+  const uint32_t* item_base() const { return items_; }
+  uint32_t item_capacity() const { return item_capacity_; }
 
   // Called once per tile during draw, after its binned points, with the
   // tile's depth+colour words (2^tile_log2 a row; uint32_t for RGB565,
@@ -229,7 +253,7 @@ class PointRaster {
   void push(uint32_t tile, uint32_t depth, uint32_t rgb, uint32_t wh, uint32_t offset) {
     const uint32_t fill = tile_fill_[tile];
     if ((fill & ((1u << kChunkLog2) - 1)) == 0) {  // the tile's chunk is full (or it has none)
-      const uint32_t c = free_chunk_++;
+      const uint32_t c = --free_chunk_;
       if (fill == 0) tile_head_[tile] = c;
       else chunk_next_[tile_tail_[tile]] = c;
       tile_tail_[tile] = c;
@@ -242,22 +266,37 @@ class PointRaster {
     tile_fill_[tile] = fill + 1;
   }
   void split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t depth, uint32_t rgb);
+  // Items of `bytes` and `points` more: the items' end, the chunks they
+  // reach into and the bytes they may reach.
+  void grow_items(uint32_t bytes, uint32_t points) {
+    item_end_ += bytes;
+    while (floor_ * chunk_bytes_ < item_end_) ++floor_;
+    item_points_ += points;
+    item_allow_ = dedicated_bytes_ + ((item_points_ + item_points_ / 4) >> kChunkLog2) * chunk_bytes_;
+  }
   template <class Word>
   void draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage, TileFn tile_fn,
                   void* context) const;
 
   RasterConfig config_{};
   int tiles_x_ = 0, tiles_y_ = 0;
-  void* entries_ = nullptr;        // chunk_count_ chunks of 64 Entry565 or Entry888
+  // The pool: chunk_count_ chunks of 64 Entry565 or Entry888, taken from
+  // the top (free_chunk_: the lowest in use), the items from the bottom
+  // (floor_: the chunks they reach into).
+  void* entries_ = nullptr;
+  uint32_t* items_ = nullptr;      // the pool as words: item i at i * item_stride_
   uint32_t* chunk_next_ = nullptr; // per chunk
   uint32_t* tile_head_ = nullptr;  // per tile: first and last chunk, entries
   uint32_t* tile_tail_ = nullptr;
   uint32_t* tile_fill_ = nullptr;
   void* tile_words_ = nullptr;     // one tile of depth+colour words
-  uint32_t* tile_nodes_ = nullptr; // per tile: its last filed item's link
-  uint32_t* node_item_ = nullptr;  // per link: the item, the tile's previous link
-  uint32_t* node_next_ = nullptr;
-  uint32_t count_ = 0, free_chunk_ = 0, chunk_count_ = 0, node_count_ = 0;
+  uint32_t* tile_items_ = nullptr; // per tile: its last filed item's link
+  uint32_t count_ = 0, free_chunk_ = 0, chunk_count_ = 0, floor_ = 0;
+  // The pool is at most 2 GiB, and the points at most 2^26: every byte
+  // count below, and item_points_ * 5/4, fits 32 bits.
+  uint32_t item_count_ = 0, item_points_ = 0, item_end_ = 0, item_allow_ = 0;
+  uint32_t item_stride_ = 0, item_capacity_ = 0, item_bytes_ = 0, chunk_bytes_ = 0;
+  uint32_t dedicated_bytes_ = 0;  // max_nodes items' chunks
 };
 
 }  // namespace stipple

@@ -19,10 +19,18 @@ constexpr int32_t kMaxSigmaN = 4 << 12;       // theta table covers theta <= 4 r
 constexpr int32_t kMaxSigmaP = 1 << 25;       // MU: two box extents
 constexpr int kMeanTermBits = 11;             // the node lanes' mean tables: position fields up to 11 bits
 constexpr uint32_t kLaneBatches = 64;         // node lanes: batches of 8 set up in one call
+// The fewest points a node drawn in the tile pass has. Where the node lanes
+// set nodes up (x86-64 builds) every count: they draw no node through the
+// bins, and their tile loop files small nodes' points into shared lanes.
+// Elsewhere a tile node costs ~400 instructions beyond its points (its row,
+// its links, the scalar loop's set-up in each tile: ARMv5), the bins ~130
+// more a point than the tile pass, so nodes of 1-3 points are binned
+// (docs/fixed_point.md, "ARMv5"). The picture is the same either way.
+constexpr uint32_t kTileMinPoints = avx2::kBuilt ? 1 : 4;
 
 struct Layout {
   size_t raster, internal_frame, coverage, screen_coverage, resolve, g_position, g_normal, g_color, shading, reciprocal,
-      lanes, grey, angles, tile_nodes, tile_list, mean_terms, ppn, total;
+      lanes, grey, angles, tile_list, mean_terms, ppn, total;
 };
 
 // The raster's configuration: the screen, times the supersampling, in
@@ -35,7 +43,7 @@ RasterConfig internal_raster(const RendererConfig& c) {
     r.format = PixelFormat::kRgb888;
   }
   r.max_nodes = c.tile_nodes;
-  r.max_links = c.tile_nodes + c.tile_nodes / 2;  // most tile nodes lie in one tile, some in 2 or 4
+  r.item_words = c.tile_nodes ? kTileFields : 0;
   return r;
 }
 
@@ -59,12 +67,11 @@ Layout layout_of(const RendererConfig& c) {
   l.lanes = take(point_lane_bytes(c.samples));
   l.grey = take(align8(2 * kIntensityEntries) + 2 * 4 * kGreyShades);
   l.angles = take(frame_angles_bytes(c.max_angle_bits));
-  l.tile_nodes = take(TileNodes::bytes(c.tile_nodes));
-  l.tile_list = take(4 * size_t{c.tile_nodes});
-  // The node lanes' per-frame tables (x86-64 builds, lanes kBest): each
-  // mean field value's camera-space terms, and the points-per-node table
-  // with room for the lanes' 32-bit reads.
+  // The node lanes' tables (x86-64 builds, lanes kBest): one tile's list
+  // of nodes, each mean field value's camera-space terms, and the
+  // points-per-node table with room for the lanes' 32-bit reads.
   const bool node_lanes = avx2::kBuilt && c.lanes == PointLanes::kBest && c.tile_nodes > 0;
+  l.tile_list = take(node_lanes ? 4 * size_t{point_raster_items(r)} : 0);
   l.mean_terms = take(node_lanes ? sizeof(int32_t) * 3 * 3 * (size_t{1} << kMeanTermBits) : 0);
   l.ppn = take(node_lanes ? sizeof(PpnTable) + 4 : 0);
   l.total = arena.total();
@@ -170,8 +177,9 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   shading_ = reinterpret_cast<ShadingTables*>(base + l.shading);
   reciprocal_ = reinterpret_cast<uint16_t*>(base + l.reciprocal);
   angles_.init(base + l.angles, config.max_angle_bits);
-  tile_nodes_.init(base + l.tile_nodes, config.tile_nodes);
-  tile_list_ = reinterpret_cast<uint32_t*>(base + l.tile_list);
+  static_assert(kTileLinks == PointRaster::kItemLinks, "a tile node's row is the raster's item and its links");
+  tile_nodes_.init(raster_.item_words(0), raster_.item_capacity());
+  tile_list_ = l.tile_list != l.mean_terms ? reinterpret_cast<uint32_t*>(base + l.tile_list) : nullptr;
   mean_terms_ = l.mean_terms != l.ppn ? reinterpret_cast<int32_t*>(base + l.mean_terms) : nullptr;
   lane_ppn_ = l.ppn != l.total ? reinterpret_cast<uint16_t*>(base + l.ppn) : nullptr;
   lanes_ = config.lanes == PointLanes::kScalar ? PointLanes::kScalar
@@ -376,25 +384,25 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
                               ? ((abs32(s.dz[0]) + abs32(s.dz[1]) + abs32(s.dz[2])) * kGaussianClip) >> s.dshift
                               : -1;
     s.int32_terms = reach >= 0 && s.depth0 - reach - 1 >= 0 && s.depth0 + reach <= 0xFFFFFFFE;
-    if (s.int32_terms && tile_node_count_ < config_.tile_nodes) {
+    if (s.int32_terms && s.count >= kTileMinPoints && raster_.item_room(s.count)) {
       const Span spx = pixel_span(proj.x0_q4, sx, s.size), spy = pixel_span(proj.y0_q4, sy, s.size);
       const int sh_t = internal_.tile_log2;
       const int32_t tx0 = (spx.lo < 0 ? 0 : spx.lo) >> sh_t, ty0 = (spy.lo < 0 ? 0 : spy.lo) >> sh_t;
       const int32_t tx1 = (spx.hi >= internal_.width ? internal_.width - 1 : spx.hi) >> sh_t;
       const int32_t ty1 = (spy.hi >= internal_.height ? internal_.height - 1 : spy.hi) >> sh_t;
-      const uint32_t tiles = static_cast<uint32_t>((tx1 - tx0 + 1) * (ty1 - ty0 + 1));
-      if (spx.hi >= 0 && spy.hi >= 0 &&
-          spx.lo < internal_.width && spy.lo < internal_.height && tx1 - tx0 <= 1 && ty1 - ty0 <= 1 &&
-          raster_.links_free() >= tiles && raster_.reserve(s.count)) {
+      if (spx.hi >= 0 && spy.hi >= 0 && spx.lo < internal_.width && spy.lo < internal_.height && tx1 - tx0 <= 1 &&
+          ty1 - ty0 <= 1) {
+        const uint32_t item = raster_.items();
+        raster_.take_item(s.count);
         const int32_t span[4] = {spx.lo, spx.hi, spy.lo, spy.hi};
-        tile_nodes_.store_terms(tile_node_count_, proj.mx, proj.my, s.dz, proj.x0_q4 - (s.size - 1) * 8,
+        tile_nodes_.store_terms(item, proj.mx, proj.my, s.dz, proj.x0_q4 - (s.size - 1) * 8,
                                 proj.y0_q4 - (s.size - 1) * 8, static_cast<uint32_t>(s.depth0), span, s.count,
                                 static_cast<uint32_t>(s.dshift));
-        tile_nodes_.store_shade(tile_node_count_, sh);
+        tile_nodes_.store_shade(item, sh);
+        int slot = 0;
         for (int32_t ty = ty0; ty <= ty1; ++ty)
           for (int32_t tx = tx0; tx <= tx1; ++tx)
-            raster_.add_node(static_cast<uint32_t>(ty * raster_.tiles_x() + tx), tile_node_count_);
-        ++tile_node_count_;
+            raster_.file_item(item, slot++, static_cast<uint32_t>(ty * raster_.tiles_x() + tx));
         ++stats.nodes_in_tiles;
         stats.points += s.count;
         return;
@@ -411,14 +419,14 @@ void PointRenderer::draw_tile_nodes(uint32_t tile, int px0, int py0, Word* words
     if (lanes_ == PointLanes::kBest) {
       uint32_t n = 0;
       for (uint32_t link = raster_.first_link(tile); link != PointRaster::kNoLink; link = raster_.next_link(link))
-        tile_list_[n++] = raster_.item_of(link);
+        tile_list_[n++] = link / kTileStride;
       avx2::draw_tile<kNormals, kColorPoints, kSpecular>(tile_nodes_, tile_list_, n, t, config_.point_size, words,
                                                          internal_.tile_log2, px0, py0);
       return;
     }
   }
   for (uint32_t link = raster_.first_link(tile); link != PointRaster::kNoLink; link = raster_.next_link(link)) {
-    const TileRow n(tile_nodes_.row(raster_.item_of(link)));
+    const TileRow n(tile_nodes_.row(link / kTileStride));  // (PointRaster::item_of, the stride known here)
     if (lanes_ == PointLanes::kScalar)
       draw_tile_node_scalar<kNormals, kColorPoints, kSpecular>(n, t, config_.point_size, words, internal_.tile_log2, px0, py0);
     else
@@ -635,7 +643,6 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   const uint32_t count = cache.count();
   stats.nodes = count;
   raster_.begin_frame();
-  tile_node_count_ = 0;
   // The point cap: a node draws at most point_cap times the original points
   // under it (times the supersampling's n^2, so it means the same on screen).
   const uint32_t cap_scale = uint32_t{config_.point_cap} * static_cast<uint32_t>(n * n);
@@ -673,31 +680,33 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
       NodeLaneBatch batches[kLaneBatches];
       while (first < count) {
         // As many batches as the tile pass and the budget surely hold (each
-        // node of them a TileNode and 4 links, or its scalar set-up's, and
-        // every point filed), so that no node is refused for room.
+        // node of them a TileNode, or its scalar set-up's, and every point
+        // filed; the lanes write 8 rows a batch past the last taken), so
+        // that no node is refused for room.
         uint32_t run = (count - first + 7) / 8;
         if (run > kLaneBatches) run = kLaneBatches;
-        while (run > 0 && (tile_node_count_ + 16 * run + 8 > config_.tile_nodes || raster_.links_free() < 32 * run ||
-                           !raster_.room_for(8 * run * config_.samples)))
-          run /= 2;
+        while (run > 0 && !raster_.room_for(8 * run + 8, 8 * run * config_.samples)) run /= 2;
         if (run == 0) break;
         const uint32_t slots = count - first < 8 * run ? count - first : 8 * run;
-        uint32_t index = tile_node_count_;
-        tile_node_count_ += lane_fn(lf, first, slots, tile_nodes_, tile_node_count_, batches);
+        const uint32_t base = raster_.items();
+        uint32_t item = base, points = 0;
+        lane_fn(lf, first, slots, tile_nodes_, base, batches);
         for (uint32_t b = 0; b < run; ++b) {
           const NodeLaneBatch& r = batches[b];
           for (uint32_t m = r.tile_mask; m != 0; m &= m - 1) {
             const int k = __builtin_ctz(m);
             const uint32_t code = r.tiles[k];
-            raster_.add_node_in_tiles(((code >> 12) & 0xFFFu) * tiles_x + (code & 0xFFFu), code >> 24 & 1u,
-                                      code >> 25 & 1u, index++, r.count[k]);
-            stats.points += r.count[k];
+            raster_.file_item_in_tiles(item++, ((code >> 12) & 0xFFFu) * tiles_x + (code & 0xFFFu), code >> 24 & 1u,
+                                       code >> 25 & 1u);
+            points += r.count[k];
           }
           stats.nodes_in_lanes += r.tile_count + r.culled_count;
           stats.nodes_drawn += r.tile_count;
           stats.nodes_in_tiles += r.tile_count;
           stats.nodes_culled += r.culled_count;
         }
+        raster_.took_items(item - base, points);
+        stats.points += points;
         for (uint32_t b = 0; b < run; ++b) {
           const uint32_t lanes = slots - 8 * b < 8 ? slots - 8 * b : 8;
           const uint32_t scalar = ~(batches[b].tile_mask | batches[b].culled_mask) & ((1u << lanes) - 1u);

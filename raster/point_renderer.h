@@ -84,9 +84,11 @@ struct RendererConfig {
   // whose points fall within two tiles a side keeps its per-point constants
   // here (a TileNode) and generates its points straight into each hot tile
   // it touches, instead of filing each point in the bins and reading it
-  // back (docs/fixed_point.md, "Speed"). Each takes 132 bytes of the arena
-  // (its TileNode and tile links); nodes beyond go through the bins; 0:
-  // every point through the bins. A Client holds no more than it caches
+  // back (docs/fixed_point.md, "Speed"). The arena holds rows for this many
+  // (136 bytes each: its TileNode and tile links) and lends more from the
+  // bins' pool, each what the bins would have taken for its points
+  // (PointRaster::take_item); nodes beyond go through the bins; 0: every
+  // point through the bins. A Client holds no more than it caches
   // (ClientConfig::node_capacity).
   uint32_t tile_nodes = 1u << 16;
   uint8_t max_angle_bits = 10;             // widest angle field drawn (sizes the per-frame Euler tables)
@@ -163,12 +165,11 @@ class PointRenderer {
   PointTables tables_;
   const uint32_t* grey_shades_ = nullptr;  // the grey shortcut's tables (PointTables::grey_shade), null when the grey is not one
   FrameAngles angles_;
-  TileNodes tile_nodes_;            // config_.tile_nodes of them
+  TileNodes tile_nodes_;            // the raster's items
   uint32_t* tile_list_ = nullptr;   // one tile's nodes (the AVX2 loop's input)
   PointLanes lanes_ = PointLanes::kScalar;  // what config_.lanes resolved to on this CPU
   int32_t* mean_terms_ = nullptr;   // the node lanes' (node_lanes.h): [axis][q][3]
   uint16_t* lane_ppn_ = nullptr;    // the points-per-node table, padded for 32-bit reads
-  uint32_t tile_node_count_ = 0;    // this frame's
 };
 
 }  // namespace stipple

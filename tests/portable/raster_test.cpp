@@ -111,6 +111,79 @@ TEST(Raster, ArenaAndConfigChecks) {
   EXPECT_EQ(r.init(c, arena.data(), need), RasterStatus::kBadConfig);
 }
 
+// Items (the renderer's tile-pass nodes) share the bins' pool: max_nodes
+// of them always fit, more as their points spare the bins, never so many
+// that a point of the budget loses the bins' room, and neither overwrites
+// the other; each is handed to the tile function in every tile it is filed in.
+TEST(Raster, ItemsShareThePoolWithTheBins) {
+  RasterConfig c{128, 128, 6, PixelFormat::kRgb565, 6400};  // 2 x 2 tiles of 64 px
+  c.max_nodes = 10;
+  c.item_words = 30;  // 136 bytes with the links
+  Frame fr(c);
+  PointRaster& r = fr.raster;
+  // 6,400 points: 8,000 entries, 125 chunks of 512 bytes, and 4 + 4 more;
+  // 10 items' 1,360 bytes round up to 3 chunks, 1,536 bytes: 11 items of
+  // 136 bytes. An item of 1 point spares the bins too little to lend more.
+  EXPECT_EQ(point_raster_items(c), 136u * 512 / 136);
+  uint32_t n = 0;
+  for (; r.item_room(1); ++n) r.take_item(1);
+  EXPECT_EQ(n, 11u);
+  // Items of 64 points spare the bins 80 entries each, more than their
+  // 136 bytes: every one fits until the budget is full.
+  r.begin_frame();
+  for (n = 0; r.item_room(64); ++n) r.take_item(64);
+  EXPECT_EQ(n, 100u);
+  EXPECT_EQ(r.points(), 6400u);
+  EXPECT_FALSE(r.add(pt(10, 10, 1, 0xFFFFFF), 1));  // the budget is full
+
+  // 40 items of 40 points, each filed in the tile (k % 4) — the first in
+  // all four — then the rest of the budget binned, one pixel a point: every
+  // point fits, and each item's words are as written.
+  r.begin_frame();
+  for (uint32_t k = 0; k < 40; ++k) {
+    ASSERT_TRUE(r.item_room(40)) << k;
+    r.take_item(40);
+    for (uint32_t w = 0; w < c.item_words; ++w) r.item_words(k)[w] = k * 1000 + w;
+    if (k == 0)
+      for (int t = 0; t < 4; ++t) r.file_item(k, t, static_cast<uint32_t>(t));
+    else
+      r.file_item(k, 0, k % 4);
+  }
+  std::mt19937 rng(7);
+  for (uint32_t i = 0; i < 4800; ++i) {
+    const double x = static_cast<double>(rng() % 128) + 0.5, y = static_cast<double>(rng() % 128) + 0.5;
+    ASSERT_TRUE(r.add(pt(x, y, 1000 + i, 0x00FF00), 1)) << i;
+  }
+  EXPECT_EQ(r.points(), 6400u);
+  for (uint32_t k = 0; k < 40; ++k)
+    for (uint32_t w = 0; w < c.item_words; ++w) ASSERT_EQ(r.item_words(k)[w], k * 1000 + w) << k << " " << w;
+  struct Seen {
+    const PointRaster* raster;
+    std::vector<uint32_t> items[4];
+  } seen{&r, {}};
+  r.draw(0, fr.pixels.data(), 128 * 2, nullptr, [](void* context, uint32_t tile, int, int, void*) {
+    Seen& s = *static_cast<Seen*>(context);
+    for (uint32_t l = s.raster->first_link(tile); l != PointRaster::kNoLink; l = s.raster->next_link(l))
+      s.items[tile].push_back(s.raster->item_of(l));
+  }, &seen);
+  for (uint32_t t = 0; t < 4; ++t) {
+    std::vector<uint32_t> want;
+    for (uint32_t k = 40; k-- > 0;)  // the last filed first
+      if (k == 0 || k % 4 == t) want.push_back(k);
+    EXPECT_EQ(seen.items[t], want) << "tile " << t;
+  }
+  EXPECT_EQ(r.items(), 40u);  // 4 times the 10 items owned: lent by the bins
+
+  // No items configured: none taken, none held.
+  c.max_nodes = 0;
+  Frame bare(c);
+  EXPECT_FALSE(bare.raster.item_room(1));
+  EXPECT_EQ(point_raster_items(c), 0u);
+  c.max_nodes = 10;
+  c.item_words = 0;  // items of no words
+  EXPECT_EQ(point_raster_bytes(c), 0u);
+}
+
 // Naive reference: every pixel takes the minimum packed word of the points
 // covering it, with the same covering rule and no tiles.
 std::vector<uint8_t> naive(const RasterConfig& c, const std::vector<std::pair<ScreenPoint, int>>& pts, uint32_t clear) {
