@@ -269,13 +269,11 @@ inline int32_t mul_hi(uint32_t a, uint32_t b) {
 #endif
 }
 
-// The intensity table's index (intensity_index) of L.n for the sampled
-// normal at angles (al, be): |al|, |be| <= 2^14 and |(t1, t2)| <= 2^14
-// (+ rounding) give |al t1 + be t2| <= 2^28.6 and a Q12 term below 23,200
-// (it fits 16 bits); cos l0 + sinc term < 2^28.6, the Q26 L.n. Its Q14
-// value is that >> 12, and intensity_index's (l + 16448) >> 7 of it is
-// (L.n_Q26 + 16448 * 2^12) >> 19 exactly (floors of divisions by powers of
-// two compose), one shift instead of two (the sum stays below 2^29).
+// The intensity table's index of L.n for the sampled normal at angles
+// (al, be): |al|, |be| <= 2^14 and |(t1, t2)| <= 2^14 (+ rounding) give
+// |al t1 + be t2| <= 2^28.6 and a Q12 term below 23,200 (it fits 16 bits);
+// cos l0 + sinc term < 2^28.6, the Q26 L.n, indexed by intensity_index_q26
+// (the sum with its offset stays below 2^29).
 // `t12` is the (t1, t2) pair; every operand fits 16 bits, so on 32-bit ARM
 // with the DSP multiplies (pair_dot, below) it is four of them, the table's
 // entry one 32-bit load.
@@ -289,8 +287,7 @@ inline int lit_index(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t12,
   const int32_t along = (al * static_cast<int16_t>(t12) + be * (static_cast<int32_t>(t12) >> 16)) >> 14;
   const int32_t l_q26 = cs.cos * n0_q12 + cs.sinc * along;
 #endif
-  const int32_t i = (l_q26 + ((16384 + 64) << 12)) >> 19;
-  return i < 0 ? 0 : i > kIntensityEntries - 1 ? kIntensityEntries - 1 : i;
+  return intensity_index_q26(l_q26);
 }
 
 // A node's terms as int16 pairs in 32-bit words (low half first), the way

@@ -68,10 +68,13 @@ inline RsqrtScale rsqrt_scale(const ShadingTables& t, uint64_t s2) {
   return RsqrtScale{t.rsqrt[m - 256], 5 + k};  // 2^14 / 2^19 / 2^k
 }
 
-// Table index of l in Q14 ([-16384, 16384]).
-inline int intensity_index(int32_t l_q14) {
-  const int32_t i = (l_q14 + 16384 + 64) >> 7;
-  return i < 0 ? 0 : i > kIntensityEntries - 1 ? kIntensityEntries - 1 : i;
-}
+// Table index of l in Q14 ([-16384, 16384]): (l + 16448) >> 7, clamped.
+inline int intensity_entry(int32_t i) { return i < 0 ? 0 : i > kIntensityEntries - 1 ? kIntensityEntries - 1 : i; }
+inline int intensity_index(int32_t l_q14) { return intensity_entry((l_q14 + 16384 + 64) >> 7); }
+// The same of l in Q26, whose Q14 value is l_q26 >> 12: floors of
+// power-of-two divisions compose, so (l_q26 + 16448 * 2^12) >> 19 is
+// intensity_index(l_q26 >> 12) exactly, one shift instead of two (the
+// caller keeps the sum below 2^31).
+inline int intensity_index_q26(int32_t l_q26) { return intensity_entry((l_q26 + ((16384 + 64) << 12)) >> 19); }
 
 }  // namespace stipple
