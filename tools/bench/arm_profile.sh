@@ -30,20 +30,12 @@ done
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 # Runs of each instruction (its guest address) in a run of $1 frames,
-# options after it, and where the program was loaded (base). A block is
-# known by its host code's address; one translated again (after a flush)
-# first hands its runs to its instructions.
+# options after it, and where the program was loaded (base).
 histogram() {
   local frames=$1
   shift
   "$qemu" -L "$prefix" -d page,in_asm,exec,nochain -D /dev/stderr "$program" "$model" --frames "$frames" "$@" \
-    -o "$work/frame$frames.ppm" 2>&1 >/dev/null | awk '
-      function hand(b,   k, a, i) { k = split(code[b], a, " "); for (i = 1; i <= k; i++) n[a[i]] += runs[b]; runs[b] = 0 }
-      /^start_code/ { print "base", $2; next }
-      /^IN:/ { block = 1; list = ""; next }
-      block && /^0x[0-9a-f]+: / { list = list " " substr($1, 1, length($1) - 1); next }
-      /^Trace/ { if (block) { if ($3 in code) hand($3); code[$3] = list; block = 0 } runs[$3]++ }
-      END { for (b in code) hand(b); for (pc in n) print pc, n[pc] }' >"$work/pc$frames"
+    -o "$work/frame$frames.ppm" 2>&1 >/dev/null | awk -f "$(dirname "${BASH_SOURCE[0]}")/qemu_block_log.awk" >"$work/pc$frames"
 }
 histogram 1 "$@" &
 histogram 2 "$@" &

@@ -41,11 +41,7 @@ qemu_count() {
   local frames=$1
   shift
   "$qemu" -L "${QEMU_LD_PREFIX:-/usr/arm-linux-gnueabi}" -d in_asm,exec,nochain -D /dev/stderr \
-    "$stipple" "$model" "$@" --frames "$frames" -o "$work/frame$frames.ppm" 2>&1 >/dev/null | awk '
-      /^IN:/ { block = 1; n = 0; next }
-      block && /^0x[0-9a-f]+: / { n++; next }
-      /^Trace/ { if (block) { size[$3] = n; block = 0 } total += size[$3] }
-      END { printf "%d\n", total }'
+    "$stipple" "$model" "$@" --frames "$frames" -o "$work/frame$frames.ppm" 2>&1 >/dev/null | awk -v total=1 -f "$(dirname "${BASH_SOURCE[0]}")/qemu_block_log.awk"
 }
 for cut in ${FIT_CUTS:-2 3}; do
   for quality in 0.5 1 2; do
