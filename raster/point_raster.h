@@ -198,14 +198,12 @@ class PointRaster {
   }
   static constexpr uint32_t kNoLink = 0xFFFFFFFFu;
   // A tile's filed items: first link, then next_link(link) until kNoLink.
-  // A link is the word, in item_base(), that holds the next: item_of(link)
-  // is link / (item_words + kItemLinks).
+  // A link is the index of the word, counted from item_words(0), that
+  // holds the next: item_of(link) is link / (item_words + kItemLinks).
   uint32_t first_link(uint32_t tile) const { return tile_items_[tile]; }
   uint32_t next_link(uint32_t link) const { return items_[link]; }
   uint32_t item_of(uint32_t link) const { return link / item_stride_; }
-  // Where the items lie (item i at words() + i * stride words), and the
-  // most a frame can hold.
-  const uint32_t* item_base() const { return items_; }
+  // The most items a frame can hold (point_raster_items).
   uint32_t item_capacity() const { return item_capacity_; }
 
   // Called once per tile during draw, after its binned points, with the
