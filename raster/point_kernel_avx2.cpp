@@ -59,15 +59,22 @@ inline __m256i add_offsets(__m256i x, __m256i y, int tile_log2) {
   return _mm256_add_epi32(_mm256_sll_epi32(y, _mm_cvtsi32_si128(tile_log2)), x);
 }
 
-// A point's square of kSize x kSize inside the tile: ztest_square unrolled.
+// A point's square of kSize x kSize inside the tile: ztest_square unrolled,
+// and without a branch — each pixel gets the lesser of its word and the
+// point's back (a compare and a conditional move). Which wins is close to
+// a coin toss where a node's points overlap, and the branch it replaces
+// mispredicted often enough to cost a third of the frame's time with 1 px
+// points (docs/fixed_point.md, "Wall clock").
 template <int kSize, class Word>
 [[gnu::always_inline]] inline void ztest_fixed(Word* at, int tile_log2, Word w) {
   const int tile = 1 << tile_log2;
 #pragma GCC unroll 3
   for (int y = 0; y < kSize; ++y, at += tile)
 #pragma GCC unroll 3
-    for (int x = 0; x < kSize; ++x)
-      if (w < at[x]) at[x] = w;
+    for (int x = 0; x < kSize; ++x) {
+      const Word v = at[x];
+      at[x] = w < v ? w : v;
+    }
 }
 
 // Eight points: lane k is sample lane_j[k] of the node whose row starts
