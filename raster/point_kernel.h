@@ -447,18 +447,21 @@ inline bool angles_in_range(const PackedShade& s) {
 }
 
 // A chunk's points that land in the tile, as draw_tile_node_scalar's first
-// pass leaves them: the sample; where, in the tile — for a node inside it
-// the first pixel's word, else (x, y) as an int16 pair, to be clipped —;
-// the depth.
+// pass leaves them: the sample; where, in the tile; the depth. A point whose
+// square lies wholly in the tile is kept from the front, as its first
+// pixel's word; one across the tile's edge (only a node across it has
+// such points) from the back, as (x, y), an int16 pair, to be clipped.
 struct ScalarChunk {
   uint16_t sample[kScalarChunk];
   uint32_t at[kScalarChunk], depth[kScalarChunk];
+  uint32_t whole = 0;             // [0, whole): wholly in the tile
+  uint32_t edge = kScalarChunk;  // [edge, kScalarChunk): across its edge
 };
 
-// The first pass over samples [first, end): returns how many landed.
+// The first pass over samples [first, end).
 template <bool kInside>
-[[gnu::always_inline]] inline uint32_t place_points(const TileRow& n, const PointTables& t, int size, int tile_log2,
-                                                    int px0, int py0, uint32_t first, uint32_t end, ScalarChunk& out) {
+[[gnu::always_inline]] inline void place_points(const TileRow& n, const PointTables& t, int size, int tile_log2, int px0,
+                                                int py0, uint32_t first, uint32_t end, ScalarChunk& out) {
   const int tile = 1 << tile_log2;
   // (x0 + (m . g >> 16)) >> 4 is (x0 2^16 + m . g) >> 20 (floors of
   // power-of-two divisions compose): the mean's corner, relative to the
@@ -469,45 +472,67 @@ template <bool kInside>
   const uint32_t my01 = n[TileField::kMy01], my2 = n[TileField::kMy2];
   const uint32_t dz01 = n[TileField::kDz01], dz2 = n[TileField::kDz2];
   const uint32_t depth0 = n.depth0(), dshift = n.dshift();
-  uint32_t kept = 0;
+  // The last first pixel of a square wholly in the tile, either axis.
+  const uint32_t last = static_cast<uint32_t>(tile - size);
+  uint32_t whole = 0, edge = kScalarChunk;
   for (uint32_t j = first; j < end; ++j) {
     const uint32_t g01 = t.g01[j], g2 = t.g2[j];
     const int32_t x = pair_dot_acc(x0, g01, g2, mx01, mx2) >> 20;
     const int32_t y = pair_dot_acc(y0, g01, g2, my01, my2) >> 20;
-    // A node across a tile's edge is drawn in each tile it touches: a
-    // point whose square lies wholly in another tile is that tile's to
-    // shade (on the bunny at 240 x 320, a quarter of the points met here).
+    uint32_t k;
     if constexpr (kInside) {
 #if STIPPLE_CHECK_RANGES
       if (x < 0 || y < 0 || x + size > tile || y + size > tile) __builtin_trap();  // outside the span it was filed by
 #endif
-      out.at[kept] = static_cast<uint32_t>((y << tile_log2) + x);
+      k = whole++;
+      out.at[k] = static_cast<uint32_t>((y << tile_log2) + x);
     } else {
-      if (x <= -size || y <= -size || x >= tile || y >= tile) continue;
-      out.at[kept] = int16_pair(x, y);
+      // A node across a tile's edge is drawn in each tile it touches: a
+      // point whose square lies wholly in another tile is that tile's to
+      // shade (on the bunny at 240 x 320, a quarter of the points met here);
+      // most of the rest lie wholly in this one and need no clipping.
+      if (static_cast<uint32_t>(x) <= last && static_cast<uint32_t>(y) <= last) {
+        k = whole++;
+        out.at[k] = static_cast<uint32_t>((y << tile_log2) + x);
+      } else {
+        if (x <= -size || y <= -size || x >= tile || y >= tile) continue;
+        k = --edge;
+        out.at[k] = int16_pair(x, y);
+      }
     }
-    out.sample[kept] = static_cast<uint16_t>(j);
-    out.depth[kept] = depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift);
-    ++kept;
+    out.sample[k] = static_cast<uint16_t>(j);
+    out.depth[k] = depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift);
   }
-  return kept;
+  out.whole = whole;
+  out.edge = edge;
 }
 
-// The second pass: the colour and the z-test of the `kept` points placed.
-template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, bool kClampAngles, class Word>
+// The second pass: the colour and the z-test of the chunk's points [begin,
+// end), wholly in the tile (kWhole) or across its edge.
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kWhole, bool kClampAngles, class Word>
 [[gnu::always_inline]] inline void shade_points(const PackedShade& shade, const PointTables& t, int size, Word* words,
-                                                int tile_log2, const ScalarChunk& in, uint32_t kept) {
+                                                int tile_log2, const ScalarChunk& in, uint32_t begin, uint32_t end) {
   const uint32_t wh = static_cast<uint32_t>(size | size << 4);
-  for (uint32_t k = 0; k < kept; ++k) {
+  for (uint32_t k = begin; k < end; ++k) {
     const uint32_t j = in.sample[k];
     const uint32_t color =
         point_color<kNormals, kColorPoints, kSpecular, sizeof(Word) == 4, kClampAngles>(shade, t, j, t.g01[j], t.g2[j]);
     const Word w = pack_word<Word>(in.depth[k], color);
-    if constexpr (kInside)
+    if constexpr (kWhole)
       ztest_square(words + in.at[k], 1 << tile_log2, wh, w);
     else
       ztest_point(words, tile_log2, size, wh, false, pair_lo(in.at[k]), pair_hi(in.at[k]), w);
   }
+}
+
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, bool kClampAngles, class Word>
+[[gnu::always_inline]] inline void shade_chunk(const PackedShade& shade, const PointTables& t, int size, Word* words,
+                                               int tile_log2, const ScalarChunk& chunk) {
+  shade_points<kNormals, kColorPoints, kSpecular, true, kClampAngles>(shade, t, size, words, tile_log2, chunk, 0,
+                                                                       chunk.whole);
+  if constexpr (!kInside)
+    shade_points<kNormals, kColorPoints, kSpecular, false, kClampAngles>(shade, t, size, words, tile_log2, chunk,
+                                                                          chunk.edge, kScalarChunk);
 }
 
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, class Word>
@@ -518,11 +543,11 @@ void draw_tile_node_chunks(const TileRow& n, const PointTables& t, int size, Wor
   ScalarChunk chunk;
   for (uint32_t first = 0; first < count; first += kScalarChunk) {
     const uint32_t end = count - first < kScalarChunk ? count : first + kScalarChunk;
-    const uint32_t kept = place_points<kInside>(n, t, size, tile_log2, px0, py0, first, end, chunk);
+    place_points<kInside>(n, t, size, tile_log2, px0, py0, first, end, chunk);
     if (clamp)
-      shade_points<kNormals, kColorPoints, kSpecular, kInside, true>(shade, t, size, words, tile_log2, chunk, kept);
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, true>(shade, t, size, words, tile_log2, chunk);
     else
-      shade_points<kNormals, kColorPoints, kSpecular, kInside, false>(shade, t, size, words, tile_log2, chunk, kept);
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false>(shade, t, size, words, tile_log2, chunk);
   }
 }
 
