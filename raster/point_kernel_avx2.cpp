@@ -191,6 +191,11 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, b
   const uint32_t touching = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(touches)));
   const uint32_t wh = static_cast<uint32_t>(kSize | kSize << 4);
   const uint32_t lanes = (1u << active) - 1u;
+  if ((inside & lanes) == 0xFFu) {  // nearly always: eight squares, no lanes to pick
+#pragma GCC unroll 8
+    for (int k = 0; k < 8; ++k) ztest_fixed<kSize>(words + offs[k], tile_log2, ws[k]);
+    return;
+  }
   for (uint32_t m = inside & lanes; m != 0; m &= m - 1) {
     const int k = __builtin_ctz(m);
     ztest_fixed<kSize>(words + offs[k], tile_log2, ws[k]);
