@@ -208,17 +208,18 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, b
 
 }  // namespace
 
-// A node's samples 8 at a time in lanes of their own; returns how many.
+// All of a node's samples (at least 8), 8 at a time in lanes of their
+// own. The last run ends at the last sample, so it may draw again some of
+// the run before it: a point drawn twice leaves the same words, the z-test
+// keeping the lesser (depth, colour) word.
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, class Word>
-[[gnu::noinline]] uint32_t draw_runs(const TileNodes& nodes, uint32_t node, uint32_t count, const PointTables& t,
-                                     Word* words, int tile_log2, int px0, int py0) {
+[[gnu::noinline]] void draw_runs(const TileNodes& nodes, uint32_t node, uint32_t count, const PointTables& t,
+                                 Word* words, int tile_log2, int px0, int py0) {
   alignas(32) int32_t run_row[8] = {static_cast<int32_t>(node * kTileStride)}, run_j[8] = {};
-  uint32_t j = 0;
-  for (; j + 8 <= count; j += 8) {
-    run_j[0] = static_cast<int32_t>(j);
+  for (uint32_t j = 0; j < count; j += 8) {
+    run_j[0] = static_cast<int32_t>(j + 8 <= count ? j : count - 8);
     draw_lanes<kNormals, kColorPoints, kSpecular, kSize, true>(nodes, run_row, run_j, 8, t, words, tile_log2, px0, py0);
   }
-  return j;
 }
 
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, class Word>
@@ -232,15 +233,13 @@ void draw_tile_sized(const TileNodes& nodes, const uint32_t* list, uint32_t n, c
   for (uint32_t i = 0; i < n; ++i) {
     const uint32_t node = list[i];
     const int32_t row = static_cast<int32_t>(node * kTileStride);
-    uint32_t count = nodes.row(node)[static_cast<int>(TileField::kCountShift)] & 0xFFFFu;
-    uint32_t first = 0;
+    const uint32_t count = nodes.row(node)[static_cast<int>(TileField::kCountShift)] & 0xFFFFu;
     if (count >= 8) {
-      // A node's samples 8 at a time in lanes of their own, the rest
-      // (fewer than 8) filed with other nodes'.
-      first = draw_runs<kNormals, kColorPoints, kSpecular, kSize>(nodes, node, count, t, words, tile_log2, px0, py0);
-      count -= first;
-      if (count == 0) continue;
-    } else if (count <= 8 - k) {  // the node's run fits the lanes left (most small nodes)
+      draw_runs<kNormals, kColorPoints, kSpecular, kSize>(nodes, node, count, t, words, tile_log2, px0, py0);
+      continue;
+    }
+    // A node of fewer than 8 samples is filed with other nodes'.
+    if (count <= 8 - k) {  // the node's run fits the lanes left (most small nodes)
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_row + k), _mm256_set1_epi32(row));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_j + k), iota);
       k += count;
@@ -253,7 +252,7 @@ void draw_tile_sized(const TileNodes& nodes, const uint32_t* list, uint32_t n, c
     for (uint32_t j = 0; j < count;) {
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_row + k), _mm256_set1_epi32(row));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_j + k),
-                          _mm256_add_epi32(_mm256_set1_epi32(static_cast<int32_t>(first + j)), iota));
+                          _mm256_add_epi32(_mm256_set1_epi32(static_cast<int32_t>(j)), iota));
       const uint32_t take = count - j < 8 - k ? count - j : 8 - k;
       k += take;
       j += take;
