@@ -44,11 +44,20 @@ inline constexpr int kRsqrtEntries = 768;
 struct ShadingTables {
   CosSincQ14 cos_sinc[kCosSincEntries];
   uint16_t rsqrt[kRsqrtEntries];
-  uint16_t diffuse[kIntensityEntries];   // Q8
+  uint16_t diffuse[kIntensityEntries];   // Q8: diffuse_q8(ambient_q8, entry)
   uint16_t specular[kIntensityEntries];  // 8-bit levels added to each channel
   int32_t light_q14[3];                  // normalized, camera space
   int32_t half_q14[3];                   // normalized (light + view), camera space
+  int32_t ambient_q8;                    // Lighting's, at most 256
 };
+
+// The diffuse table's entry i, l = (i - 128) / 128, for an ambient term
+// `ambient_q8` (at most 256): ambient + (1 - ambient) max(0, l) in Q8,
+// from lit_q7 = max(0, i - 128). The AVX2 lanes compute it rather than
+// gather it (raster/point_kernel_avx2.cpp).
+constexpr int32_t diffuse_q8(int32_t ambient_q8, int32_t lit_q7) {
+  return ambient_q8 + (((256 - ambient_q8) * lit_q7 + 64) >> 7);
+}
 
 // Fills the tables. Returns false for a zero light vector or a shininess outside 1..64.
 [[nodiscard]] bool build_shading_tables(const Lighting& lighting, ShadingTables* out);

@@ -351,6 +351,7 @@ TEST(Client, LanesDrawTheScalarPicture) {
     bool decoded = false;
     uint16_t quality_q8 = 64;
     int32_t near_leaf_mu = 0;  // > 0: the camera this close to the last node's mean (nodes nearer than 2^16 MU)
+    uint16_t ambient_q8 = 64;  // the AVX2 lanes compute the diffuse table's entries (diffuse_q8)
   };
   const Case cases[] = {
       {"tests/golden/bunny_v1.spg", PixelFormat::kRgb888, 2, ShadingMode::kPerPoint, 1, false, 3, 30, 20},
@@ -365,6 +366,12 @@ TEST(Client, LanesDrawTheScalarPicture) {
       {"tests/data/sphere600_normals.spg", PixelFormat::kRgb565, 2, ShadingMode::kPerPoint, 2, false, 4, 10, 70},
       {"tests/golden/bunny_v1.spg", PixelFormat::kRgb888, 2, ShadingMode::kSurface, 1, false, 0, 30, 10, 1u << 16,
        1u << 21, false, 256, 1 << 14},
+      {"tests/golden/bunny_v1.spg", PixelFormat::kRgb888, 1, ShadingMode::kPerPoint, 1, false, 2, 250, 35, 1u << 16,
+       1u << 21, false, 256, 0, 0},
+      {"tests/golden/bunny_v1.spg", PixelFormat::kRgb565, 2, ShadingMode::kSurface, 1, false, 3, 70, -20, 1u << 16,
+       1u << 21, false, 64, 0, 256},
+      {"tests/golden/bunny_v1.spg", PixelFormat::kRgb888, 2, ShadingMode::kPerPoint, 1, false, 3, 160, 5, 1u << 16,
+       1u << 21, false, 64, 0, 203},
   };
   uint32_t in_lanes = 0;
   int mixed = 0;
@@ -383,6 +390,7 @@ TEST(Client, LanesDrawTheScalarPicture) {
     c.tile_nodes = k.tile_nodes;
     c.cache_decoded = k.decoded;
     c.quality_q8 = k.quality_q8;
+    c.lighting.ambient_q8 = k.ambient_q8;
     LaneFrames out;
     draw_in_each_lanes(file, spg, spg.records, c, [&](const Client& client) {
       OrbitView o = test::orbit(client.decoder().extent_mu(), k.yaw, k.pitch, k.distance > 0 ? k.distance : 1);
