@@ -170,9 +170,13 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, b
       intensity = _mm256_and_si256(li, _mm256_set1_epi32(0xFFFF));
       specular = _mm256_srli_epi32(li, 16);
     }
-    rgb = _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(shade_channel(ch[0], intensity, specular), 16),
-                                          _mm256_slli_epi32(shade_channel(ch[1], intensity, specular), 8)),
-                          shade_channel(ch[2], intensity, specular));
+    if (!kColorPoints && t.grey_shade != nullptr) {  // a grey model's three channels are one
+      rgb = _mm256_mullo_epi32(shade_channel(ch[2], intensity, specular), _mm256_set1_epi32(0x010101));
+    } else {
+      rgb = _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(shade_channel(ch[0], intensity, specular), 16),
+                                            _mm256_slli_epi32(shade_channel(ch[1], intensity, specular), 8)),
+                            shade_channel(ch[2], intensity, specular));
+    }
   }
   alignas(32) int32_t xs[8], ys[8];
   alignas(32) Word ws[8];
