@@ -224,19 +224,35 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, b
 
 }  // namespace
 
-// All of a node's samples (at least 8), 8 at a time in lanes of their
-// own. The last run ends at the last sample, so it may draw again some of
-// the run before it: a point drawn twice leaves the same words, the z-test
-// keeping the lesser (depth, colour) word.
+// All of a node's samples, 8 at a time in lanes of their own — fewer than
+// 8 in one run with the rest of its lanes idle. The last run of a node of
+// 8 or more ends at its last sample, so it may draw again some of the run
+// before it: a point drawn twice leaves the same words, the z-test keeping
+// the lesser (depth, colour) word.
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, class Word>
 [[gnu::noinline]] void draw_runs(const TileNodes& nodes, uint32_t node, uint32_t count, const PointTables& t,
                                  Word* words, int tile_log2, int px0, int py0) {
   alignas(32) int32_t run_row[8] = {static_cast<int32_t>(node * kTileStride)}, run_j[8] = {};
+  if (count < 8) {
+    draw_lanes<kNormals, kColorPoints, kSpecular, kSize, true>(nodes, run_row, run_j, count, t, words, tile_log2, px0, py0);
+    return;
+  }
   for (uint32_t j = 0; j < count; j += 8) {
     run_j[0] = static_cast<int32_t>(j + 8 <= count ? j : count - 8);
     draw_lanes<kNormals, kColorPoints, kSpecular, kSize, true>(nodes, run_row, run_j, 8, t, words, tile_log2, px0, py0);
   }
 }
+
+// The fewest samples a node draws in runs of its own rather than filed
+// with other nodes' (whose fields are gathered lane by lane). Runs with
+// idle lanes cost instructions and save gathers; measured on the dragon
+// at 640x480 (one core, median of 7; callgrind), a threshold of 4 rather
+// than 8 takes 1 px points from 4.89 to 4.61 ms a frame for 29.05 ->
+// 30.80 M instructions, and 2 px points from 3.66 to 3.57 ms for 18.30 ->
+// 18.67 M — past the 18.6 M that issue 15 holds the 2 px frame to, so
+// only 1 px points, four times as many a node, take the lower threshold.
+template <int kSize>
+inline constexpr uint32_t kRunMin = kSize == 1 ? 4 : 8;
 
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, class Word>
 void draw_tile_sized(const TileNodes& nodes, const uint32_t* list, uint32_t n, const PointTables& t, Word* words,
@@ -250,11 +266,11 @@ void draw_tile_sized(const TileNodes& nodes, const uint32_t* list, uint32_t n, c
     const uint32_t node = list[i];
     const int32_t row = static_cast<int32_t>(node * kTileStride);
     const uint32_t count = nodes.row(node)[static_cast<int>(TileField::kCountShift)] & 0xFFFFu;
-    if (count >= 8) {
+    if (count >= kRunMin<kSize>) {
       draw_runs<kNormals, kColorPoints, kSpecular, kSize>(nodes, node, count, t, words, tile_log2, px0, py0);
       continue;
     }
-    // A node of fewer than 8 samples is filed with other nodes'.
+    // A smaller node is filed with other nodes'.
     if (count <= 8 - k) {  // the node's run fits the lanes left (most small nodes)
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_row + k), _mm256_set1_epi32(row));
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(lane_j + k), iota);
