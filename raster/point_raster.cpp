@@ -131,8 +131,8 @@ RasterStatus PointRaster::init(const RasterConfig& config, void* arena, size_t b
   chunk_bytes_ = static_cast<uint32_t>(entry_bytes(config.format) * kChunk);
   item_bytes_ = static_cast<uint32_t>(item_bytes(config));
   item_stride_ = config.item_words + kItemLinks;
-  dedicated_bytes_ = l.dedicated * chunk_bytes_;
-  item_capacity_ = point_raster_items(config);
+  dedicated_bytes_ = l.dedicated * chunk_bytes_;  // 0 without items
+  item_capacity_ = config.max_nodes ? static_cast<uint32_t>(uint64_t{l.chunks} * chunk_bytes_ / item_bytes_) : 0;  // point_raster_items
   begin_frame();
   return RasterStatus::kOk;
 }
@@ -144,7 +144,7 @@ void PointRaster::begin_frame() {
   item_count_ = 0;
   item_points_ = 0;
   item_end_ = 0;
-  item_allow_ = config_.max_nodes ? dedicated_bytes_ : 0;
+  item_allow_ = dedicated_bytes_;
   for (int t = 0; t < tiles_x_ * tiles_y_; ++t) tile_fill_[t] = 0;
   if (tile_items_)
     for (int t = 0; t < tiles_x_ * tiles_y_; ++t) tile_items_[t] = kNoLink;

@@ -125,6 +125,7 @@ TEST(Raster, ItemsShareThePoolWithTheBins) {
   // 10 items' 1,360 bytes round up to 3 chunks, 1,536 bytes: 11 items of
   // 136 bytes. An item of 1 point spares the bins too little to lend more.
   EXPECT_EQ(point_raster_items(c), 136u * 512 / 136);
+  EXPECT_EQ(r.item_capacity(), point_raster_items(c));
   uint32_t n = 0;
   for (; r.item_room(1); ++n) r.take_item(1);
   EXPECT_EQ(n, 11u);
