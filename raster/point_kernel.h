@@ -525,6 +525,8 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kWhole,
   }
 }
 
+// A chunk's second pass: the points wholly in the tile unclipped, then (a
+// node across its edge) the rest clipped.
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, bool kClampAngles, class Word>
 [[gnu::always_inline]] inline void shade_chunk(const PackedShade& shade, const PointTables& t, int size, Word* words,
                                                int tile_log2, const ScalarChunk& chunk) {

@@ -71,8 +71,8 @@ inline __m256i add_offsets(__m256i x, __m256i y, int tile_log2) {
 }
 
 // A point's square of kSize x kSize inside the tile: ztest_square unrolled,
-// and without a branch — each pixel gets the lesser of its word and the
-// point's back (a compare and a conditional move). Which wins is close to
+// and without a branch — each pixel is written back with the lesser of its
+// word and the point's (a compare and a conditional move). Which wins is close to
 // a coin toss where a node's points overlap, and the branch it replaces
 // mispredicted often enough to cost a third of the frame's time with 1 px
 // points (docs/fixed_point.md, "Wall clock").
@@ -170,7 +170,9 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, b
       intensity = _mm256_and_si256(li, _mm256_set1_epi32(0xFFFF));
       specular = _mm256_srli_epi32(li, 16);
     }
-    if (!kColorPoints && t.grey_shade != nullptr) {  // a grey model's three channels are one
+    // The grey shortcut's frames (no model colour, a grey base): every
+    // point's three channels are equal, so one is shaded.
+    if (!kColorPoints && t.grey_shade != nullptr) {
       rgb = _mm256_mullo_epi32(shade_channel(ch[2], intensity, specular), _mm256_set1_epi32(0x010101));
     } else {
       rgb = _mm256_or_si256(_mm256_or_si256(_mm256_slli_epi32(shade_channel(ch[0], intensity, specular), 16),
