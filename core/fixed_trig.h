@@ -30,6 +30,15 @@ inline constexpr int32_t kQ14One = 1 << 14;
 inline int32_t mul_q14(int32_t a_q14, int32_t b) {
   return narrow<int32_t>((static_cast<int64_t>(a_q14) * b + (1 << 13)) >> 14);
 }
+// The same for |a| <= 2^14 and |b| < 2^30 in 32-bit products: with b = h
+// 2^14 + l (h = b >> 14, 0 <= l < 2^14), a b + 2^13 = a h 2^14 + (a l +
+// 2^13), and the floor of a division by 2^14 takes a h out whole. |a h| <=
+// 2^30 and |a l + 2^13| < 2^28.1: int32 throughout — two multiplies on
+// ARMv5, not an SMULL, its carries and a 64-bit shift (the client's
+// per-node set-up; tests/portable/fixed_test.cpp holds the two equal).
+inline int32_t mul_q14_int32(int32_t a_q14, int32_t b) {
+  return a_q14 * (b >> 14) + ((a_q14 * (b & 0x3FFF) + (1 << 13)) >> 14);
+}
 inline constexpr int kMaxAngleBits = 16;  // the widest field the format allows; tables are 2^bits entries
 
 struct SinCosQ14 {

@@ -42,15 +42,6 @@ struct LightPhi {
 // Bytes of a frame's tables for angle fields up to `max_angle_bits` wide.
 size_t frame_angles_bytes(int max_angle_bits);
 
-// (q v + 2^13) >> 14 — v scaled by a Q14 factor q, rounded — for |q| <=
-// 2^14 and |v| < 2^30, in 32-bit products: with v = h 2^14 + l (h = v >>
-// 14, 0 <= l < 2^14), q v + 2^13 = q h 2^14 + (q l + 2^13), and the floor
-// of a division by 2^14 takes q h out whole. |q h| <= 2^30, 0 <= q l + 2^13
-// < 2^28.1 for q >= 0 (> -2^28 below): int32 throughout — two multiplies
-// on ARMv5, not an SMULL, its carries and a 64-bit shift. The same value
-// as the int64 formula (tests/portable/render_parts_test.cpp).
-inline int32_t scale_q14(int32_t q, int32_t v) { return q * (v >> 14) + ((q * (v & 0x3FFF) + (1 << 13)) >> 14); }
-
 // One frame's tables, in storage of frame_angles_bytes(max_angle_bits).
 class FrameAngles {
  public:

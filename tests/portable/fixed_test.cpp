@@ -8,6 +8,7 @@
 #include <cstring>
 #include <limits>
 #include <numbers>
+#include <random>
 
 #include "core/fixed_trig.h"
 
@@ -65,6 +66,22 @@ TEST(FixedTrig, AngleTablesCheckTheirBounds) {
   EXPECT_FALSE(build_angle_table(AngleKind::kPhi, 0, table, 256));
   EXPECT_FALSE(build_angle_table(AngleKind::kPhi, kMaxAngleBits + 1, table, 256));
   EXPECT_EQ(table[64].sin, kQ14One);  // phi = pi/2
+}
+
+// The set-up's Q14 scaling in 32-bit products is mul_q14's int64 formula,
+// at the ends of its range and between.
+TEST(FixedTrig, MulQ14Int32IsMulQ14) {
+  const int32_t as[] = {-16384, -16383, -8193, -1, 0, 1, 8191, 16383, 16384};
+  const int32_t bs[] = {-(1 << 30) + 1, -(1 << 29) - (1 << 24), -16385, -16384, -16383, -8192, -1, 0, 1, 8191, 8192,
+                        16383, 16384, 16385, 1 << 25, (1 << 29) + (1 << 24), (1 << 30) - 1};
+  for (int32_t a : as)
+    for (int32_t b : bs) EXPECT_EQ(mul_q14_int32(a, b), mul_q14(a, b)) << a << " x " << b;
+  std::mt19937 rng(14);
+  std::uniform_int_distribution<int32_t> a_of(-16384, 16384), b_of(-(1 << 30) + 1, (1 << 30) - 1);
+  for (int i = 0; i < 200000; ++i) {
+    const int32_t a = a_of(rng), b = b_of(rng) >> (i % 20);
+    ASSERT_EQ(mul_q14_int32(a, b), mul_q14(a, b)) << a << " x " << b;
+  }
 }
 
 uint32_t bits_of(float f) {

@@ -5,12 +5,10 @@
 
 #include <cmath>
 #include <numbers>
-#include <random>
 #include <vector>
 
 #include "core/camera.h"
 #include "core/cut.h"
-#include "raster/node_setup.h"
 #include "raster/points_per_node.h"
 #include "raster/shading.h"
 #include "tests/portable/test_files.h"
@@ -169,23 +167,6 @@ TEST(Cut, ProjectedSizeCutIsACutAndRespectsTheThreshold) {
       camera_space(cam, node.mean, c);
       EXPECT_LE(int64_t{node_radius_mu(node)} * cam.focal_q4, int64_t{q4} * c[2]);
     }
-  }
-}
-
-// The set-up's Q14 scaling in 32-bit products equals the int64 formula it
-// replaced, at the ends of its range and between.
-TEST(NodeSetup, ScaleQ14IsTheInt64Rounding) {
-  const auto wide = [](int32_t q, int32_t v) { return static_cast<int32_t>((int64_t{q} * v + (1 << 13)) >> 14); };
-  const int32_t qs[] = {-16384, -16383, -8193, -1, 0, 1, 8191, 16383, 16384};
-  const int32_t vs[] = {-(1 << 30) + 1, -(1 << 29) - (1 << 24), -16385, -16384, -16383, -8192, -1, 0, 1, 8191, 8192,
-                        16383, 16384, 16385, 1 << 25, (1 << 29) + (1 << 24), (1 << 30) - 1};
-  for (int32_t q : qs)
-    for (int32_t v : vs) EXPECT_EQ(scale_q14(q, v), wide(q, v)) << q << " x " << v;
-  std::mt19937 rng(14);
-  std::uniform_int_distribution<int32_t> q_of(-16384, 16384), v_of(-(1 << 30) + 1, (1 << 30) - 1);
-  for (int i = 0; i < 200000; ++i) {
-    const int32_t q = q_of(rng), v = v_of(rng) >> (i % 20);
-    ASSERT_EQ(scale_q14(q, v), wide(q, v)) << q << " x " << v;
   }
 }
 
