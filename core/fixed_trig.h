@@ -41,7 +41,9 @@ inline int32_t mul_q14_int32(int32_t a_q14, int32_t b) {
 }
 inline constexpr int kMaxAngleBits = 16;  // the widest field the format allows; tables are 2^bits entries
 
-struct SinCosQ14 {
+// 4-aligned: a copy is one word (on ARMv5, without unaligned loads, GCC
+// copied a 2-aligned one by calling memcpy — twice a node in the set-up).
+struct alignas(4) SinCosQ14 {
   int16_t sin = 0, cos = 0;
 };
 

@@ -59,12 +59,7 @@ class FrameAngles {
   // The first two axes of the normal frame in camera space (Q14).
   void normal_tangents(const EulerTables& e, const NodeFields& f, int16_t axis[2][3]) const {
     const uint32_t q_phi = f[Field::kFnPhi];
-    int16_t all[3][3];
-    turn(e.theta[f[Field::kFnTheta]], e.gamma[e.gamma_index(q_phi, f[Field::kFnPsi])], normal_[q_phi], column2_, all);
-    for (int c = 0; c < 3; ++c) {
-      axis[0][c] = all[0][c];
-      axis[1][c] = all[1][c];
-    }
+    turn<2>(e.theta[f[Field::kFnTheta]], e.gamma[e.gamma_index(q_phi, f[Field::kFnPsi])], normal_[q_phi], column2_, axis);
   }
   // The three axes of a frame in model space (Q14): no camera, so no table
   // (the colour frame's, which the camera does not turn).
@@ -92,13 +87,15 @@ class FrameAngles {
   static int32_t rot_q14(int32_t a, int32_t b, int32_t c, int32_t d) { return (a * b + c * d + (1 << 13)) >> 14; }
   // T Ry(theta) Rz(gamma): with u = cos(theta) t0 - sin(theta) t2,
   //   axis 0 = cos(gamma) u + sin(gamma) t1,  axis 1 = cos(gamma) t1 - sin(gamma) u,
-  //   axis 2 = sin(theta) t0 + cos(theta) t2.
-  static void turn(SinCosQ14 th, SinCosQ14 ga, const CameraPhi& tp, const int16_t t2[3], int16_t axis[3][3]) {
+  //   axis 2 = sin(theta) t0 + cos(theta) t2
+  // — the first kAxes of them.
+  template <int kAxes = 3>
+  static void turn(SinCosQ14 th, SinCosQ14 ga, const CameraPhi& tp, const int16_t t2[3], int16_t axis[][3]) {
     for (int c = 0; c < 3; ++c) {
       const int32_t u = rot_q14(th.cos, tp.t0[c], -th.sin, t2[c]);
       axis[0][c] = static_cast<int16_t>(rot_q14(ga.cos, u, ga.sin, tp.t1[c]));
       axis[1][c] = static_cast<int16_t>(rot_q14(ga.cos, tp.t1[c], -ga.sin, u));
-      axis[2][c] = static_cast<int16_t>(rot_q14(th.sin, tp.t0[c], th.cos, t2[c]));
+      if constexpr (kAxes == 3) axis[2][c] = static_cast<int16_t>(rot_q14(th.sin, tp.t0[c], th.cos, t2[c]));
     }
   }
 
