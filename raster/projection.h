@@ -45,12 +45,15 @@ struct ScreenSample {
   int64_t z;  // MU
 };
 
+// Its fields are setup's to write and are read only after setup returned
+// true: no default values, which every node's set-up would clear first (on
+// ARMv5 a call to memset a node).
 struct NodeProjection {
-  int64_t X = 0, Y = 0, Z = 0;  // mean, camera space, MU
-  int32_t A[3][3] = {};          // A[k]: axis k in camera space, MU per sigma
-  int32_t x0_q4 = 0, y0_q4 = 0;  // the mean on screen
-  int32_t mx[3] = {}, my[3] = {};  // 1/256 px per sigma
-  int32_t focal_q4 = 0, cx_q4 = 0, cy_q4 = 0;
+  int64_t X, Y, Z;                // mean, camera space, MU
+  int32_t A[3][3];                // A[k]: axis k in camera space, MU per sigma
+  int32_t x0_q4, y0_q4;           // the mean on screen
+  int32_t mx[3], my[3];           // 1/256 px per sigma
+  int32_t focal_q4, cx_q4, cy_q4;
 
   // False when the node is not drawn: its mean behind the near plane or
   // outside a ~165 degree cone, or its projection too large.
