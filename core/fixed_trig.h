@@ -39,6 +39,16 @@ inline int32_t mul_q14(int32_t a_q14, int32_t b) {
 inline int32_t mul_q14_int32(int32_t a_q14, int32_t b) {
   return a_q14 * (b >> 14) + ((a_q14 * (b & 0x3FFF) + (1 << 13)) >> 14);
 }
+// mul_q14 for those ranges, the cheaper way on the target: 64-bit targets
+// multiply 64 bits in one instruction (the split costs x86-64's scalar
+// set-up ~54 instructions a node more), 32-bit ones take mul_q14_int32.
+inline int32_t mul_q14_fast(int32_t a_q14, int32_t b) {
+#if UINTPTR_MAX > 0xFFFFFFFFu
+  return static_cast<int32_t>((int64_t{a_q14} * b + (1 << 13)) >> 14);
+#else
+  return mul_q14_int32(a_q14, b);
+#endif
+}
 inline constexpr int kMaxAngleBits = 16;  // the widest field the format allows; tables are 2^bits entries
 
 // 4-aligned: a copy is one word (on ARMv5, without unaligned loads, GCC

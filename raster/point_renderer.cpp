@@ -104,13 +104,13 @@ inline Span pixel_span(int32_t p0_q4, int32_t sum_abs_m, int size) {
 inline int32_t abs32(int32_t v) { return v < 0 ? -v : v; }
 
 // One mean axis's camera-space terms: R's column `axis` (Q14) times d =
-// mean_a - eye_a (|d| <= 2^29 + 2^24), each rounded from Q14 (mul_q14_int32:
-// 32-bit products). A node's camera-space mean is their sum over the three
-// axes (every partial sum within int32); draw_node forms them per node, the
-// node lanes read them from a per-frame table over the field's values —
-// the same terms either way.
+// mean_a - eye_a (|d| <= 2^29 + 2^24), each rounded from Q14 (mul_q14_fast:
+// 32-bit products on 32-bit targets). A node's camera-space mean is their
+// sum over the three axes (every partial sum within int32); draw_node forms
+// them per node, the node lanes read them from a per-frame table over the
+// field's values — the same terms either way.
 inline void mean_axis_terms(const Camera& camera, int axis, int32_t d, int32_t out[3]) {
-  for (int i = 0; i < 3; ++i) out[i] = mul_q14_int32(camera.rotation[i][axis], d);
+  for (int i = 0; i < 3; ++i) out[i] = mul_q14_fast(camera.rotation[i][axis], d);
 }
 
 inline int bit_length(uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); }
@@ -257,7 +257,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   int32_t axes[3][3], sk[3];
   for (int k = 0; k < 3; ++k) {
     sk[k] = sigma[k] < kMaxSigmaP ? sigma[k] : kMaxSigmaP;
-    for (int i = 0; i < 3; ++i) axes[k][i] = mul_q14_int32(frame[k][i], sk[k]);
+    for (int i = 0; i < 3; ++i) axes[k][i] = mul_q14_fast(frame[k][i], sk[k]);
   }
   PointSetup s;
   NodeProjection& proj = s.proj;
