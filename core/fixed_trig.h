@@ -44,7 +44,7 @@ inline int32_t mul_q14_int32(int32_t a_q14, int32_t b) {
 // set-up ~54 instructions a node more), 32-bit ones take mul_q14_int32.
 inline int32_t mul_q14_fast(int32_t a_q14, int32_t b) {
 #if UINTPTR_MAX > 0xFFFFFFFFu
-  return static_cast<int32_t>((int64_t{a_q14} * b + (1 << 13)) >> 14);
+  return mul_q14(a_q14, b);
 #else
   return mul_q14_int32(a_q14, b);
 #endif

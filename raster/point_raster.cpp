@@ -64,6 +64,12 @@ Layout layout_of(const RasterConfig& c, size_t entry_size) {
   return l;
 }
 
+// The items the whole pool would hold (none without max_nodes): what
+// point_raster_items reports and PointRaster::init keeps.
+uint32_t items_in(const RasterConfig& c, const Layout& l, size_t entry_size) {
+  return c.max_nodes ? static_cast<uint32_t>(uint64_t{l.chunks} * entry_size * kChunk / item_bytes(c)) : 0;
+}
+
 void store(uint8_t* p, uint32_t word) {  // RGB565, little-endian
   p[0] = static_cast<uint8_t>(word);
   p[1] = static_cast<uint8_t>(word >> 8);
@@ -104,9 +110,9 @@ size_t point_raster_bytes(const RasterConfig& config) {
 }
 
 uint32_t point_raster_items(const RasterConfig& config) {
-  if (!valid(config) || config.max_nodes == 0) return 0;
+  if (!valid(config)) return 0;
   const size_t entry = PointRaster::entry_bytes(config.format);
-  return static_cast<uint32_t>(uint64_t{layout_of(config, entry).chunks} * entry * kChunk / item_bytes(config));
+  return items_in(config, layout_of(config, entry), entry);
 }
 
 RasterStatus PointRaster::init(const RasterConfig& config, void* arena, size_t bytes) {
@@ -132,7 +138,7 @@ RasterStatus PointRaster::init(const RasterConfig& config, void* arena, size_t b
   item_bytes_ = static_cast<uint32_t>(item_bytes(config));
   item_stride_ = config.item_words + kItemLinks;
   dedicated_bytes_ = l.dedicated * chunk_bytes_;  // 0 without items
-  item_capacity_ = config.max_nodes ? static_cast<uint32_t>(uint64_t{l.chunks} * chunk_bytes_ / item_bytes_) : 0;  // point_raster_items
+  item_capacity_ = items_in(config, l, entry_bytes(config.format));
   begin_frame();
   return RasterStatus::kOk;
 }
