@@ -382,8 +382,12 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565
         al = clamp_angle_q12(al);
         be = clamp_angle_q12(be);
       }
+      // |al|, |be| <= 2^14 (clamped, or angles_in_range): cell < kCosSincCells.
       const uint32_t cell = static_cast<uint32_t>(al * al + be * be) >> kCosSincShift;
-      const CosSincQ14& cs = t.shading->cos_sinc[cell < kCosSincEntries ? cell : kCosSincEntries - 1];
+#if STIPPLE_CHECK_RANGES
+      if (cell >= static_cast<uint32_t>(kCosSincCells)) __builtin_trap();
+#endif
+      const CosSincQ14& cs = t.shading->cos_sinc[cell];
       const int il = lit_index(cs, al, be, s.lt, s.l0);
       const uint32_t specular = kSpecular ? t.shading->specular[lit_index(cs, al, be, s.ht, s.h0)] : 0;
       if constexpr (!kColorPoints) {

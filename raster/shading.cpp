@@ -40,6 +40,7 @@ bool build_shading_tables(const Lighting& lighting, ShadingTables* out) {
     out->cos_sinc[i].cos = static_cast<int16_t>(sc.cos);
     out->cos_sinc[i].sinc = static_cast<int16_t>((int64_t{sc.sin} << 24) / theta_q24);
   }
+  for (int i = kCosSincEntries; i < kCosSincCells; ++i) out->cos_sinc[i] = out->cos_sinc[kCosSincEntries - 1];
 
   // Reciprocal square roots: round(2^19 / sqrt(m)) = round(sqrt(2^38 / m)),
   // the square root of the rounded-down quotient, corrected to the nearest.

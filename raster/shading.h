@@ -29,6 +29,11 @@ struct Lighting {
 
 inline constexpr int kCosSincEntries = 2048;  // theta^2 in [0, 16), steps of 2^-7
 inline constexpr int kCosSincShift = 17;      // theta^2 in Q24 -> index
+// The cells an angle pair reaches: each angle within 4 rad (Q12: |.| <=
+// 2^14, clamp_angle_q12's bound), so theta^2 <= 2^29 in Q24, cell <= 4096.
+// Cells past kCosSincEntries repeat its last entry — the table ends at
+// theta^2 = 16 — so the scalar loops index it without a clamp.
+inline constexpr int kCosSincCells = ((2 << 28) >> kCosSincShift) + 1;
 inline constexpr int kIntensityEntries = 257; // l in [-1, 1], steps of 2^-7
 
 // 4-aligned: the scalar loops on 32-bit ARM load an entry as one word.
@@ -42,7 +47,7 @@ struct alignas(4) CosSincQ14 {
 inline constexpr int kRsqrtEntries = 768;
 
 struct ShadingTables {
-  CosSincQ14 cos_sinc[kCosSincEntries];
+  CosSincQ14 cos_sinc[kCosSincCells];  // [kCosSincEntries, kCosSincCells): the last entry again
   uint16_t rsqrt[kRsqrtEntries];
   uint16_t diffuse[kIntensityEntries];   // Q8: diffuse_q8(ambient_q8, entry)
   uint16_t specular[kIntensityEntries];  // 8-bit levels added to each channel
