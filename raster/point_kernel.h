@@ -348,10 +348,16 @@ struct PackedShade {
   }
 };
 
+// Whether a grey model's points take the grey shortcut's tables
+// (PointTables::grey_shade): asked a point at a time, or known for a node's
+// loop (the tile pass decides once a node).
+enum class GreyTables { kAsk, kYes, kNo };
+
 // The colour of sample j (the formula's last three lines) from the node's
 // packed terms and the sample's position pairs, as 0xRRGGBB — or, for
 // kRgb565, as RGB565: what the scalar loops run.
-template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565 = false, bool kClampAngles = true>
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565 = false, bool kClampAngles = true,
+          GreyTables kGrey = GreyTables::kAsk>
 [[gnu::always_inline]] inline uint32_t point_color(const PackedShade& s, const PointTables& t, uint32_t j, uint32_t g01,
                                                    uint32_t g2) {
   const auto encode = [](uint32_t rgb) { return kRgb565 ? uint32_t{rgb565(rgb)} : rgb; };
@@ -391,7 +397,8 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565
       const int il = lit_index(cs, al, be, s.lt, s.l0);
       const uint32_t specular = kSpecular ? t.shading->specular[lit_index(cs, al, be, s.ht, s.h0)] : 0;
       if constexpr (!kColorPoints) {
-        if (t.grey_shade != nullptr) return (kRgb565 ? t.grey_shade565 : t.grey_shade)[t.grey_diffuse[il] + specular];
+        if (kGrey == GreyTables::kYes || (kGrey == GreyTables::kAsk && t.grey_shade != nullptr))
+          return (kRgb565 ? t.grey_shade565 : t.grey_shade)[t.grey_diffuse[il] + specular];
       }
       return encode(shade(r, g, b, t.shading->diffuse[il], specular));
     }
@@ -451,19 +458,22 @@ inline bool angles_in_range(const PackedShade& s) {
 }
 
 // A chunk's points that land in the tile, as draw_tile_node_scalar's first
-// pass leaves them: the sample; where, in the tile; the depth. A point whose
+// pass leaves them: the sample (of a node inside the tile, `first` plus
+// the point's place: not stored); where, in the tile; the depth (its upper
+// half alone, shifted down, for 32-bit words: the part they keep). A point whose
 // square lies wholly in the tile is kept from the front, as its first
 // pixel's word; one across the tile's edge (only a node across it has
 // such points) from the back, as (x, y), an int16 pair, to be clipped.
 struct ScalarChunk {
+  uint32_t first = 0;
   uint16_t sample[kScalarChunk];
   uint32_t at[kScalarChunk], depth[kScalarChunk];
   uint32_t whole = 0;             // [0, whole): wholly in the tile
   uint32_t edge = kScalarChunk;  // [edge, kScalarChunk): across its edge
 };
 
-// The first pass over samples [first, end).
-template <bool kInside>
+// The first pass over samples [first, end); the depths shifted down by kDepthShift.
+template <bool kInside, int kDepthShift>
 [[gnu::always_inline]] inline void place_points(const TileRow& n, const PointTables& t, int size, int tile_log2, int px0,
                                                 int py0, uint32_t first, uint32_t end, ScalarChunk& out) {
   const int tile = 1 << tile_log2;
@@ -504,24 +514,32 @@ template <bool kInside>
         out.at[k] = int16_pair(x, y);
       }
     }
-    out.sample[k] = static_cast<uint16_t>(j);
-    out.depth[k] = depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift);
+    if constexpr (!kInside) out.sample[k] = static_cast<uint16_t>(j);  // else first + k
+    out.depth[k] = (depth0 + static_cast<uint32_t>(pair_dot(g01, g2, dz01, dz2) >> dshift)) >> kDepthShift;
   }
+  out.first = first;
   out.whole = whole;
   out.edge = edge;
 }
 
 // The second pass: the colour and the z-test of the chunk's points [begin,
-// end), wholly in the tile (kWhole) or across its edge.
-template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kWhole, bool kClampAngles, class Word>
+// end), wholly in the tile (kWhole) or across its edge, their samples in
+// order (kInOrder: a node inside the tile) or listed; squares of kSize px
+// where the caller knows it (0: `size`).
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kWhole, bool kInOrder, bool kClampAngles,
+          GreyTables kGrey, int kSize, class Word>
 [[gnu::always_inline]] inline void shade_points(const PackedShade& shade, const PointTables& t, int size, Word* words,
                                                 int tile_log2, const ScalarChunk& in, uint32_t begin, uint32_t end) {
+  if constexpr (kSize != 0) size = kSize;
   const uint32_t wh = static_cast<uint32_t>(size | size << 4);
   for (uint32_t k = begin; k < end; ++k) {
-    const uint32_t j = in.sample[k];
+    const uint32_t j = kInOrder ? in.first + k : in.sample[k];
     const uint32_t color =
-        point_color<kNormals, kColorPoints, kSpecular, sizeof(Word) == 4, kClampAngles>(shade, t, j, t.g01[j], t.g2[j]);
-    const Word w = pack_word<Word>(in.depth[k], color);
+        point_color<kNormals, kColorPoints, kSpecular, sizeof(Word) == 4, kClampAngles, kGrey>(shade, t, j, t.g01[j], t.g2[j]);
+    // An RGB565 colour (the uint32_t words') is below 2^16 — the grey
+    // table's entries too — and the depth is its upper half already
+    // (place_points): pack_word's value without its masks.
+    const Word w = sizeof(Word) == 4 ? static_cast<Word>(in.depth[k] << 16 | color) : pack_word<Word>(in.depth[k], color);
     if constexpr (kWhole)
       ztest_square(words + in.at[k], 1 << tile_log2, wh, w);
     else
@@ -531,14 +549,17 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kWhole,
 
 // A chunk's second pass: the points wholly in the tile unclipped, then (a
 // node across its edge) the rest clipped.
-template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, bool kClampAngles, class Word>
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, bool kClampAngles, GreyTables kGrey,
+          int kSize, class Word>
 [[gnu::always_inline]] inline void shade_chunk(const PackedShade& shade, const PointTables& t, int size, Word* words,
                                                int tile_log2, const ScalarChunk& chunk) {
-  shade_points<kNormals, kColorPoints, kSpecular, true, kClampAngles>(shade, t, size, words, tile_log2, chunk, 0,
-                                                                       chunk.whole);
+  shade_points<kNormals, kColorPoints, kSpecular, true, kInside, kClampAngles, kGrey, kSize>(shade, t, size, words,
+                                                                                              tile_log2, chunk, 0,
+                                                                                              chunk.whole);
   if constexpr (!kInside)
-    shade_points<kNormals, kColorPoints, kSpecular, false, kClampAngles>(shade, t, size, words, tile_log2, chunk,
-                                                                          chunk.edge, kScalarChunk);
+    shade_points<kNormals, kColorPoints, kSpecular, false, false, kClampAngles, kGrey, kSize>(shade, t, size, words,
+                                                                                               tile_log2,
+                                                                                        chunk, chunk.edge, kScalarChunk);
 }
 
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, class Word>
@@ -546,14 +567,27 @@ void draw_tile_node_chunks(const TileRow& n, const PointTables& t, int size, Wor
   const uint32_t count = n.count();
   const PackedShade shade(n);
   const bool clamp = !angles_in_range<kNormals>(shade);
+  // The grey shortcut, where a point could take it, decided for the node.
+  constexpr bool kMayGrey = !kColorPoints && kNormals != PointNormals::kNode;
+  const bool grey = kMayGrey && t.grey_shade != nullptr;
   ScalarChunk chunk;
   for (uint32_t first = 0; first < count; first += kScalarChunk) {
     const uint32_t end = count - first < kScalarChunk ? count : first + kScalarChunk;
-    place_points<kInside>(n, t, size, tile_log2, px0, py0, first, end, chunk);
+    place_points<kInside, sizeof(Word) == 4 ? 16 : 0>(n, t, size, tile_log2, px0, py0, first, end, chunk);
+    // The common cases — angles in range, 2 px squares, grey or not —
+    // with their tests out of the loop; the rest ask a point at a time.
     if (clamp)
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, true>(shade, t, size, words, tile_log2, chunk);
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, true, GreyTables::kAsk, 0>(shade, t, size, words,
+                                                                                          tile_log2, chunk);
+    else if (size != 2)
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kAsk, 0>(shade, t, size, words,
+                                                                                           tile_log2, chunk);
+    else if (grey)
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kYes, 2>(shade, t, size, words,
+                                                                                           tile_log2, chunk);
     else
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false>(shade, t, size, words, tile_log2, chunk);
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kNo, 2>(shade, t, size, words,
+                                                                                          tile_log2, chunk);
   }
 }
 
