@@ -274,20 +274,25 @@ inline int32_t mul_hi(uint32_t a, uint32_t b) {
 // |al t1 + be t2| <= 2^28.6 and a Q12 term below 23,200 (it fits 16 bits);
 // cos l0 + sinc term < 2^28.6, the Q26 L.n, indexed by intensity_index_q26
 // (the sum with its offset stays below 2^29).
-// `t12` is the (t1, t2) pair; every operand fits 16 bits, so on 32-bit ARM
-// with the DSP multiplies (pair_dot, below) it is four of them, the table's
-// entry one 32-bit load.
-inline int lit_index(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t12, int32_t n0_q12) {
+// `t12` is the (t1, t2) pair and n0 (Q12) the low half of `n0_pair`, or
+// its high half (kHigh: the (l0, h0) pair serves both terms); every
+// operand fits 16 bits, so on 32-bit ARM with the DSP multiplies
+// (pair_dot, below) it is four of them, the table's entry one 32-bit load.
+template <bool kHigh>
+inline int lit_index(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t12, uint32_t n0_pair) {
 #if defined(__ARM_FEATURE_DSP) && !defined(__ARM_BIG_ENDIAN)
   using Word [[gnu::may_alias]] = uint32_t;
-  const uint32_t c = *reinterpret_cast<const Word*>(&cs);  // cos | sinc << 16
+  const int32_t c = static_cast<int32_t>(*reinterpret_cast<const Word*>(&cs));  // cos | sinc << 16
+  const int32_t n0 = static_cast<int32_t>(n0_pair);
   const int32_t along = __smlabt(be, static_cast<int32_t>(t12), mul_lo(static_cast<uint32_t>(al), t12)) >> 14;
-  const int32_t l_q26 = __smlatb(static_cast<int32_t>(c), along, mul_lo(c, static_cast<uint32_t>(n0_q12)));
+  // The offset of intensity_index_q26 as the chain's start: the same sum.
+  const int32_t start = kHigh ? __smlabt(c, n0, kIntensityOffsetQ26) : __smlabb(c, n0, kIntensityOffsetQ26);
+  return intensity_entry(__smlatb(c, along, start) >> 19);
 #else
   const int32_t along = (al * static_cast<int16_t>(t12) + be * (static_cast<int32_t>(t12) >> 16)) >> 14;
-  const int32_t l_q26 = cs.cos * n0_q12 + cs.sinc * along;
+  const int32_t n0 = kHigh ? pair_hi(n0_pair) : pair_lo(n0_pair);
+  return intensity_index_q26(cs.cos * n0 + cs.sinc * along);
 #endif
-  return intensity_index_q26(l_q26);
 }
 
 // A node's terms as int16 pairs in 32-bit words (low half first), the way
@@ -318,14 +323,14 @@ inline int32_t pair_dot(uint32_t g01, uint32_t g2, uint32_t a01, uint32_t a2) { 
 
 struct PackedShade {
   uint32_t sn = 0, lt = 0, ht = 0;            // (sigma_n1, sigma_n2), (L.t1, L.t2), (H.t1, H.t2)
-  int32_t l0 = 0, h0 = 0;
+  uint32_t l0h0 = 0;                          // (l0, h0)
   uint32_t s0_01 = 0, s0_2 = 0, s1_01 = 0, s1_2 = 0;  // surface[0], surface[1]
   uint32_t ca01[3] = {}, ca2[3] = {};         // colour axes per channel
   uint32_t r = 0, g = 0, b = 0;               // base colour
   uint32_t node_rgb = 0, intensity = 256, specular = 0;
   explicit PackedShade(const PointShade& s)
       : sn(int16_pair(s.sn[0], s.sn[1])), lt(int16_pair(s.lt[0], s.lt[1])), ht(int16_pair(s.ht[0], s.ht[1])),
-        l0(s.l0), h0(s.h0), s0_01(int16_pair(s.surface[0][0], s.surface[0][1])), s0_2(int16_pair(s.surface[0][2], 0)),
+        l0h0(int16_pair(s.l0, s.h0)), s0_01(int16_pair(s.surface[0][0], s.surface[0][1])), s0_2(int16_pair(s.surface[0][2], 0)),
         s1_01(int16_pair(s.surface[1][0], s.surface[1][1])), s1_2(int16_pair(s.surface[1][2], 0)),
         r(s.base_rgb >> 16), g((s.base_rgb >> 8) & 0xFFu), b(s.base_rgb & 0xFFu), node_rgb(s.node_rgb),
         intensity(s.intensity), specular(s.specular) {
@@ -336,8 +341,8 @@ struct PackedShade {
   }
   // The same terms from a tile node's row, whose words are these pairs.
   explicit PackedShade(const TileRow& row)
-      : sn(row[TileField::kSn]), lt(row[TileField::kLt]), ht(row[TileField::kHt]), l0(row.lo(TileField::kL0H0)),
-        h0(row.hi(TileField::kL0H0)), s0_01(row[TileField::kS0_01]), s0_2(row[TileField::kS0_2]), s1_01(row[TileField::kS1_01]),
+      : sn(row[TileField::kSn]), lt(row[TileField::kLt]), ht(row[TileField::kHt]), l0h0(row[TileField::kL0H0]),
+        s0_01(row[TileField::kS0_01]), s0_2(row[TileField::kS0_2]), s1_01(row[TileField::kS1_01]),
         s1_2(row[TileField::kS1_2]), r(row[TileField::kBaseRgb] >> 16), g((row[TileField::kBaseRgb] >> 8) & 0xFFu),
         b(row[TileField::kBaseRgb] & 0xFFu), node_rgb(row[TileField::kNodeRgb]), intensity(row[TileField::kLighting] & 0xFFFFu),
         specular(row[TileField::kLighting] >> 16) {
@@ -394,8 +399,8 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kRgb565
       if (cell >= static_cast<uint32_t>(kCosSincCells)) __builtin_trap();
 #endif
       const CosSincQ14& cs = t.shading->cos_sinc[cell];
-      const int il = lit_index(cs, al, be, s.lt, s.l0);
-      const uint32_t specular = kSpecular ? t.shading->specular[lit_index(cs, al, be, s.ht, s.h0)] : 0;
+      const int il = lit_index<false>(cs, al, be, s.lt, s.l0h0);
+      const uint32_t specular = kSpecular ? t.shading->specular[lit_index<true>(cs, al, be, s.ht, s.l0h0)] : 0;
       if constexpr (!kColorPoints) {
         if (kGrey == GreyTables::kYes || (kGrey == GreyTables::kAsk && t.grey_shade != nullptr))
           return (kRgb565 ? t.grey_shade565 : t.grey_shade)[t.grey_diffuse[il] + specular];

@@ -89,6 +89,7 @@ inline int intensity_index(int32_t l_q14) { return intensity_entry((l_q14 + 1638
 // power-of-two divisions compose, so (l_q26 + 16448 * 2^12) >> 19 is
 // intensity_index(l_q26 >> 12) exactly, one shift instead of two (the
 // caller keeps the sum below 2^31).
-inline int intensity_index_q26(int32_t l_q26) { return intensity_entry((l_q26 + ((16384 + 64) << 12)) >> 19); }
+inline constexpr int32_t kIntensityOffsetQ26 = (16384 + 64) << 12;
+inline int intensity_index_q26(int32_t l_q26) { return intensity_entry((l_q26 + kIntensityOffsetQ26) >> 19); }
 
 }  // namespace stipple
