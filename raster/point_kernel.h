@@ -508,8 +508,9 @@ template <bool kInside, int kDepthShift>
     } else {
       // A node across a tile's edge is drawn in each tile it touches: a
       // point whose square lies wholly in another tile is that tile's to
-      // shade (on the bunny at 240 x 320, a quarter of the points met here);
-      // most of the rest lie wholly in this one and need no clipping.
+      // shade (on the bunny at 240 x 320, half the points met here:
+      // 23,061 of 46,650); most of the rest lie wholly in this one and need
+      // no clipping. (Testing x before computing y measured dearer.)
       if (static_cast<uint32_t>(x) <= last && static_cast<uint32_t>(y) <= last) {
         k = whole++;
         out.at[k] = static_cast<uint32_t>((y << tile_log2) + x);
