@@ -94,9 +94,11 @@ struct RasterSink {
 struct Span {
   int32_t lo, hi;
 };
-// (For the tile pass's nodes: sum |m| < 2^15, so every term is int32.)
-inline Span pixel_span(int32_t p0_q4, int32_t sum_abs_m, int size) {
-  const int32_t d = (sum_abs_m * kGaussianClip) >> 16;
+// `reach` = sum_k |m_k| G_k, G_k the largest |g_k| of the node's samples
+// (Q12): how far its points' offsets m . g (1/2^20 px) reach. For the tile
+// pass's nodes |m_k| < 2^15 and G_k <= kGaussianClip < 2^14: int32.
+inline Span pixel_span(int32_t p0_q4, int32_t reach, int size) {
+  const int32_t d = reach >> 16;
   const int32_t lo = p0_q4 - d - 1 - (size - 1) * 8, hi = p0_q4 + d - (size - 1) * 8;
   return Span{lo >> 4, (hi >> 4) + size - 1};
 }
@@ -190,6 +192,13 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   if (g_color_) build_gaussian3_table(config.source, g_color_, config.samples, kColorSobolDim);
   if (!build_shading_tables(config.lighting, shading_)) return RenderStatus::kBadConfig;
   build_reciprocal_table(reciprocal_);
+  int32_t most[3] = {0, 0, 0};
+  for (uint32_t i = 0, j = 0; i < kSampleReachBuckets; ++i) {
+    for (; j < sample_reach_samples(static_cast<int>(i)) && j < config.samples; ++j)
+      for (int k = 0; k < 3; ++k)
+        if (abs32(g_position_[j].v[k]) > most[k]) most[k] = abs32(g_position_[j].v[k]);
+    for (int k = 0; k < 3; ++k) sample_reach_[i][k] = static_cast<uint16_t>(most[k]);
+  }
   tables_ = PointTables{g_position_, g_normal_, g_color_, shading_};
   build_point_lanes(g_position_, g_normal_, g_color_, config.samples, base + l.lanes, &tables_);
   uint16_t* grey_diffuse = reinterpret_cast<uint16_t*>(base + l.grey);
@@ -385,7 +394,12 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
                               : -1;
     s.int32_terms = reach >= 0 && s.depth0 - reach - 1 >= 0 && s.depth0 + reach <= 0xFFFFFFFE;
     if (s.int32_terms && s.count >= kTileMinPoints && raster_.item_room(s.count)) {
-      const Span spx = pixel_span(proj.x0_q4, sx, s.size), spy = pixel_span(proj.y0_q4, sy, s.size);
+      // Its span on screen from the samples it draws, which reach no
+      // farther than sample_reach_ says (for a few points, little more
+      // than half kGaussianClip) — fewer nodes across tile edges.
+      const uint16_t* g = sample_reach_[sample_reach_bucket(s.count)];
+      const auto offsets = [g](const int32_t m[3]) { return abs32(m[0]) * g[0] + abs32(m[1]) * g[1] + abs32(m[2]) * g[2]; };
+      const Span spx = pixel_span(proj.x0_q4, offsets(proj.mx), s.size), spy = pixel_span(proj.y0_q4, offsets(proj.my), s.size);
       const int sh_t = internal_.tile_log2;
       const int32_t tx0 = (spx.lo < 0 ? 0 : spx.lo) >> sh_t, ty0 = (spy.lo < 0 ? 0 : spy.lo) >> sh_t;
       const int32_t tx1 = (spx.hi >= internal_.width ? internal_.width - 1 : spx.hi) >> sh_t;

@@ -116,6 +116,20 @@ struct FrameStats {
 
 bool renderer_config_valid(const RendererConfig& config);
 
+// Sample counts in half octaves: 1, 2, 3, 4, 6, 8, 12, ..., 6144, 8192
+// (RendererConfig::samples' most), bucket i's most samples...
+inline constexpr int kSampleReachBuckets = 26;
+constexpr uint32_t sample_reach_samples(int i) {
+  return i < 2 ? static_cast<uint32_t>(i + 1) : (i & 1) ? 2u << (i / 2) : 3u << (i / 2 - 1);
+}
+// ... and the bucket of a node of n points: the first whose count is n or more.
+constexpr int sample_reach_bucket(uint32_t n) {
+  if (n <= 2) return n == 0 ? 0 : static_cast<int>(n - 1);
+  const uint32_t t = n - 1;
+  const int k = 31 - __builtin_clz(t);
+  return 2 * k + static_cast<int>((t >> (k - 1)) & 1u);
+}
+
 // Storage bytes for a configuration (8-byte aligned pieces), or 0 when invalid.
 size_t point_renderer_bytes(const RendererConfig& config);
 
@@ -170,6 +184,11 @@ class PointRenderer {
   PointLanes lanes_ = PointLanes::kScalar;  // what config_.lanes resolved to on this CPU
   int32_t* mean_terms_ = nullptr;   // the node lanes' (node_lanes.h): [axis][q][3]
   uint16_t* lane_ppn_ = nullptr;    // the points-per-node table, padded for 32-bit reads
+  // sample_reach_[i][k]: the largest |g_k| (Q12) of the first
+  // sample_reach_samples(i) position samples — a node of no more points
+  // reaches no farther along its axis k (the tile pass's spans;
+  // kGaussianClip bounds them all).
+  uint16_t sample_reach_[kSampleReachBuckets][3] = {};
 };
 
 }  // namespace stipple

@@ -9,6 +9,7 @@
 
 #include "core/camera.h"
 #include "core/cut.h"
+#include "raster/point_renderer.h"
 #include "raster/points_per_node.h"
 #include "raster/shading.h"
 #include "tests/portable/test_files.h"
@@ -180,10 +181,32 @@ TEST(Shading, CosSincTableAgainstLibm) {
     worst = std::max(worst, std::abs(tables.cos_sinc[i].sinc / 16384.0 - std::sin(theta) / theta));
   }
   EXPECT_LE(worst, 6.0 / 16384);  // measured 5.3 LSB: theta to a binary angle, sincos_q14, one division
+  // Past theta^2 = 16 the cells an angle pair within 4 rad reaches repeat
+  // the last entry: the clamp the scalar loops no longer make.
+  EXPECT_EQ(kCosSincCells, ((16384 * 16384 * 2) >> kCosSincShift) + 1);
+  for (int i = kCosSincEntries; i < kCosSincCells; ++i) {
+    EXPECT_EQ(tables.cos_sinc[i].cos, tables.cos_sinc[kCosSincEntries - 1].cos) << i;
+    EXPECT_EQ(tables.cos_sinc[i].sinc, tables.cos_sinc[kCosSincEntries - 1].sinc) << i;
+  }
   // Light normalized; the half vector between it and the eye.
   const double l = std::hypot(std::hypot(4096.0, 6144.0), 14336.0);
   EXPECT_NEAR(tables.light_q14[2], -14336 / l * 16384, 1);
   EXPECT_LT(tables.half_q14[2], tables.light_q14[2]);
+}
+
+// A node of n points takes the first bucket of n samples or more, in half
+// octaves, so its reach is at most a third more samples' than its own.
+TEST(PointRenderer, SampleReachBuckets) {
+  EXPECT_EQ(sample_reach_samples(0), 1u);
+  EXPECT_EQ(sample_reach_samples(kSampleReachBuckets - 1), 8192u);
+  for (uint32_t n = 1; n <= 8192; ++n) {
+    const int b = sample_reach_bucket(n);
+    ASSERT_GE(sample_reach_samples(b), n) << n;
+    if (b > 0) {
+      ASSERT_LT(sample_reach_samples(b - 1), n) << n;
+    }
+  }
+  for (int b = 1; b < kSampleReachBuckets; ++b) EXPECT_LT(sample_reach_samples(b - 1), sample_reach_samples(b));
 }
 
 TEST(Shading, IntensitiesAreLambertAndPhongPowers) {
