@@ -52,6 +52,7 @@ struct NodeLaneFrame {
   // Points per node, shading.
   const uint16_t* ppn = nullptr;  // [kPpnSizes][kPpnAspects]
   uint32_t quality_q8 = 256, samples = 1024;
+  const int32_t* sample_reach = nullptr;  // PointRenderer::sample_reach_: [sample_reach_bucket(n)][4]
   bool lit = false;
   const ShadingTables* shading = nullptr;
   uint32_t base_rgb = 0;

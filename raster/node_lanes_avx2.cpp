@@ -404,22 +404,31 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
                          shade_channel(static_cast<int32_t>(f.base_rgb & 0xFF)));
 
   // The tile pass: slopes and depth terms in 16 bits, the depths inside the
-  // word, within 2 x 2 tiles (pixel_span).
-  V sx = zero, sy = zero;
+  // word, within 2 x 2 tiles (pixel_span: the reach of the count's samples,
+  // sample_reach_bucket; lanes whose slopes reach 2^15 wrap here and are
+  // not tile lanes).
+  const V t_count = sub(count_v, set1(1));
+  const V k_count = log2_32(_mm256_max_epi32(t_count, set1(1)));
+  const V half = band(_mm256_srlv_epi32(t_count, sub(k_count, set1(1))), set1(1));
+  const V bucket = _mm256_blendv_epi8(add(add(k_count, k_count), half), t_count, _mm256_cmpgt_epi32(set1(3), count_v));
+  V sx = zero, sy = zero, rx = zero, ry = zero;
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
+    const V g = _mm256_i32gather_epi32(f.sample_reach, add(_mm256_slli_epi32(bucket, 2), set1(k)), 4);
     sx = add(sx, _mm256_abs_epi32(mx[k]));
     sy = add(sy, _mm256_abs_epi32(my[k]));
+    rx = add(rx, _mm256_mullo_epi32(_mm256_abs_epi32(mx[k]), g));
+    ry = add(ry, _mm256_mullo_epi32(_mm256_abs_epi32(my[k]), g));
   }
   const int32_t corner = (f.size - 1) * 8;
-  const auto span = [&](V p0, V s, V* lo, V* hi) {
-    const V dd = _mm256_srai_epi32(_mm256_mullo_epi32(s, set1(kGaussianClip)), 16);
+  const auto span = [&](V p0, V offsets, V* lo, V* hi) {
+    const V dd = _mm256_srai_epi32(offsets, 16);
     *lo = _mm256_srai_epi32(sub(sub(p0, dd), set1(1 + corner)), 4);
     *hi = add(_mm256_srai_epi32(sub(add(p0, dd), set1(corner)), 4), set1(f.size - 1));
   };
   V lo_x, hi_x, lo_y, hi_y;
-  span(x0, sx, &lo_x, &hi_x);
-  span(y0, sy, &lo_y, &hi_y);
+  span(x0, rx, &lo_x, &hi_x);
+  span(y0, ry, &lo_y, &hi_y);
   const __m128i tl = _mm_cvtsi32_si128(f.tile_log2);
   const V tx0 = _mm256_sra_epi32(_mm256_max_epi32(lo_x, zero), tl), ty0 = _mm256_sra_epi32(_mm256_max_epi32(lo_y, zero), tl);
   const V tx1 = _mm256_sra_epi32(_mm256_min_epi32(hi_x, set1(f.width - 1)), tl);

@@ -197,7 +197,7 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
     for (; j < sample_reach_samples(static_cast<int>(i)) && j < config.samples; ++j)
       for (int k = 0; k < 3; ++k)
         if (abs32(g_position_[j].v[k]) > most[k]) most[k] = abs32(g_position_[j].v[k]);
-    for (int k = 0; k < 3; ++k) sample_reach_[i][k] = static_cast<uint16_t>(most[k]);
+    for (int k = 0; k < 3; ++k) sample_reach_[i][k] = most[k];
   }
   tables_ = PointTables{g_position_, g_normal_, g_color_, shading_};
   build_point_lanes(g_position_, g_normal_, g_color_, config.samples, base + l.lanes, &tables_);
@@ -397,7 +397,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
       // Its span on screen from the samples it draws, which reach no
       // farther than sample_reach_ says (for a few points, little more
       // than half kGaussianClip) — fewer nodes across tile edges.
-      const uint16_t* g = sample_reach_[sample_reach_bucket(s.count)];
+      const int32_t* g = sample_reach_[sample_reach_bucket(s.count)];
       const auto offsets = [g](const int32_t m[3]) { return abs32(m[0]) * g[0] + abs32(m[1]) * g[1] + abs32(m[2]) * g[2]; };
       const Span spx = pixel_span(proj.x0_q4, offsets(proj.mx), s.size), spy = pixel_span(proj.y0_q4, offsets(proj.my), s.size);
       const int sh_t = internal_.tile_log2;
@@ -574,6 +574,7 @@ NodeLaneFrame PointRenderer::lane_frame(const FrameSetup& f, const NodeCache& ca
   lf.ppn = lane_ppn_;
   lf.quality_q8 = config_.quality_q8;
   lf.samples = config_.samples;
+  lf.sample_reach = &sample_reach_[0][0];
   lf.lit = f.lit;
   lf.shading = shading_;
   lf.base_rgb = config_.grey_rgb & 0xFFFFFFu;

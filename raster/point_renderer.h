@@ -188,7 +188,8 @@ class PointRenderer {
   // sample_reach_samples(i) position samples — a node of no more points
   // reaches no farther along its axis k (the tile pass's spans;
   // kGaussianClip bounds them all).
-  uint16_t sample_reach_[kSampleReachBuckets][3] = {};
+  // (A fourth column, 0, for the node lanes' gathers.)
+  int32_t sample_reach_[kSampleReachBuckets][4] = {};
 };
 
 }  // namespace stipple
