@@ -156,8 +156,8 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, b
       al = _mm256_min_epi32(_mm256_max_epi32(al, nlim), lim);
       be = _mm256_min_epi32(_mm256_max_epi32(be, nlim), lim);
       const __m256i ab = _mm256_or_si256(_mm256_and_si256(al, _mm256_set1_epi32(0xFFFF)), _mm256_slli_epi32(be, 16));
-      const __m256i cell = _mm256_min_epi32(_mm256_srli_epi32(_mm256_madd_epi16(ab, ab), kCosSincShift),
-                                            _mm256_set1_epi32(kCosSincEntries - 1));
+      // <= 4096: a cell of the table (kCosSincCells), no clamp.
+      const __m256i cell = _mm256_srli_epi32(_mm256_madd_epi16(ab, ab), kCosSincShift);
       const __m256i cs = _mm256_i32gather_epi32(reinterpret_cast<const int*>(t.shading->cos_sinc), cell, 4);
       const __m256i l0h0 = field(TileField::kL0H0);
       const __m256i l0 = _mm256_and_si256(l0h0, _mm256_set1_epi32(0xFFFF)), h0 = _mm256_srli_epi32(l0h0, 16);

@@ -125,8 +125,8 @@ void draw_tile_node(const TileRow& n, const PointTables& t, int size, Word* word
         const int32x4_t lim = vdupq_n_s32(16384), nlim = vdupq_n_s32(-16384);
         al = vminq_s32(vmaxq_s32(al, nlim), lim);
         be = vminq_s32(vmaxq_s32(be, nlim), lim);
-        const uint32x4_t cell = vminq_u32(vshrq_n_u32(vreinterpretq_u32_s32(vmlaq_s32(vmulq_s32(al, al), be, be)), kCosSincShift),
-                                          vdupq_n_u32(kCosSincEntries - 1));
+        // <= 4096: a cell of the table (kCosSincCells), no clamp.
+        const uint32x4_t cell = vshrq_n_u32(vreinterpretq_u32_s32(vmlaq_s32(vmulq_s32(al, al), be, be)), kCosSincShift);
         const int32x4_t cs = gather(t.shading->cos_sinc, vreinterpretq_s32_u32(cell));
         intensity = gather(t.shading->diffuse, intensity_index4(lit4(cs, al, be, lt[0], lt[1], l0)));
         specular = kSpecular ? gather(t.shading->specular, intensity_index4(lit4(cs, al, be, ht[0], ht[1], h0)))

@@ -132,8 +132,9 @@ void draw_tile_node(const TileRow& n, const PointTables& t, int size, Word* word
         // Clamped to +-4 rad and packed back to (al, be) pairs.
         const __m128i ab = _mm_min_epi16(_mm_max_epi16(_mm_packs_epi32(p01, p23), _mm_set1_epi16(-16384)),
                                          _mm_set1_epi16(16384));
-        const __m128i cell32 = _mm_srli_epi32(_mm_madd_epi16(ab, ab), kCosSincShift);  // <= 4096
-        const __m128i cell = _mm_min_epi16(_mm_packs_epi32(cell32, cell32), _mm_set1_epi16(kCosSincEntries - 1));
+        // <= 4096: a cell of the table (kCosSincCells), no clamp.
+        const __m128i cell32 = _mm_srli_epi32(_mm_madd_epi16(ab, ab), kCosSincShift);
+        const __m128i cell = _mm_packs_epi32(cell32, cell32);
         const __m128i cs = gather(t.shading->cos_sinc, cell);
         intensity = gather(t.shading->diffuse, intensity_index4(lit4(cs, ab, lt, l0)));
         specular = kSpecular ? gather(t.shading->specular, intensity_index4(lit4(cs, ab, ht, h0))) : _mm_setzero_si128();
