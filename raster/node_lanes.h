@@ -76,6 +76,11 @@ namespace avx2 {
 template <PointNormals kNormals, bool kSpecular>
 uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t count, TileNodes& out, uint32_t base,
                       NodeLaneBatch* batches);
+
+// The lanes' sample_reach_bucket (point_renderer.h), as set_up_nodes forms
+// it, of 8 counts from 1 to RendererConfig::samples' most: for the test
+// that holds the two alike.
+void sample_reach_buckets(const uint32_t count[8], int32_t bucket[8]);
 }  // namespace avx2
 
 }  // namespace stipple

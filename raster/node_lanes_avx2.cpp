@@ -76,6 +76,13 @@ inline V half_octave32(V x) {
   const V bit = band(_mm256_srlv_epi32(x, _mm256_max_epi32(sub(top, set1(1)), _mm256_setzero_si256())), set1(1));
   return band(add(add(top, top), bit), _mm256_cmpgt_epi32(x, set1(1)));
 }
+// sample_reach_bucket (point_renderer.h) of lanes of 1 or more points.
+inline V sample_reach_bucket8(V count) {
+  const V t = sub(count, set1(1));
+  const V k = log2_32(_mm256_max_epi32(t, set1(1)));
+  const V half = band(_mm256_srlv_epi32(t, sub(k, set1(1))), set1(1));
+  return _mm256_blendv_epi8(add(add(k, k), half), t, _mm256_cmpgt_epi32(set1(3), count));
+}
 // half_octave of 4 64-bit lanes (below 2^62), in each lane's low half.
 [[gnu::always_inline]] inline __m256i half_octave64(__m256i x) {
   const __m256i one = _mm256_set1_epi64x(1);
@@ -407,10 +414,7 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
   // word, within 2 x 2 tiles (pixel_span: the reach of the count's samples,
   // sample_reach_bucket; lanes whose slopes reach 2^15 wrap here and are
   // not tile lanes).
-  const V t_count = sub(count_v, set1(1));
-  const V k_count = log2_32(_mm256_max_epi32(t_count, set1(1)));
-  const V half = band(_mm256_srlv_epi32(t_count, sub(k_count, set1(1))), set1(1));
-  const V bucket = _mm256_blendv_epi8(add(add(k_count, k_count), half), t_count, _mm256_cmpgt_epi32(set1(3), count_v));
+  const V bucket = sample_reach_bucket8(count_v);
   V sx = zero, sy = zero, rx = zero, ry = zero;
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
@@ -497,6 +501,11 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
   base += r.tile_count;
   }
   return base - base0;
+}
+
+void sample_reach_buckets(const uint32_t count[8], int32_t bucket[8]) {
+  const V c = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(count));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(bucket), sample_reach_bucket8(c));
 }
 
 #define STIPPLE_SET_UP_NODES(N, S) \

@@ -9,6 +9,8 @@
 
 #include "core/camera.h"
 #include "core/cut.h"
+#include "raster/node_lanes.h"
+#include "raster/point_kernel_avx2.h"
 #include "raster/point_renderer.h"
 #include "raster/points_per_node.h"
 #include "raster/shading.h"
@@ -207,6 +209,24 @@ TEST(PointRenderer, SampleReachBuckets) {
     }
   }
   for (int b = 1; b < kSampleReachBuckets; ++b) EXPECT_LT(sample_reach_samples(b - 1), sample_reach_samples(b));
+}
+
+// The AVX2 node lanes form the bucket in lanes (node_lanes_avx2.cpp): the
+// same bucket as sample_reach_bucket for every count a node can draw. A
+// bucket too small there would let a lane's points leave its tiles.
+TEST(PointRenderer, SampleReachBucketsInLanes) {
+#if defined(__x86_64__) || defined(__i386__)
+  if (!avx2::supported()) GTEST_SKIP() << "no AVX2 on this CPU";
+  for (uint32_t first = 1; first <= 8192; first += 8) {
+    uint32_t count[8];
+    int32_t bucket[8];
+    for (uint32_t i = 0; i < 8; ++i) count[i] = first + i;
+    avx2::sample_reach_buckets(count, bucket);
+    for (uint32_t i = 0; i < 8; ++i) ASSERT_EQ(bucket[i], sample_reach_bucket(count[i])) << count[i] << " points";
+  }
+#else
+  GTEST_SKIP() << "no AVX2 lanes on this target";
+#endif
 }
 
 TEST(Shading, IntensitiesAreLambertAndPhongPowers) {
