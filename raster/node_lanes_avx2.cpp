@@ -104,7 +104,7 @@ inline V sample_reach_bucket8(V count) {
 }
 
 inline V intensity_index8(V l) {
-  const V i = _mm256_srai_epi32(add(l, set1(16384 + 64)), 7);
+  const V i = _mm256_srai_epi32(add(l, set1(kIntensityOffsetQ14)), 7);
   return _mm256_min_epi32(_mm256_max_epi32(i, _mm256_setzero_si256()), set1(kIntensityEntries - 1));
 }
 

@@ -272,8 +272,9 @@ inline int32_t mul_hi(uint32_t a, uint32_t b) {
 // The intensity table's index of L.n for the sampled normal at angles
 // (al, be): |al|, |be| <= 2^14 and |(t1, t2)| <= 2^14 (+ rounding) give
 // |al t1 + be t2| <= 2^28.6 and a Q12 term below 23,200 (it fits 16 bits);
-// cos l0 + sinc term < 2^28.6, the Q26 L.n, indexed by intensity_index_q26
-// (the sum with its offset stays below 2^29).
+// cos l0 + sinc term < 2^28.6, the Q26 L.n, indexed by lit_entry_q26
+// without a clamp (|L.n| <= 1.26: the sum with its offset stays within
+// [0, 2^27.5)).
 // `t12` is the (t1, t2) pair and n0 (Q12) the low half of `n0_pair`, or
 // its high half (kHigh: the (l0, h0) pair serves both terms); every
 // operand fits 16 bits, so on 32-bit ARM with the DSP multiplies
@@ -285,13 +286,17 @@ inline int lit_index(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t12,
   const int32_t c = static_cast<int32_t>(*reinterpret_cast<const Word*>(&cs));  // cos | sinc << 16
   const int32_t n0 = static_cast<int32_t>(n0_pair);
   const int32_t along = __smlabt(be, static_cast<int32_t>(t12), mul_lo(static_cast<uint32_t>(al), t12)) >> 14;
-  // The offset of intensity_index_q26 as the chain's start: the same sum.
+  // The offset of lit_entry_q26 as the chain's start: the same sum.
   const int32_t start = kHigh ? __smlabt(c, n0, kIntensityOffsetQ26) : __smlabb(c, n0, kIntensityOffsetQ26);
-  return intensity_entry(__smlatb(c, along, start) >> 19);
+  const int32_t i = __smlatb(c, along, start) >> 19;
+#if STIPPLE_CHECK_RANGES
+  if (i < 0 || i >= kIntensityEntries) __builtin_trap();
+#endif
+  return i;
 #else
   const int32_t along = (al * static_cast<int16_t>(t12) + be * (static_cast<int32_t>(t12) >> 16)) >> 14;
   const int32_t n0 = kHigh ? pair_hi(n0_pair) : pair_lo(n0_pair);
-  return intensity_index_q26(cs.cos * n0 + cs.sinc * along);
+  return lit_entry_q26(cs.cos * n0 + cs.sinc * along);
 #endif
 }
 

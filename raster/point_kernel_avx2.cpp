@@ -32,14 +32,15 @@ inline __m256i dot3(__m256i g01, __m256i g2, __m256i a01, __m256i a2) {
 }
 
 inline __m256i intensity_index8(__m256i l) {
-  const __m256i i = _mm256_srai_epi32(_mm256_add_epi32(l, _mm256_set1_epi32(16384 + 64)), 7);
+  const __m256i i = _mm256_srai_epi32(_mm256_add_epi32(l, _mm256_set1_epi32(kIntensityOffsetQ14)), 7);
   return _mm256_min_epi32(_mm256_max_epi32(i, _mm256_setzero_si256()), _mm256_set1_epi32(kIntensityEntries - 1));
 }
 
 // The diffuse table's entries for L.n in Q14, `l`, computed (diffuse_q8):
-// with i = intensity_index(l), max(0, i - 128) = clamp((l + 64) >> 7, 0,
-// 128) — 16,384 is 128 << 7. Seven operations instead of a gather, which
-// on the 1 px frame is the tile pass's costliest instruction.
+// with i = intensity_index(l), clamp(i - kIntensityPad - 128, 0, 128) =
+// clamp((l + 64) >> 7, 0, 128) — 16,384 is 128 << 7. Seven operations
+// instead of a gather, which on the 1 px frame is the tile pass's costliest
+// instruction.
 inline __m256i diffuse8(__m256i l, __m256i ambient, __m256i lit_scale) {
   const __m256i lit = _mm256_min_epi32(
       _mm256_max_epi32(_mm256_srai_epi32(_mm256_add_epi32(l, _mm256_set1_epi32(64)), 7), _mm256_setzero_si256()),

@@ -38,7 +38,7 @@ inline int32x4_t gather(const CosSincQ14* table, int32x4_t idx) {
 }
 
 inline int32x4_t intensity_index4(int32x4_t l) {
-  const int32x4_t i = vshrq_n_s32(vaddq_s32(l, vdupq_n_s32(16384 + 64)), 7);
+  const int32x4_t i = vshrq_n_s32(vaddq_s32(l, vdupq_n_s32(kIntensityOffsetQ14)), 7);
   return vminq_s32(vmaxq_s32(i, vdupq_n_s32(0)), vdupq_n_s32(kIntensityEntries - 1));
 }
 

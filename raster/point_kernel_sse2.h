@@ -42,7 +42,7 @@ inline __m128i gather(const CosSincQ14* table, __m128i idx) {
 
 // intensity_index of four Q14 values, as int16 lanes 0..3.
 inline __m128i intensity_index4(__m128i l) {
-  const __m128i i = _mm_srai_epi32(_mm_add_epi32(l, _mm_set1_epi32(16384 + 64)), 7);
+  const __m128i i = _mm_srai_epi32(_mm_add_epi32(l, _mm_set1_epi32(kIntensityOffsetQ14)), 7);
   const __m128i p = _mm_packs_epi32(i, i);
   return _mm_min_epi16(_mm_max_epi16(p, _mm_setzero_si128()), _mm_set1_epi16(kIntensityEntries - 1));
 }

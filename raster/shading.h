@@ -18,6 +18,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "core/fixed_range.h"
+
 namespace stipple {
 
 struct Lighting {
@@ -34,7 +36,13 @@ inline constexpr int kCosSincShift = 17;      // theta^2 in Q24 -> index
 // Cells past kCosSincEntries repeat its last entry — the table ends at
 // theta^2 = 16 — so the scalar loops index it without a clamp.
 inline constexpr int kCosSincCells = ((2 << 28) >> kCosSincShift) + 1;
-inline constexpr int kIntensityEntries = 257; // l in [-1, 1], steps of 2^-7
+// The intensity tables: l in steps of 2^-7, entry kIntensityPad + 128 at l
+// = 0. [-1, 1] takes 257 entries; kIntensityPad more on either side repeat
+// the ends (l <= -1 and l >= 1 shade alike), so the scalar point loops
+// index them without a clamp: a sampled normal's L.n stays within 1.26
+// (lit_entry_q26), inside the padded [-1.37, 1.37].
+inline constexpr int kIntensityPad = 48;
+inline constexpr int kIntensityEntries = 257 + 2 * kIntensityPad;
 
 // 4-aligned: the scalar loops on 32-bit ARM load an entry as one word.
 struct alignas(4) CosSincQ14 {
@@ -56,10 +64,11 @@ struct ShadingTables {
   int32_t ambient_q8;                    // Lighting's, at most 256
 };
 
-// The diffuse table's entry i, l = (i - 128) / 128, for an ambient term
-// `ambient_q8` (at most 256): ambient + (1 - ambient) max(0, l) in Q8,
-// from lit_q7 = max(0, i - 128). The AVX2 lanes compute it rather than
-// gather it (raster/point_kernel_avx2.cpp).
+// The diffuse table's entry i, l = (i - kIntensityPad - 128) / 128, for an
+// ambient term `ambient_q8` (at most 256): ambient + (1 - ambient)
+// clamp(l, 0, 1) in Q8, from lit_q7 = clamp(i - kIntensityPad - 128, 0,
+// 128). The AVX2 lanes compute it rather than gather it
+// (raster/point_kernel_avx2.cpp).
 constexpr int32_t diffuse_q8(int32_t ambient_q8, int32_t lit_q7) {
   return ambient_q8 + (((256 - ambient_q8) * lit_q7 + 64) >> 7);
 }
@@ -82,14 +91,28 @@ inline RsqrtScale rsqrt_scale(const ShadingTables& t, uint64_t s2) {
   return RsqrtScale{t.rsqrt[m - 256], 5 + k};  // 2^14 / 2^19 / 2^k
 }
 
-// Table index of l in Q14 ([-16384, 16384]): (l + 16448) >> 7, clamped.
+// Table index of l in Q14: (l + kIntensityOffsetQ14) >> 7, clamped — l
+// rounded to the nearest 2^-7, the pad entries below it.
+inline constexpr int32_t kIntensityOffsetQ14 = 16384 + 64 + (kIntensityPad << 7);
 inline int intensity_entry(int32_t i) { return i < 0 ? 0 : i > kIntensityEntries - 1 ? kIntensityEntries - 1 : i; }
-inline int intensity_index(int32_t l_q14) { return intensity_entry((l_q14 + 16384 + 64) >> 7); }
+inline int intensity_index(int32_t l_q14) { return intensity_entry((l_q14 + kIntensityOffsetQ14) >> 7); }
 // The same of l in Q26, whose Q14 value is l_q26 >> 12: floors of
-// power-of-two divisions compose, so (l_q26 + 16448 * 2^12) >> 19 is
-// intensity_index(l_q26 >> 12) exactly, one shift instead of two (the
+// power-of-two divisions compose, so (l_q26 + kIntensityOffsetQ14 2^12) >>
+// 19 is intensity_index(l_q26 >> 12) exactly, one shift instead of two (the
 // caller keeps the sum below 2^31).
-inline constexpr int32_t kIntensityOffsetQ26 = (16384 + 64) << 12;
+inline constexpr int32_t kIntensityOffsetQ26 = kIntensityOffsetQ14 << 12;
 inline int intensity_index_q26(int32_t l_q26) { return intensity_entry((l_q26 + kIntensityOffsetQ26) >> 19); }
+// The unclamped index, for |l| < 1 + (kIntensityPad + 1/2) / 128 (Q26:
+// |l_q26| < kIntensityOffsetQ26): a sampled normal's L.n and H.n, which
+// stay within 1.26 — the cos/sinc table's (cos, sinc theta) has norm at
+// most 1.2532 for any two angles within 4 rad, tested cell by cell in
+// Shading.IntensityPadCoversSampledNormals; docs/fixed_point.md, "Shading".
+inline int lit_entry_q26(int32_t l_q26) {
+  const int32_t i = (l_q26 + kIntensityOffsetQ26) >> 19;
+#if STIPPLE_CHECK_RANGES
+  if (i < 0 || i >= kIntensityEntries) __builtin_trap();
+#endif
+  return i;
+}
 
 }  // namespace stipple

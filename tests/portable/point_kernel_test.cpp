@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "raster/point_kernel.h"
@@ -84,15 +85,17 @@ TileNode random_node(std::mt19937& rng, int size, bool extreme) {
   for (int k = 0; k < 2; ++k)
     s.sn[k] = static_cast<int16_t>(gentle ? (extreme && rng() % 2 ? kGentle : rng() % (kGentle + 1))
                                           : extreme && rng() % 2 ? 16384 : rng() % 16385);
-  // L.t and H.t: the tangential part of a unit vector, |(t1, t2)| <= 2^14.
-  for (int16_t* t : {s.lt, s.ht}) {
+  // (L.t1, L.t2, L.n0) and (H.t1, H.t2, H.n0): a unit vector in the
+  // node's frame, as light_terms gives (Q14 tangents, Q12 normal), all
+  // tangential or all normal at the extremes. (The scalar loops index the
+  // intensity tables unclamped for such vectors: lit_entry_q26.)
+  for (auto [t, n0] : {std::pair{s.lt, &s.l0}, std::pair{s.ht, &s.h0}}) {
     const double a = static_cast<double>(rng() % 6283) / 1000.0;
-    const double r = extreme && rng() % 2 ? 1.0 : static_cast<double>(rng() % 1001) / 1000.0;
+    const double r = extreme && rng() % 2 ? (rng() & 1 ? 1.0 : 0.0) : static_cast<double>(rng() % 1001) / 1000.0;
     t[0] = static_cast<int16_t>(std::lround(16384 * r * std::cos(a) * 0.9999));
     t[1] = static_cast<int16_t>(std::lround(16384 * r * std::sin(a) * 0.9999));
+    *n0 = static_cast<int16_t>(std::lround((rng() & 1 ? 4096 : -4096) * std::sqrt(1 - r * r) * 0.9999));
   }
-  s.l0 = bounded(rng, 4096);
-  s.h0 = bounded(rng, 4096);
   for (auto& row : s.surface) {
     if (gentle) {  // |row| summing to at most kGentle: slopes() scaled
       int32_t left = extreme && rng() % 2 ? kGentle : static_cast<int32_t>(rng() % (kGentle + 1));

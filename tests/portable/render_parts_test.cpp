@@ -3,6 +3,7 @@
 // are in tests/render_reference_test.cpp).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -246,6 +247,70 @@ TEST(Shading, IntensitiesAreLambertAndPhongPowers) {
   Lighting bad;
   bad.shininess = 0;
   EXPECT_FALSE(build_shading_tables(bad, &t));
+}
+
+// The scalar point loops index the intensity tables without a clamp
+// (lit_entry_q26): the pad entries must hold every L.n a sampled normal
+// reaches, and shade it as the ends do.
+TEST(Shading, IntensityPadCoversSampledNormals) {
+  ShadingTables t;
+  ASSERT_TRUE(build_shading_tables(Lighting{}, &t));
+  for (int i = 0; i < kIntensityPad; ++i) {
+    EXPECT_EQ(t.diffuse[i], t.diffuse[intensity_index(-16384)]) << i;
+    EXPECT_EQ(t.specular[i], t.specular[intensity_index(-16384)]) << i;
+    EXPECT_EQ(t.diffuse[kIntensityEntries - 1 - i], t.diffuse[intensity_index(16384)]) << i;
+    EXPECT_EQ(t.specular[kIntensityEntries - 1 - i], t.specular[intensity_index(16384)]) << i;
+  }
+  // L.n = (cos, sinc al, sinc be) . (L.n0, L.t1, L.t2), so |L.n| <= A |L|
+  // with A the norm of the first vector at its largest: per cell, the
+  // cell's table entry with theta^2 at the cell's end (at most 32 rad^2,
+  // both angles within 4 rad; past 16 the entry is the last one again).
+  double a2 = 0;
+  for (int k = 0; k < kCosSincCells; ++k) {
+    const double c = t.cos_sinc[k].cos / 16384.0, s = t.cos_sinc[k].sinc / 16384.0;
+    const double theta2 = std::min((k + 1) / 128.0, 32.0);
+    a2 = std::max(a2, c * c + s * s * theta2);
+  }
+  const double a = std::sqrt(a2);
+  EXPECT_NEAR(a, 1.2532, 0.001);  // at theta = 4 sqrt(2): cos^2 4 + 2 sin^2 4 under the root
+  // |L| within 2^-11 of 1 (the light normalized, light_terms within 4 Q14
+  // LSB a component: NodeDecoder.FrameTables), l0 rounded to Q12 (2^-13)
+  // and the along term floored in Q12 (2^-12 times sinc <= 1).
+  const double reach = a * (1 + 1.0 / 2048 + 1.0 / 8192) + 1.0 / 4096;
+  EXPECT_LT(reach, 1 + kIntensityPad / 128.0);
+  // The integer formula at its extremes: every angle pair on the 4 rad
+  // square's edge and inside, (L.n0, L.t1, L.t2) of norm 1 + 2^-11 in
+  // many directions; the index is in the table, its entries the clamped
+  // index's.
+  const int32_t edge = 16384;
+  const double norm = 16384 * (1 + 1.0 / 2048);
+  int worst_low = kIntensityEntries, worst_high = -1;
+  for (int d = 0; d < 64; ++d)
+    for (int e = 0; e <= 16; ++e) {
+      const double phi = d * 0.0982, z = -1 + e / 8.0, r = std::sqrt(1 - z * z);
+      const int32_t t1 = static_cast<int32_t>(std::lround(norm * r * std::cos(phi)));
+      const int32_t t2 = static_cast<int32_t>(std::lround(norm * r * std::sin(phi)));
+      const int32_t n0 = static_cast<int32_t>(std::lround(norm * z / 4));  // Q12
+      const uint32_t t12 = int16_pair(t1, t2), n0h0 = int16_pair(n0, -n0);
+      for (int32_t al = -edge; al <= edge; al += 1024)
+        for (int32_t be = -edge; be <= edge; be += 1024) {
+          const uint32_t cell = static_cast<uint32_t>(al * al + be * be) >> kCosSincShift;
+          const CosSincQ14& cs = t.cos_sinc[cell];
+          for (const int i : {lit_index<false>(cs, al, be, t12, n0h0), lit_index<true>(cs, al, be, t12, n0h0)}) {
+            ASSERT_GE(i, 0) << al << " " << be << " " << t1 << " " << t2 << " " << n0;
+            ASSERT_LT(i, kIntensityEntries) << al << " " << be << " " << t1 << " " << t2 << " " << n0;
+            worst_low = std::min(worst_low, i);
+            worst_high = std::max(worst_high, i);
+            const int ends = std::clamp(i, kIntensityPad, kIntensityPad + 256);  // l within [-1, 1]
+            ASSERT_EQ(t.diffuse[i], t.diffuse[ends]);
+            ASSERT_EQ(t.specular[i], t.specular[ends]);
+          }
+        }
+    }
+  // The reach measured: about 1.25 either way, within the pad's 1.37.
+  EXPECT_LE(worst_high, kIntensityPad + 128 + 161) << worst_high;
+  EXPECT_GE(worst_low, kIntensityPad + 128 - 161) << worst_low;
+  EXPECT_GT(worst_high, kIntensityPad + 128 + 150) << "the extremes were not reached";
 }
 
 TEST(PointsPerNode, IndexIsScaleFreeInAspect) {
