@@ -482,10 +482,12 @@ struct ScalarChunk {
   uint32_t edge = kScalarChunk;  // [edge, kScalarChunk): across its edge
 };
 
-// The first pass over samples [first, end); the depths shifted down by kDepthShift.
-template <bool kInside, int kDepthShift>
+// The first pass over samples [first, end); the depths shifted down by
+// kDepthShift; tiles of 2^kTileLog2 px where the caller knows it (0: tile_log2).
+template <bool kInside, int kDepthShift, int kTileLog2>
 [[gnu::always_inline]] inline void place_points(const TileRow& n, const PointTables& t, int size, int tile_log2, int px0,
                                                 int py0, uint32_t first, uint32_t end, ScalarChunk& out) {
+  if constexpr (kTileLog2 != 0) tile_log2 = kTileLog2;
   const int tile = 1 << tile_log2;
   // (x0 + (m . g >> 16)) >> 4 is (x0 2^16 + m . g) >> 20 (floors of
   // power-of-two divisions compose): the mean's corner, relative to the
@@ -536,12 +538,13 @@ template <bool kInside, int kDepthShift>
 // The second pass: the colour and the z-test of the chunk's points [begin,
 // end), wholly in the tile (kWhole) or across its edge, their samples in
 // order (kInOrder: a node inside the tile) or listed; squares of kSize px
-// where the caller knows it (0: `size`).
+// and tiles of 2^kTileLog2 where the caller knows them (0: `size`, `tile_log2`).
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kWhole, bool kInOrder, bool kClampAngles,
-          GreyTables kGrey, int kSize, class Word>
+          GreyTables kGrey, int kSize, int kTileLog2, class Word>
 [[gnu::always_inline]] inline void shade_points(const PackedShade& shade, const PointTables& t, int size, Word* words,
                                                 int tile_log2, const ScalarChunk& in, uint32_t begin, uint32_t end) {
   if constexpr (kSize != 0) size = kSize;
+  if constexpr (kTileLog2 != 0) tile_log2 = kTileLog2;
   const uint32_t wh = static_cast<uint32_t>(size | size << 4);
   for (uint32_t k = begin; k < end; ++k) {
     const uint32_t j = kInOrder ? in.first + k : in.sample[k];
@@ -561,19 +564,17 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kWhole,
 // A chunk's second pass: the points wholly in the tile unclipped, then (a
 // node across its edge) the rest clipped.
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, bool kClampAngles, GreyTables kGrey,
-          int kSize, class Word>
+          int kSize, int kTileLog2, class Word>
 [[gnu::always_inline]] inline void shade_chunk(const PackedShade& shade, const PointTables& t, int size, Word* words,
                                                int tile_log2, const ScalarChunk& chunk) {
-  shade_points<kNormals, kColorPoints, kSpecular, true, kInside, kClampAngles, kGrey, kSize>(shade, t, size, words,
-                                                                                              tile_log2, chunk, 0,
-                                                                                              chunk.whole);
+  shade_points<kNormals, kColorPoints, kSpecular, true, kInside, kClampAngles, kGrey, kSize, kTileLog2>(
+      shade, t, size, words, tile_log2, chunk, 0, chunk.whole);
   if constexpr (!kInside)
-    shade_points<kNormals, kColorPoints, kSpecular, false, false, kClampAngles, kGrey, kSize>(shade, t, size, words,
-                                                                                               tile_log2, chunk,
-                                                                                               chunk.edge, kScalarChunk);
+    shade_points<kNormals, kColorPoints, kSpecular, false, false, kClampAngles, kGrey, kSize, kTileLog2>(
+        shade, t, size, words, tile_log2, chunk, chunk.edge, kScalarChunk);
 }
 
-template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, class Word>
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, bool kInside, int kTileLog2, class Word>
 void draw_tile_node_chunks(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0, int py0) {
   const uint32_t count = n.count();
   const PackedShade shade(n);
@@ -584,31 +585,43 @@ void draw_tile_node_chunks(const TileRow& n, const PointTables& t, int size, Wor
   ScalarChunk chunk;
   for (uint32_t first = 0; first < count; first += kScalarChunk) {
     const uint32_t end = count - first < kScalarChunk ? count : first + kScalarChunk;
-    place_points<kInside, sizeof(Word) == 4 ? 16 : 0>(n, t, size, tile_log2, px0, py0, first, end, chunk);
+    place_points<kInside, sizeof(Word) == 4 ? 16 : 0, kTileLog2>(n, t, size, tile_log2, px0, py0, first, end, chunk);
     // The common cases — angles in range, 2 px squares, grey or not —
     // with their tests out of the loop; the rest ask a point at a time.
     if (clamp)
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, true, GreyTables::kAsk, 0>(shade, t, size, words,
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, true, GreyTables::kAsk, 0, kTileLog2>(shade, t, size, words,
                                                                                           tile_log2, chunk);
     else if (size != 2)
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kAsk, 0>(shade, t, size, words,
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kAsk, 0, kTileLog2>(shade, t, size, words,
                                                                                            tile_log2, chunk);
     else if (grey)
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kYes, 2>(shade, t, size, words,
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kYes, 2, kTileLog2>(shade, t, size, words,
                                                                                            tile_log2, chunk);
     else
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kNo, 2>(shade, t, size, words,
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kNo, 2, kTileLog2>(shade, t, size, words,
                                                                                           tile_log2, chunk);
   }
 }
 
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kTileLog2, class Word>
+void draw_tile_node_tiled(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0,
+                          int py0) {
+  if (n.inside_tile(px0, py0, 1 << tile_log2))
+    draw_tile_node_chunks<kNormals, kColorPoints, kSpecular, true, kTileLog2>(n, t, size, words, tile_log2, px0, py0);
+  else
+    draw_tile_node_chunks<kNormals, kColorPoints, kSpecular, false, kTileLog2>(n, t, size, words, tile_log2, px0, py0);
+}
+
+// The default tile's loops know its size: a row's offset and the pixel
+// index's shift are immediates, which on ARMv5 frees the registers two
+// spilled terms took (docs/fixed_point.md, "ARMv5"). Other tiles ask.
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
 void draw_tile_node_scalar(const TileRow& n, const PointTables& t, int size, Word* words, int tile_log2, int px0,
                            int py0) {
-  if (n.inside_tile(px0, py0, 1 << tile_log2))
-    draw_tile_node_chunks<kNormals, kColorPoints, kSpecular, true>(n, t, size, words, tile_log2, px0, py0);
+  if (tile_log2 == kDefaultTileLog2)
+    draw_tile_node_tiled<kNormals, kColorPoints, kSpecular, kDefaultTileLog2>(n, t, size, words, tile_log2, px0, py0);
   else
-    draw_tile_node_chunks<kNormals, kColorPoints, kSpecular, false>(n, t, size, words, tile_log2, px0, py0);
+    draw_tile_node_tiled<kNormals, kColorPoints, kSpecular, 0>(n, t, size, words, tile_log2, px0, py0);
 }
 
 }  // namespace stipple

@@ -41,9 +41,11 @@ enum class PixelFormat : uint8_t { kRgb565, kRgb888 };
 
 inline constexpr int bytes_per_pixel(PixelFormat f) { return f == PixelFormat::kRgb565 ? 2 : 3; }
 
+inline constexpr int kDefaultTileLog2 = 6;  // 64 x 64 tiles (docs/fixed_point.md, "Speed")
+
 struct RasterConfig {
   uint16_t width = 240, height = 320;
-  uint8_t tile_log2 = 6;  // 64 x 64 tiles (docs/fixed_point.md, "Speed")
+  uint8_t tile_log2 = kDefaultTileLog2;
   PixelFormat format = PixelFormat::kRgb565;
   uint32_t max_points = 1u << 16;  // points per frame; more are refused by add()
   // Items (the renderer's nodes) drawn by the caller's tile function inside
