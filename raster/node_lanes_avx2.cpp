@@ -348,7 +348,7 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
     sn = pair(sigma_n[0], sigma_n[1]);
     l0h0 = pair(_mm256_srai_epi32(add(l2, set1(2)), 2), _mm256_srai_epi32(add(h2, set1(2)), 2));
     intensity = gather16(f.shading->diffuse, intensity_index8(l2));
-    if (kSpecular) specular = gather16(f.shading->specular, intensity_index8(h2));
+    if (kSpecular) specular = gather(f.shading->specular, intensity_index8(h2));
     if constexpr (kNormals == PointNormals::kSurface) {
       // The normal frame's tangents in camera space (turn, its first two axes).
       const V tn = _mm256_slli_epi32(ph, 2);

@@ -32,13 +32,13 @@ void build_point_lanes(const Gaussian3Q12* position, const Gaussian2Q12* normal,
   out->q2 = q2;
 }
 
-bool build_grey_shades(const ShadingTables& shading, uint32_t rgb, uint16_t* diffuse, uint32_t* shades,
+bool build_grey_shades(const ShadingTables& shading, uint32_t rgb, uint32_t* diffuse, uint32_t* shades,
                        uint32_t* shades565) {
   const uint32_t v = rgb & 0xFFu;
   if (((rgb >> 16) & 0xFFu) != v || ((rgb >> 8) & 0xFFu) != v) return false;
   for (int i = 0; i < kIntensityEntries; ++i)
     if (shading.specular[i] > 255) return false;
-  for (int i = 0; i < kIntensityEntries; ++i) diffuse[i] = static_cast<uint16_t>((v * shading.diffuse[i]) >> 8);
+  for (int i = 0; i < kIntensityEntries; ++i) diffuse[i] = (v * shading.diffuse[i]) >> 8;
   for (uint32_t s = 0; s < kGreyShades; ++s) {
     shades[s] = (s > 255 ? 255u : s) * 0x010101u;
     shades565[s] = rgb565(shades[s]);

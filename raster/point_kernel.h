@@ -76,7 +76,7 @@ struct PointTables {
   // 256, shading it is two lookups (the scalar loop's shortcut, the same
   // values as shade()): grey_diffuse[i] = (v diffuse[i]) >> 8 and
   // grey_shade[d + s] = min(d + s, 255) as 0xRRGGBB. Null otherwise.
-  const uint16_t* grey_diffuse = nullptr;  // kIntensityEntries
+  const uint32_t* grey_diffuse = nullptr;  // kIntensityEntries (words: one LDR on 32-bit ARM)
   const uint32_t* grey_shade = nullptr;    // kGreyShades
   const uint32_t* grey_shade565 = nullptr; // the same as RGB565
 };
@@ -85,7 +85,7 @@ inline constexpr int kGreyShades = 511;
 // The grey shortcut's tables for base colour `rgb` (false: not a grey, or a
 // specular term above 255): kIntensityEntries diffuse terms, kGreyShades
 // shades as 0xRRGGBB and as many as RGB565.
-bool build_grey_shades(const ShadingTables& shading, uint32_t rgb, uint16_t* diffuse, uint32_t* shades,
+bool build_grey_shades(const ShadingTables& shading, uint32_t rgb, uint32_t* diffuse, uint32_t* shades,
                        uint32_t* shades565);
 
 // Bytes of the paired tables for `samples` samples; fills them from the Gaussian tables.

@@ -164,7 +164,7 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular, int kSize, b
       const __m256i l0 = _mm256_and_si256(l0h0, _mm256_set1_epi32(0xFFFF)), h0 = _mm256_srli_epi32(l0h0, 16);
       const __m256i ambient = _mm256_set1_epi32(t.shading->ambient_q8);
       intensity = diffuse8(lit8(cs, ab, field(TileField::kLt), l0), ambient, _mm256_sub_epi32(_mm256_set1_epi32(256), ambient));
-      specular = kSpecular ? gather16(t.shading->specular, intensity_index8(lit8(cs, ab, field(TileField::kHt), h0)))
+      specular = kSpecular ? gather(t.shading->specular, intensity_index8(lit8(cs, ab, field(TileField::kHt), h0)))
                            : _mm256_setzero_si256();
     } else {
       const __m256i li = field(TileField::kLighting);

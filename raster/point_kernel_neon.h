@@ -23,7 +23,8 @@ inline int32x4_t dot3(int16x4_t g0, int16x4_t g1, int16x4_t g2, int16_t a0, int1
   return vmlal_n_s16(vmlal_n_s16(vmull_n_s16(g0, a0), g1, a1), g2, a2);
 }
 
-inline uint32x4_t gather(const uint16_t* table, int32x4_t idx) {
+template <class Entry>
+inline uint32x4_t gather(const Entry* table, int32x4_t idx) {
   const uint32_t v[4] = {table[vgetq_lane_s32(idx, 0)], table[vgetq_lane_s32(idx, 1)], table[vgetq_lane_s32(idx, 2)],
                          table[vgetq_lane_s32(idx, 3)]};
   return vld1q_u32(v);

@@ -26,7 +26,8 @@ inline __m128i dot3(__m128i g01, __m128i g2, __m128i a01, __m128i a2) {
 }
 
 // Table entries at the int16 indices in lanes 0..3 of `idx`, as 32-bit lanes.
-inline __m128i gather(const uint16_t* table, __m128i idx) {
+template <class Entry>
+inline __m128i gather(const Entry* table, __m128i idx) {
   return _mm_setr_epi32(table[_mm_extract_epi16(idx, 0)], table[_mm_extract_epi16(idx, 1)],
                         table[_mm_extract_epi16(idx, 2)], table[_mm_extract_epi16(idx, 3)]);
 }

@@ -65,7 +65,7 @@ Layout layout_of(const RendererConfig& c) {
   l.shading = take(sizeof(ShadingTables));
   l.reciprocal = take(sizeof(uint16_t) << kReciprocalBits);
   l.lanes = take(point_lane_bytes(c.samples));
-  l.grey = take(align8(2 * kIntensityEntries) + 2 * 4 * kGreyShades);
+  l.grey = take(align8(4 * kIntensityEntries) + 2 * 4 * kGreyShades);
   l.angles = take(frame_angles_bytes(c.max_angle_bits));
   // The node lanes' tables (x86-64 builds, lanes kBest): one tile's list
   // of nodes, each mean field value's camera-space terms, and the
@@ -201,8 +201,8 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   }
   tables_ = PointTables{g_position_, g_normal_, g_color_, shading_};
   build_point_lanes(g_position_, g_normal_, g_color_, config.samples, base + l.lanes, &tables_);
-  uint16_t* grey_diffuse = reinterpret_cast<uint16_t*>(base + l.grey);
-  uint32_t* grey_shades = reinterpret_cast<uint32_t*>(base + l.grey + align8(2 * kIntensityEntries));
+  uint32_t* grey_diffuse = reinterpret_cast<uint32_t*>(base + l.grey);
+  uint32_t* grey_shades = reinterpret_cast<uint32_t*>(base + l.grey + align8(4 * kIntensityEntries));
   grey_shades_ = build_grey_shades(*shading_, config.grey_rgb, grey_diffuse, grey_shades, grey_shades + kGreyShades)
                      ? grey_shades
                      : nullptr;
@@ -334,7 +334,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
     sh.l0 = static_cast<int16_t>((l[2] + 2) >> 2);
     sh.h0 = static_cast<int16_t>((h[2] + 2) >> 2);
     sh.intensity = shading_->diffuse[intensity_index(l[2])];
-    sh.specular = kSpecular ? shading_->specular[intensity_index(h[2])] : 0;
+    sh.specular = kSpecular ? static_cast<uint16_t>(shading_->specular[intensity_index(h[2])]) : 0;
     if constexpr (kNormals == PointNormals::kSurface) {
       // The surface's normal field: a position sample g lands at sum_i g_i
       // sigma_i a_i; its offset along the normal frame's tangent t_k, over

@@ -60,8 +60,9 @@ bool build_shading_tables(const Lighting& lighting, ShadingTables* out) {
     out->diffuse[i] = static_cast<uint16_t>(diffuse_q8(ambient, lit));
     int64_t p = int64_t{1} << 30;  // Q30 power of max(0, l)
     for (int s = 0; s < lighting.shininess; ++s) p = (p * lit) >> 7;
-    out->specular[i] = static_cast<uint16_t>((int64_t{lighting.specular_q8} * 255 * p + (int64_t{1} << 37)) >> 38);
+    out->specular[i] = static_cast<uint32_t>((int64_t{lighting.specular_q8} * 255 * p + (int64_t{1} << 37)) >> 38);
   }
+  for (int i = kIntensityEntries; i < kSpecularWords; ++i) out->specular[i] = 0;  // unread: the layout's room
   return true;
 }
 

@@ -54,11 +54,18 @@ struct alignas(4) CosSincQ14 {
 // (rsqrt_shift).
 inline constexpr int kRsqrtEntries = 768;
 
+// The scalar point loops on 32-bit ARM read `specular` and `cos_sinc` a
+// point each from one base register: the first as 32-bit words at offset 0
+// (one LDR with a scaled index, where a uint16 entry farther in took four
+// instructions), the second kSpecularWords words on, an ARM immediate (one
+// ADD to the index; 353 took two).
+inline constexpr int kSpecularWords = 384;
+static_assert(kSpecularWords >= kIntensityEntries);
 struct ShadingTables {
-  CosSincQ14 cos_sinc[kCosSincCells];  // [kCosSincEntries, kCosSincCells): the last entry again
+  uint32_t specular[kSpecularWords];  // 8-bit levels added to each channel; kIntensityEntries used
+  CosSincQ14 cos_sinc[kCosSincCells];    // [kCosSincEntries, kCosSincCells): the last entry again
   uint16_t rsqrt[kRsqrtEntries];
   uint16_t diffuse[kIntensityEntries];   // Q8: diffuse_q8(ambient_q8, entry)
-  uint16_t specular[kIntensityEntries];  // 8-bit levels added to each channel
   int32_t light_q14[3];                  // normalized, camera space
   int32_t half_q14[3];                   // normalized (light + view), camera space
   int32_t ambient_q8;                    // Lighting's, at most 256
