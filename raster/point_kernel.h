@@ -288,11 +288,7 @@ inline int lit_index(const CosSincQ14& cs, int32_t al, int32_t be, uint32_t t12,
   const int32_t along = __smlabt(be, static_cast<int32_t>(t12), mul_lo(static_cast<uint32_t>(al), t12)) >> 14;
   // The offset of lit_entry_q26 as the chain's start: the same sum.
   const int32_t start = kHigh ? __smlabt(c, n0, kIntensityOffsetQ26) : __smlabb(c, n0, kIntensityOffsetQ26);
-  const int32_t i = __smlatb(c, along, start) >> 19;
-#if STIPPLE_CHECK_RANGES
-  if (i < 0 || i >= kIntensityEntries) __builtin_trap();
-#endif
-  return i;
+  return lit_entry(__smlatb(c, along, start));
 #else
   const int32_t along = (al * static_cast<int16_t>(t12) + be * (static_cast<int32_t>(t12) >> 16)) >> 14;
   const int32_t n0 = kHigh ? pair_hi(n0_pair) : pair_lo(n0_pair);

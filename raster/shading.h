@@ -103,23 +103,24 @@ inline RsqrtScale rsqrt_scale(const ShadingTables& t, uint64_t s2) {
 inline constexpr int32_t kIntensityOffsetQ14 = 16384 + 64 + (kIntensityPad << 7);
 inline int intensity_entry(int32_t i) { return i < 0 ? 0 : i > kIntensityEntries - 1 ? kIntensityEntries - 1 : i; }
 inline int intensity_index(int32_t l_q14) { return intensity_entry((l_q14 + kIntensityOffsetQ14) >> 7); }
-// The same of l in Q26, whose Q14 value is l_q26 >> 12: floors of
-// power-of-two divisions compose, so (l_q26 + kIntensityOffsetQ14 2^12) >>
-// 19 is intensity_index(l_q26 >> 12) exactly, one shift instead of two (the
-// caller keeps the sum below 2^31).
-inline constexpr int32_t kIntensityOffsetQ26 = kIntensityOffsetQ14 << 12;
-inline int intensity_index_q26(int32_t l_q26) { return intensity_entry((l_q26 + kIntensityOffsetQ26) >> 19); }
-// The unclamped index, for |l| < 1 + (kIntensityPad + 1/2) / 128 (Q26:
-// |l_q26| < kIntensityOffsetQ26): a sampled normal's L.n and H.n, which
-// stay within 1.26 — the cos/sinc table's (cos, sinc theta) has norm at
+// The unclamped index of l in Q26, whose Q14 value is l_q26 >> 12: floors
+// of power-of-two divisions compose, so (l_q26 + kIntensityOffsetQ14 2^12)
+// >> 19 is intensity_index(l_q26 >> 12) exactly, one shift instead of two —
+// for |l| < 1 + (kIntensityPad + 1/2) / 128 (|l_q26| < kIntensityOffsetQ26),
+// where the pads make the clamp needless: a sampled normal's L.n and H.n,
+// which stay within 1.26 (the cos/sinc table's (cos, sinc theta) has norm at
 // most 1.2532 for any two angles within 4 rad, tested cell by cell in
-// Shading.IntensityPadCoversSampledNormals; docs/fixed_point.md, "Shading".
-inline int lit_entry_q26(int32_t l_q26) {
-  const int32_t i = (l_q26 + kIntensityOffsetQ26) >> 19;
+// Shading.IntensityPadCoversSampledNormals; docs/fixed_point.md, "Shading").
+// lit_entry takes the sum with its offset (a multiply-accumulate chain may
+// start at it), lit_entry_q26 l itself.
+inline constexpr int32_t kIntensityOffsetQ26 = kIntensityOffsetQ14 << 12;
+inline int lit_entry(int32_t biased_q26) {
+  const int32_t i = biased_q26 >> 19;
 #if STIPPLE_CHECK_RANGES
   if (i < 0 || i >= kIntensityEntries) __builtin_trap();
 #endif
   return i;
 }
+inline int lit_entry_q26(int32_t l_q26) { return lit_entry(l_q26 + kIntensityOffsetQ26); }
 
 }  // namespace stipple
