@@ -585,17 +585,17 @@ void draw_tile_node_chunks(const TileRow& n, const PointTables& t, int size, Wor
     // The common cases — angles in range, 2 px squares, grey or not —
     // with their tests out of the loop; the rest ask a point at a time.
     if (clamp)
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, true, GreyTables::kAsk, 0, kTileLog2>(shade, t, size, words,
-                                                                                          tile_log2, chunk);
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, true, GreyTables::kAsk, 0, kTileLog2>(
+          shade, t, size, words, tile_log2, chunk);
     else if (size != 2)
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kAsk, 0, kTileLog2>(shade, t, size, words,
-                                                                                           tile_log2, chunk);
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kAsk, 0, kTileLog2>(
+          shade, t, size, words, tile_log2, chunk);
     else if (grey)
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kYes, 2, kTileLog2>(shade, t, size, words,
-                                                                                           tile_log2, chunk);
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kYes, 2, kTileLog2>(
+          shade, t, size, words, tile_log2, chunk);
     else
-      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kNo, 2, kTileLog2>(shade, t, size, words,
-                                                                                          tile_log2, chunk);
+      shade_chunk<kNormals, kColorPoints, kSpecular, kInside, false, GreyTables::kNo, 2, kTileLog2>(
+          shade, t, size, words, tile_log2, chunk);
   }
 }
 

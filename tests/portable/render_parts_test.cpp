@@ -274,8 +274,9 @@ TEST(Shading, IntensityPadCoversSampledNormals) {
   const double a = std::sqrt(a2);
   EXPECT_NEAR(a, 1.2532, 0.001);  // at theta = 4 sqrt(2): cos^2 4 + 2 sin^2 4 under the root
   // |L| within 2^-11 of 1 (the light normalized, light_terms within 4 Q14
-  // LSB a component: NodeDecoder.FrameTables), l0 rounded to Q12 (2^-13)
-  // and the along term floored in Q12 (2^-12 times sinc <= 1).
+  // LSB a component: FrameAngles.CameraFramesAndLightTermsMatchTheReference-
+  // Decoder), l0 rounded to Q12 (2^-13) and the along term floored in Q12
+  // (2^-12 times sinc <= 1).
   const double reach = a * (1 + 1.0 / 2048 + 1.0 / 8192) + 1.0 / 4096;
   EXPECT_LT(reach, 1 + kIntensityPad / 128.0);
   // The integer formula at its extremes: every angle pair on the 4 rad
