@@ -18,11 +18,6 @@ namespace {
 inline __m256i gather(const uint32_t* base, __m256i index) {
   return _mm256_i32gather_epi32(reinterpret_cast<const int*>(base), index, 4);
 }
-// A uint16 table's entries (the gather reads 32 bits at 2-byte steps: the
-// tables are followed by more of ShadingTables).
-inline __m256i gather16(const uint16_t* base, __m256i index) {
-  return _mm256_and_si256(_mm256_i32gather_epi32(reinterpret_cast<const int*>(base), index, 2), _mm256_set1_epi32(0xFFFF));
-}
 inline __m256i lo16(__m256i pairs) { return _mm256_srai_epi32(_mm256_slli_epi32(pairs, 16), 16); }
 inline __m256i hi16(__m256i pairs) { return _mm256_srai_epi32(pairs, 16); }
 
