@@ -2,6 +2,7 @@
 // both pixel formats, and exact agreement with a naive untiled rasterizer.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -233,6 +234,39 @@ TEST(Raster, TiledEqualsNaiveForRandomPoints) {
       fr.draw(0x334455);
       ASSERT_EQ(fr.pixels, naive(c, pts, 0x334455)) << "format " << static_cast<int>(f) << " tile " << int{tile_log2};
     }
+}
+
+// The write-out into a frame at any address and of any width: RGB565 rows
+// go out four, two and one pixels at a time by the row's alignment and
+// length (odd addresses a pixel at a time), and nothing outside the frame's
+// rows is written.
+TEST(Raster, WritesFramesAtEveryAlignmentAndWidth) {
+  std::mt19937 rng(7);
+  for (PixelFormat f : {PixelFormat::kRgb565, PixelFormat::kRgb888})
+    for (uint16_t width = 1; width <= 21; ++width)
+      for (size_t offset = 0; offset < 4; ++offset) {
+        const RasterConfig c{width, 5, 3, f, 400};  // 8 px tiles: rows of 1..8 px, every remainder
+        Frame fr(c);
+        std::vector<std::pair<ScreenPoint, int>> pts;
+        for (int i = 0; i < 3 * width; ++i) {
+          const ScreenPoint p{static_cast<int32_t>(rng() % ((width + 2) * 16)) - 16, static_cast<int32_t>(rng() % (7 * 16)) - 16,
+                              static_cast<uint32_t>(rng()), static_cast<uint32_t>(rng() & 0xFFFFFF)};
+          const int s = 1 + static_cast<int>(rng() % 3);
+          ASSERT_TRUE(fr.raster.add(p, s));
+          pts.push_back({p, s});
+        }
+        const size_t row = static_cast<size_t>(width) * bytes_per_pixel(f), stride = row + 3;  // each row at another alignment
+        std::vector<uint8_t> frame(offset + stride * c.height + 8, 0xA5);
+        fr.raster.draw(0x102030, frame.data() + offset, stride);
+        const std::vector<uint8_t> want = naive(c, pts, 0x102030);
+        for (int y = 0; y < c.height; ++y) {
+          const uint8_t* got = frame.data() + offset + y * stride;
+          ASSERT_TRUE(std::equal(got, got + row, want.begin() + static_cast<ptrdiff_t>(y * row)))
+              << "format " << static_cast<int>(f) << " width " << width << " offset " << offset << " row " << y;
+          for (size_t k = row; k < stride; ++k) ASSERT_EQ(got[k], 0xA5) << "the gap after row " << y << " was written";
+        }
+        for (size_t k = 0; k < offset; ++k) ASSERT_EQ(frame[k], 0xA5) << "a byte before the frame was written";
+      }
 }
 
 }  // namespace
