@@ -32,7 +32,7 @@ inline __m256i intensity_index8(__m256i l) {
 }
 
 // The diffuse table's entries for L.n in Q14, `l`, computed (diffuse_q8):
-// with i = intensity_index(l), clamp(i - kIntensityPad - 128, 0, 128) =
+// with i = intensity_index(l), clamp(i - kIntensityZero, 0, 128) =
 // clamp((l + 64) >> 7, 0, 128) — 16,384 is 128 << 7. Seven operations
 // instead of a gather, which on the 1 px frame is the tile pass's costliest
 // instruction.

@@ -98,9 +98,10 @@ void store_row(const uint32_t* row, int pixels, uint8_t* out) {
     std::memcpy(__builtin_assume_aligned(out, 4), pair, 8);
   }
   x = static_cast<int>(p - row);
-  for (; x + 2 <= pixels; x += 2, out += 4) {
+  if (x + 2 <= pixels) {  // fewer than four left: at most one pair
     const uint32_t pair = two(row + x);
     std::memcpy(__builtin_assume_aligned(out, 4), &pair, 4);
+    x += 2, out += 4;
   }
   if (x < pixels) store(out, row[x]);
 }

@@ -51,11 +51,11 @@ bool build_shading_tables(const Lighting& lighting, ShadingTables* out) {
     out->rsqrt[i] = static_cast<uint16_t>(r);
   }
 
-  // Intensities: l = (i - kIntensityPad - 128) / 128, taken within [-1, 1].
+  // Intensities: l = (i - kIntensityZero) / 128, taken within [-1, 1].
   const int32_t ambient = lighting.ambient_q8 > 256 ? 256 : lighting.ambient_q8;
   out->ambient_q8 = ambient;
   for (int i = 0; i < kIntensityEntries; ++i) {
-    const int32_t l_q7 = i - kIntensityPad - 128;  // Q7
+    const int32_t l_q7 = i - kIntensityZero;  // Q7
     const int32_t lit = l_q7 < 0 ? 0 : l_q7 > 128 ? 128 : l_q7;
     out->diffuse[i] = static_cast<uint16_t>(diffuse_q8(ambient, lit));
     int64_t p = int64_t{1} << 30;  // Q30 power of max(0, l)

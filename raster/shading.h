@@ -36,13 +36,14 @@ inline constexpr int kCosSincShift = 17;      // theta^2 in Q24 -> index
 // Cells past kCosSincEntries repeat its last entry — the table ends at
 // theta^2 = 16 — so the scalar loops index it without a clamp.
 inline constexpr int kCosSincCells = ((2 << 28) >> kCosSincShift) + 1;
-// The intensity tables: l in steps of 2^-7, entry kIntensityPad + 128 at l
-// = 0. [-1, 1] takes 257 entries; kIntensityPad more on either side repeat
+// The intensity tables: l in steps of 2^-7, entry kIntensityZero at l = 0.
+// [-1, 1] takes 257 entries; kIntensityPad more on either side repeat
 // the ends (l <= -1 and l >= 1 shade alike), so the scalar point loops
 // index them without a clamp: a sampled normal's L.n stays within 1.26
 // (lit_entry_q26), inside the padded [-1.37, 1.37].
 inline constexpr int kIntensityPad = 48;
 inline constexpr int kIntensityEntries = 257 + 2 * kIntensityPad;
+inline constexpr int kIntensityZero = kIntensityPad + 128;  // the entry of l = 0
 
 // 4-aligned: the scalar loops on 32-bit ARM load an entry as one word.
 struct alignas(4) CosSincQ14 {
@@ -71,10 +72,10 @@ struct ShadingTables {
   int32_t ambient_q8;                    // Lighting's, at most 256
 };
 
-// The diffuse table's entry i, l = (i - kIntensityPad - 128) / 128, for an
+// The diffuse table's entry i, l = (i - kIntensityZero) / 128, for an
 // ambient term `ambient_q8` (at most 256): ambient + (1 - ambient)
-// clamp(l, 0, 1) in Q8, from lit_q7 = clamp(i - kIntensityPad - 128, 0,
-// 128). The AVX2 lanes compute it rather than gather it
+// clamp(l, 0, 1) in Q8, from lit_q7 = clamp(i - kIntensityZero, 0, 128).
+// The AVX2 lanes compute it rather than gather it
 // (raster/point_kernel_avx2.cpp).
 constexpr int32_t diffuse_q8(int32_t ambient_q8, int32_t lit_q7) {
   return ambient_q8 + (((256 - ambient_q8) * lit_q7 + 64) >> 7);
@@ -100,7 +101,7 @@ inline RsqrtScale rsqrt_scale(const ShadingTables& t, uint64_t s2) {
 
 // Table index of l in Q14: (l + kIntensityOffsetQ14) >> 7, clamped — l
 // rounded to the nearest 2^-7, the pad entries below it.
-inline constexpr int32_t kIntensityOffsetQ14 = 16384 + 64 + (kIntensityPad << 7);
+inline constexpr int32_t kIntensityOffsetQ14 = (kIntensityZero << 7) + 64;
 inline int intensity_entry(int32_t i) { return i < 0 ? 0 : i > kIntensityEntries - 1 ? kIntensityEntries - 1 : i; }
 inline int intensity_index(int32_t l_q14) { return intensity_entry((l_q14 + kIntensityOffsetQ14) >> 7); }
 // The unclamped index of l in Q26, whose Q14 value is l_q26 >> 12: floors
