@@ -148,9 +148,12 @@ class TileNodes {
   void store(uint32_t i, const TileNode& n);
   // store's two halves from their parts (each int16 term in an int32): the
   // point formula's position terms (span: x lo, x hi, y lo, y hi), and the
-  // node's shading.
+  // node's shading — its surface and colour terms where the loops read
+  // them (kSurface: PointNormals::kSurface; kColor: colour per point),
+  // those words left as they were otherwise.
   void store_terms(uint32_t i, const int32_t mx[3], const int32_t my[3], const int32_t dz[3], int32_t x0_q4,
                    int32_t y0_q4, uint32_t depth0, const int32_t span[4], uint32_t count, uint32_t dshift);
+  template <bool kSurface = true, bool kColor = true>
   void store_shade(uint32_t i, const PointShade& s);
 
  private:
@@ -207,6 +210,7 @@ inline void TileNodes::store_terms(uint32_t i, const int32_t mx[3], const int32_
   set(TileField::kCountShift, count | dshift << 16);
 }
 
+template <bool kSurface, bool kColor>
 inline void TileNodes::store_shade(uint32_t i, const PointShade& s) {
   uint32_t* const r = row(i);
   const auto set = [&](TileField f, uint32_t v) { r[static_cast<int>(f)] = v; };
@@ -217,13 +221,17 @@ inline void TileNodes::store_shade(uint32_t i, const PointShade& s) {
   set(TileField::kBaseRgb, s.base_rgb);
   set(TileField::kNodeRgb, s.node_rgb);
   set(TileField::kLighting, s.intensity | uint32_t{s.specular} << 16);
-  set(TileField::kS0_01, int16_pair(s.surface[0][0], s.surface[0][1]));
-  set(TileField::kS0_2, int16_pair(s.surface[0][2], 0));
-  set(TileField::kS1_01, int16_pair(s.surface[1][0], s.surface[1][1]));
-  set(TileField::kS1_2, int16_pair(s.surface[1][2], 0));
-  for (int c = 0; c < 3; ++c) {
-    set(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c), int16_pair(s.ca[0][c], s.ca[1][c]));
-    set(static_cast<TileField>(static_cast<int>(TileField::kCa2R) + c), int16_pair(s.ca[2][c], 0));
+  if constexpr (kSurface) {
+    set(TileField::kS0_01, int16_pair(s.surface[0][0], s.surface[0][1]));
+    set(TileField::kS0_2, int16_pair(s.surface[0][2], 0));
+    set(TileField::kS1_01, int16_pair(s.surface[1][0], s.surface[1][1]));
+    set(TileField::kS1_2, int16_pair(s.surface[1][2], 0));
+  }
+  if constexpr (kColor) {
+    for (int c = 0; c < 3; ++c) {
+      set(static_cast<TileField>(static_cast<int>(TileField::kCa01R) + c), int16_pair(s.ca[0][c], s.ca[1][c]));
+      set(static_cast<TileField>(static_cast<int>(TileField::kCa2R) + c), int16_pair(s.ca[2][c], 0));
+    }
   }
 }
 

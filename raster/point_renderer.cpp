@@ -270,7 +270,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   }
   PointSetup s;
   NodeProjection& proj = s.proj;
-  if (!proj.setup(f.camera, c, axes)) {
+  if (!proj.template setup<P != Projection::kAffine>(f.camera, c, axes)) {
     ++stats.nodes_culled;
     return;
   }
@@ -412,7 +412,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
         tile_nodes_.store_terms(item, proj.mx, proj.my, s.dz, proj.x0_q4 - (s.size - 1) * 8,
                                 proj.y0_q4 - (s.size - 1) * 8, static_cast<uint32_t>(s.depth0), span, s.count,
                                 static_cast<uint32_t>(s.dshift));
-        tile_nodes_.store_shade(item, sh);
+        tile_nodes_.store_shade<kNormals == PointNormals::kSurface, kColorPoints>(item, sh);
         int slot = 0;
         for (int32_t ty = ty0; ty <= ty1; ++ty)
           for (int32_t tx = tx0; tx <= tx1; ++tx)

@@ -71,29 +71,35 @@ struct NodeProjection {
   }
   // The same from the mean and the axes in camera space (MU; the mean
   // in_view, every axis component within 2^25 + 2^11: sigma <= 2^25).
+  // kKeep false leaves X, Y, Z and A unset — only the exact and reciprocal
+  // projections' point() reads them — which spares the affine set-up
+  // storing twelve words a node (ARMv5: ~30 instructions).
+  template <bool kKeep = true>
   bool setup(const Camera& camera, const int32_t c[3], const int32_t a[3][3]) {
-    X = c[0];
-    Y = c[1];
-    Z = c[2];
-    for (int k = 0; k < 3; ++k)
-      for (int i = 0; i < 3; ++i) A[k][i] = a[k][i];
+    if constexpr (kKeep) {
+      X = c[0];
+      Y = c[1];
+      Z = c[2];
+      for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < 3; ++i) A[k][i] = a[k][i];
+    }
     focal_q4 = camera.focal_q4;
     cx_q4 = camera.center_q4[0];
     cy_q4 = camera.center_q4[1];
     // u = 2^46 / Z < 2^34, floored — without a divide instruction where
     // the build has none (core/divide.h: the same quotient).
-    const int64_t u = floor_div(int64_t{1} << 46, Z);
+    const int64_t u = floor_div(int64_t{1} << 46, c[2]);
     // Z > 2^15 (every node but the nearest): u < 2^31 and f / Z below
     // 2^31, so each product below is one 32 x 32-bit multiply into 64
     // (ARMv5's SMULL) — the same values as in int64.
-    if (u < (int64_t{1} << 31)) return slopes(c, static_cast<int32_t>(u));
-    return slopes(c, u);
+    if (u < (int64_t{1} << 31)) return slopes(c, a, static_cast<int32_t>(u));
+    return slopes(c, a, u);
   }
 
  private:
   // The rest of setup, from u = 2^46 / Z (int32_t or int64_t).
   template <class U>
-  bool slopes(const int32_t c[3], U u) {
+  bool slopes(const int32_t c[3], const int32_t a[3][3], U u) {
     // X/Z, Y/Z in Q16: below 2^19 (|X|, |Y| <= 8 Z).
     const int32_t xr = static_cast<int32_t>((int64_t{c[0]} * u) >> 30), yr = static_cast<int32_t>((int64_t{c[1]} * u) >> 30);
     x0_q4 = cx_q4 + narrow<int32_t>((int64_t{focal_q4} * xr) >> 16);
@@ -102,10 +108,12 @@ struct NodeProjection {
     for (int k = 0; k < 3; ++k) {
       // (A - (X/Z) A_z): below 2^25 * 9 = 2^28.2 for |A| <= 2^25 + 2^11;
       // times f / Z below 2^62.2; 256 f / Z (A - (X/Z) A_z) after the shift.
-      const int32_t dx = A[k][0] - static_cast<int32_t>((int64_t{xr} * A[k][2]) >> 16);
-      const int32_t dy = A[k][1] - static_cast<int32_t>((int64_t{yr} * A[k][2]) >> 16);
+      const int32_t dx = a[k][0] - static_cast<int32_t>((int64_t{xr} * a[k][2]) >> 16);
+      const int32_t dy = a[k][1] - static_cast<int32_t>((int64_t{yr} * a[k][2]) >> 16);
       const int64_t vx = (int64_t{dx} * fu) >> 22, vy = (int64_t{dy} * fu) >> 22;
-      if (abs64(vx) >= kMaxScreenSlope || abs64(vy) >= kMaxScreenSlope) return false;
+      // |v| >= 2^28, without the 64-bit absolute values: v + 2^28 - 1 outside [0, 2^29 - 2].
+      const auto beyond = [](int64_t v) { return static_cast<uint64_t>(v + (kMaxScreenSlope - 1)) > 2 * kMaxScreenSlope - 2; };
+      if (beyond(vx) || beyond(vy)) return false;
       mx[k] = static_cast<int32_t>(vx);
       my[k] = static_cast<int32_t>(vy);
     }
