@@ -38,6 +38,12 @@ inline constexpr int64_t kMaxScreenSlope = int64_t{1} << 28;  // 1/256 px per si
 void build_reciprocal_table(uint16_t out[1 << kReciprocalBits]);
 
 inline int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
+// Whether a screen slope is out of range, |v| >= kMaxScreenSlope, for |v|
+// below 2^62: v + 2^28 - 1 outside [0, 2^29 - 2] — one unsigned compare,
+// where two 64-bit absolute values cost ARMv5 ~15 instructions a node.
+inline bool slope_beyond(int64_t v) {
+  return static_cast<uint64_t>(v + (kMaxScreenSlope - 1)) > static_cast<uint64_t>(2 * kMaxScreenSlope - 2);
+}
 
 
 struct ScreenSample {
@@ -73,7 +79,7 @@ struct NodeProjection {
   // in_view, every axis component within 2^25 + 2^11: sigma <= 2^25).
   // kKeep false leaves X, Y, Z and A unset — only the exact and reciprocal
   // projections' point() reads them — which spares the affine set-up
-  // storing twelve words a node (ARMv5: ~30 instructions).
+  // storing twelve words a node (ARMv5: ~45 instructions).
   template <bool kKeep = true>
   bool setup(const Camera& camera, const int32_t c[3], const int32_t a[3][3]) {
     if constexpr (kKeep) {
@@ -111,9 +117,7 @@ struct NodeProjection {
       const int32_t dx = a[k][0] - static_cast<int32_t>((int64_t{xr} * a[k][2]) >> 16);
       const int32_t dy = a[k][1] - static_cast<int32_t>((int64_t{yr} * a[k][2]) >> 16);
       const int64_t vx = (int64_t{dx} * fu) >> 22, vy = (int64_t{dy} * fu) >> 22;
-      // |v| >= 2^28, without the 64-bit absolute values: v + 2^28 - 1 outside [0, 2^29 - 2].
-      const auto beyond = [](int64_t v) { return static_cast<uint64_t>(v + (kMaxScreenSlope - 1)) > 2 * kMaxScreenSlope - 2; };
-      if (beyond(vx) || beyond(vy)) return false;
+      if (slope_beyond(vx) || slope_beyond(vy)) return false;
       mx[k] = static_cast<int32_t>(vx);
       my[k] = static_cast<int32_t>(vy);
     }

@@ -114,5 +114,83 @@ TEST(Projection, ReciprocalTableIsRoundedInverse) {
   }
 }
 
+// The slope bound as one unsigned compare (slope_beyond) is |v| >= 2^28
+// exactly: at the bound, either side of it and far beyond.
+TEST(Projection, SlopeBoundIsTheAbsoluteValueBound) {
+  std::vector<int64_t> vs;
+  for (const int64_t edge : {int64_t{0}, kMaxScreenSlope, -kMaxScreenSlope})
+    for (int64_t d = -3; d <= 3; ++d) vs.push_back(edge + d);
+  for (int s = 29; s < 62; s += 4) vs.push_back(int64_t{1} << s), vs.push_back(-(int64_t{1} << s));
+  vs.push_back((int64_t{1} << 62) - 1);
+  vs.push_back(-(int64_t{1} << 62) + 1);
+  for (const int64_t v : vs) EXPECT_EQ(slope_beyond(v), abs64(v) >= kMaxScreenSlope) << v;
+}
+
+// The affine set-up (setup<false>: the camera-space mean and axes not
+// kept) places and refuses every node as the full set-up does: the
+// bunny's nodes from three views, then means from 2^12 MU to 2^30 deep
+// with axes up to 2^25, whose slopes pass the bound near the eye.
+TEST(Projection, AffineSetupPlacesAndRefusesAsTheFullOne) {
+  const std::vector<uint8_t> file = test::fixture("tests/golden/bunny_v1.spg");
+  SpgView view;
+  ASSERT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
+  std::vector<uint8_t> storage(node_decoder_bytes(view.header));
+  NodeDecoder decoder;
+  ASSERT_EQ(decoder.init(view, storage.data(), storage.size()), DecodeStatus::kOk);
+  long placed = 0, refused = 0;
+  const auto same = [&](const Camera& cam, const int32_t c[3], const int32_t a[3][3]) {
+    NodeProjection full, affine;
+    const bool ok = full.setup(cam, c, a);
+    EXPECT_EQ(affine.setup<false>(cam, c, a), ok);
+    if (!ok) return void(++refused);
+    ++placed;
+    EXPECT_EQ(affine.x0_q4, full.x0_q4);
+    EXPECT_EQ(affine.y0_q4, full.y0_q4);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(affine.mx[k], full.mx[k]);
+      EXPECT_EQ(affine.my[k], full.my[k]);
+    }
+  };
+  const uint32_t yaws[3] = {0, 0x40000000u, 0x95555555u}, pitches[3] = {0, 0x0E38E38Eu, 0x1C71C71Cu};
+  Camera cam;
+  for (int v = 0; v < 3; ++v) {
+    OrbitView o;
+    for (int a = 0; a < 3; ++a) o.target_mu[a] = decoder.extent_mu()[a] / 2;
+    o.distance_mu = 37 << 20;
+    o.yaw = yaws[v];
+    o.pitch = pitches[v];
+    o.fov = 0x18E38E39u;
+    ASSERT_TRUE(orbit_camera(o, 640, 480, &cam));
+    for (uint32_t i = 0; i < view.header.node_count; ++i) {
+      FixedNode node;
+      ASSERT_EQ(decoder.decode(view.records + i * view.record_bytes, &node), DecodeStatus::kOk);
+      int32_t c[3], a[3][3];
+      camera_space(cam, node.mean, c);
+      if (!NodeProjection::in_view(cam, c)) continue;
+      for (int k = 0; k < 3; ++k) camera_rotate(cam, node.axis[k], a[k]);
+      same(cam, c, a);
+    }
+  }
+  const long bunny = placed;
+  cam.near_mu = 1 << 12;  // means from 2^12 MU: slopes up to 2^30 px a sigma
+  uint32_t state = 12345;
+  const auto next = [&state](int32_t bound) {  // in [-bound, bound]
+    state = state * 1664525u + 1013904223u;
+    return static_cast<int32_t>(static_cast<int64_t>(state) % (2 * int64_t{bound} + 1) - bound);
+  };
+  for (int64_t z = cam.near_mu + 1; z < (int64_t{1} << 30); z += z / 3 + 1)
+    for (int n = 0; n < 16; ++n) {
+      const int32_t c[3] = {next(static_cast<int32_t>(std::min<int64_t>(8 * z, INT32_MAX))),
+                            next(static_cast<int32_t>(std::min<int64_t>(8 * z, INT32_MAX))), static_cast<int32_t>(z)};
+      int32_t a[3][3];
+      for (auto& axis : a)
+        for (int32_t& e : axis) e = next(1 << 25);
+      same(cam, c, a);
+    }
+  EXPECT_GT(bunny, 10000);
+  EXPECT_GT(placed, bunny + 100);
+  EXPECT_GT(refused, 100) << "no slope passed the bound";
+}
+
 }  // namespace
 }  // namespace stipple
