@@ -14,6 +14,10 @@ struct Layout {
   uint32_t hash_entries;
 };
 
+// A hash entry holds a slot + 1 (0: empty): 16 bits where every slot's
+// fits, as at the handheld's 30 K nodes (128 KB of its 2 MiB arena).
+size_t hash_entry_bytes(const NodeCacheLimits& l) { return l.node_capacity <= 0xFFFFu ? 2 : 4; }
+
 bool valid(const NodeCacheLimits& l) {
   return l.node_capacity >= 1 && l.node_capacity <= (1u << 24) && l.max_angle_bits >= 1 &&
          l.max_angle_bits <= kMaxAngleBits && l.max_classes[0] >= 1 && l.max_record_bytes <= kMaxRecordBytes;
@@ -47,7 +51,7 @@ Layout layout_of(const NodeCacheLimits& c) {
   l.records = take(l.record_stride * c.node_capacity);
   l.ids = take(4 * size_t{c.node_capacity});
   l.points = take(size_t{c.node_capacity});
-  l.hash = take(4 * size_t{l.hash_entries});
+  l.hash = take(hash_entry_bytes(c) * size_t{l.hash_entries});
   l.total = arena.total();
   return l;
 }
@@ -86,7 +90,8 @@ CacheStatus NodeCache::init(const NodeCacheLimits& limits, void* storage, size_t
   records_ = base + l.records;
   ids_ = reinterpret_cast<uint32_t*>(base + l.ids);
   points_ = base + l.points;
-  hash_ = reinterpret_cast<uint32_t*>(base + l.hash);
+  hash16_ = hash_entry_bytes(limits) == 2 ? reinterpret_cast<uint16_t*>(base + l.hash) : nullptr;
+  hash32_ = hash16_ == nullptr ? reinterpret_cast<uint32_t*>(base + l.hash) : nullptr;
   hash_mask_ = l.hash_entries - 1;
   ready_ = false;
   clear();
@@ -95,7 +100,7 @@ CacheStatus NodeCache::init(const NodeCacheLimits& limits, void* storage, size_t
 
 void NodeCache::clear() {
   count_ = 0;
-  for (uint32_t i = 0; i <= hash_mask_; ++i) hash_[i] = 0;
+  for (uint32_t i = 0; i <= hash_mask_; ++i) set_entry(i, 0);
 }
 
 CacheStatus NodeCache::load_startup(const uint8_t* data, size_t size) {
@@ -128,27 +133,27 @@ uint32_t NodeCache::home_slot(uint32_t id) const {
   return shift >= 32 ? 0 : hash_of(id) >> shift;
 }
 
-uint32_t* NodeCache::find(uint32_t id) const {
+uint32_t NodeCache::find(uint32_t id) const {
   for (uint32_t i = home_slot(id);; i = (i + 1) & hash_mask_) {
-    if (hash_[i] == 0 || ids_[hash_[i] - 1] == id) return &hash_[i];
+    const uint32_t e = entry(i);
+    if (e == 0 || ids_[e - 1] == id) return i;
   }
 }
 
-bool NodeCache::has(NodeId id) const { return ready_ && *find(index_of(id)) != 0; }
+bool NodeCache::has(NodeId id) const { return ready_ && entry(find(index_of(id))) != 0; }
 
-void NodeCache::erase_hash(uint32_t* entry) {
+void NodeCache::erase_hash(uint32_t hole) {
   // Backward-shift deletion keeps every probe sequence unbroken.
-  uint32_t hole = static_cast<uint32_t>(entry - hash_);
-  for (uint32_t j = (hole + 1) & hash_mask_; hash_[j] != 0; j = (j + 1) & hash_mask_) {
-    const uint32_t home = home_slot(ids_[hash_[j] - 1]);
+  for (uint32_t j = (hole + 1) & hash_mask_; entry(j) != 0; j = (j + 1) & hash_mask_) {
+    const uint32_t home = home_slot(ids_[entry(j) - 1]);
     // Move j into the hole unless its home lies cyclically in (hole, j].
     const bool stays = hole <= j ? (home > hole && home <= j) : (home > hole || home <= j);
     if (!stays) {
-      hash_[hole] = hash_[j];
+      set_entry(hole, entry(j));
       hole = j;
     }
   }
-  hash_[hole] = 0;
+  set_entry(hole, 0);
 }
 
 CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size, uint8_t points) {
@@ -159,15 +164,15 @@ CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size, uint
   const NodeFields fields = decoder_.unpacker().unpack(record);
   if (!decoder_.classes_valid(fields)) return CacheStatus::kBadRecord;
   const uint32_t id = index_of(node);
-  uint32_t* entry = find(id);
+  const uint32_t at = find(id);
   uint32_t slot;
-  if (*entry != 0) {
-    slot = *entry - 1;
+  if (entry(at) != 0) {
+    slot = entry(at) - 1;
   } else {
     if (count_ >= limits_.node_capacity) return CacheStatus::kFull;
     slot = count_++;
     ids_[slot] = id;
-    *entry = slot + 1;
+    set_entry(at, slot + 1);
   }
   uint8_t* dst = records_ + slot * record_stride_;
   if (limits_.decoded) *reinterpret_cast<NodeFields*>(dst) = fields;
@@ -179,17 +184,17 @@ CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size, uint
 
 CacheStatus NodeCache::drop(NodeId node) {
   if (!ready_) return CacheStatus::kNoStartup;
-  uint32_t* entry = find(index_of(node));
-  if (*entry == 0) return CacheStatus::kUnknownNode;
-  const uint32_t slot = *entry - 1, last = count_ - 1;
-  erase_hash(entry);
+  const uint32_t at = find(index_of(node));
+  if (entry(at) == 0) return CacheStatus::kUnknownNode;
+  const uint32_t slot = entry(at) - 1, last = count_ - 1;
+  erase_hash(at);
   if (slot != last) {  // keep the cache dense: the last node moves into the hole
     const uint8_t* src = records_ + last * record_stride_;
     uint8_t* dst = records_ + slot * record_stride_;
     for (size_t i = 0; i < record_stride_; ++i) dst[i] = src[i];
     ids_[slot] = ids_[last];
     points_[slot] = points_[last];
-    *find(ids_[slot]) = slot + 1;
+    set_entry(find(ids_[slot]), slot + 1);
   }
   --count_;
   return CacheStatus::kOk;

@@ -18,7 +18,7 @@
 // are kept packed (9-17 bytes a node, unpacked by whoever reads them) or, with
 // `decoded`, unpacked once into their fields (NodeFields, 36 bytes), which
 // trades memory for the per-frame unpacking. Ids hash into an open-addressed table (linear
-// probing, backward-shift deletion); slots stay dense, so iteration visits
+// probing, backward-shift deletion; 16-bit entries up to 65,535 nodes); slots stay dense, so iteration visits
 // exactly count() records. Not thread-safe: one owner.
 #pragma once
 
@@ -95,9 +95,14 @@ class NodeCache {
   bool decoded() const { return limits_.decoded; }
 
  private:
-  uint32_t* find(uint32_t id) const;
+  uint32_t find(uint32_t id) const;  // id's hash entry, or the empty one ending its probe sequence
   uint32_t home_slot(uint32_t id) const;  // where id's probe sequence starts
-  void erase_hash(uint32_t* entry);
+  void erase_hash(uint32_t at);
+  uint32_t entry(uint32_t i) const { return hash16_ != nullptr ? hash16_[i] : hash32_[i]; }
+  void set_entry(uint32_t i, uint32_t v) {
+    if (hash16_ != nullptr) hash16_[i] = static_cast<uint16_t>(v);
+    else hash32_[i] = v;
+  }
 
   NodeCacheLimits limits_{};
   NodeDecoder decoder_;
@@ -109,7 +114,10 @@ class NodeCache {
   uint8_t* records_ = nullptr;  // node_capacity x record_stride_
   uint32_t* ids_ = nullptr;     // per slot
   uint8_t* points_ = nullptr;   // per slot: original points, saturated at 255
-  uint32_t* hash_ = nullptr;    // slot + 1, 0 = empty; linear probing
+  // Slot + 1, 0 = empty; linear probing. 16-bit entries where the
+  // capacity allows (node_capacity < 2^16), else 32-bit: one of the two.
+  uint16_t* hash16_ = nullptr;
+  uint32_t* hash32_ = nullptr;
   uint32_t hash_mask_ = 0;
   uint32_t count_ = 0;
 };

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "core/cut.h"
@@ -604,6 +605,52 @@ TEST(NodeCache, ServesNodesWithoutARenderer) {
   const ClientConfig c = small_config();
   EXPECT_EQ(client_arena_bytes(c), ((node_cache_bytes(cache_limits(c)) + 7) & ~size_t{7}) +
                                        point_renderer_bytes(renderer_config(c)));
+}
+
+// The hash's entries are 16 bits up to 65,535 nodes and 32 above: either
+// way a cache filled to capacity, half dropped and refilled, finds every
+// node it holds and no other, its slots dense.
+TEST(NodeCache, HashEntriesNarrowWhereEverySlotFits) {
+  const SpgView& v = bunny().view;
+  NodeCacheLimits limits;
+  limits.node_capacity = 65535;
+  const size_t narrow = node_cache_bytes(limits);
+  limits.node_capacity = 65536;
+  const size_t wide = node_cache_bytes(limits);
+  // One more record (17 bytes: colour allowed), id and count, each section
+  // 8-aligned, and 2^17 entries either way (load <= 2/3) of 4 bytes, not 2.
+  const auto align8 = [](size_t n) { return (n + 7) & ~size_t{7}; };
+  EXPECT_EQ(wide - narrow, align8(17 * 65536) - align8(17 * 65535) + align8(4 * 65536) - align8(4 * 65535) +
+                               align8(65536) - align8(65535) + (4 - 2) * (size_t{1} << 17));
+  for (uint32_t capacity : {65535u, 65536u}) {
+    limits.node_capacity = capacity;
+    std::vector<uint64_t> storage(node_cache_bytes(limits) / 8 + 1);
+    NodeCache cache;
+    ASSERT_EQ(cache.init(limits, storage.data(), storage.size() * 8), CacheStatus::kOk);
+    ASSERT_EQ(cache.load_startup(bunny().file.data(), bunny().startup_bytes), CacheStatus::kOk);
+    // Ids spread over 32 bits, so that probe sequences wrap and collide.
+    std::mt19937 rng(capacity);
+    std::vector<uint32_t> ids;
+    std::set<uint32_t> taken;
+    while (ids.size() < 2 * size_t{capacity}) {
+      const uint32_t id = static_cast<uint32_t>(rng());
+      if (taken.insert(id).second) ids.push_back(id);
+    }
+    const uint8_t* r = record(3);
+    for (uint32_t i = 0; i < capacity; ++i) ASSERT_EQ(cache.put(NodeId{ids[i]}, r, v.record_bytes), CacheStatus::kOk);
+    EXPECT_EQ(cache.put(NodeId{ids[capacity]}, r, v.record_bytes), CacheStatus::kFull);
+    for (uint32_t i = 0; i < capacity; i += 2) ASSERT_EQ(cache.drop(NodeId{ids[i]}), CacheStatus::kOk);
+    for (uint32_t i = capacity; i < capacity + capacity / 2; ++i)
+      ASSERT_EQ(cache.put(NodeId{ids[i]}, r, v.record_bytes), CacheStatus::kOk);
+    ASSERT_EQ(cache.count(), capacity - (capacity + 1) / 2 + capacity / 2);
+    for (uint32_t i = 0; i < 2 * capacity; ++i) {
+      const bool held = i < capacity ? i % 2 == 1 : i < capacity + capacity / 2;
+      ASSERT_EQ(cache.has(NodeId{ids[i]}), held) << capacity << " " << i;
+    }
+    std::set<uint32_t> slots;
+    for (uint32_t s = 0; s < cache.count(); ++s) ASSERT_TRUE(slots.insert(index_of(cache.id_at(s))).second);
+    EXPECT_EQ(cache.drop(NodeId{ids[0]}), CacheStatus::kUnknownNode);
+  }
 }
 
 }  // namespace
