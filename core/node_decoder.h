@@ -98,6 +98,16 @@ class NodeDecoder {
     const int shift = header_.layout.bits[axis] + 1 + 8;
     return narrow<int32_t>((v + (int64_t{1} << (shift - 1))) >> shift);
   }
+  // Every cell centre of one axis, mean_axis_mu(axis, q) for q = 0 .. 2^b - 1,
+  // into out[q * stride]: the same sums, one 64-bit addition a cell. Returns 2^b.
+  uint32_t mean_axis_cells(int axis, int32_t* out, size_t stride) const {
+    const int shift = header_.layout.bits[axis] + 1 + 8;
+    const int64_t step = 2 * axis_scale_q8_[axis];
+    const uint32_t cells = 1u << header_.layout.bits[axis];
+    int64_t v = axis_scale_q8_[axis] + (int64_t{1} << (shift - 1));
+    for (uint32_t q = 0; q < cells; ++q, v += step) out[q * stride] = narrow<int32_t>(v >> shift);
+    return cells;
+  }
   void mean_mu(const NodeFields& f, int32_t out[3]) const {
     for (int a = 0; a < 3; ++a) out[a] = mean_axis_mu(a, f.v[a]);
   }

@@ -17,7 +17,11 @@ constexpr int32_t kMaxFocalQ4 = 1 << 20;
 constexpr int32_t kMaxDepthMu = 1 << 30;
 constexpr int32_t kMaxSigmaN = 4 << 12;       // theta table covers theta <= 4 rad
 constexpr int32_t kMaxSigmaP = 1 << 25;       // MU: two box extents
-constexpr int kMeanTermBits = 11;             // the node lanes' mean tables: position fields up to 11 bits
+constexpr int kMeanTermBits = 11;             // the mean tables: position fields up to 11 bits
+// The mean table is built for a frame whose nodes are at least 1 / kMeanCellsPerNode
+// of its entries: an entry costs ~30 instructions to build on ARMv5, and
+// saves each node ~160 of draw_node's (docs/fixed_point.md, "ARMv5").
+constexpr uint32_t kMeanCellsPerNode = 5;
 constexpr uint32_t kLaneBatches = 64;         // node lanes: batches of 8 set up in one call
 // The fewest points a node drawn in the tile pass has. Where the node lanes
 // set nodes up (x86-64 builds) every count: they draw no node through the
@@ -68,11 +72,11 @@ Layout layout_of(const RendererConfig& c) {
   l.grey = take(align8(4 * kIntensityEntries) + 2 * 4 * kGreyShades);
   l.angles = take(frame_angles_bytes(c.max_angle_bits));
   // The node lanes' tables (x86-64 builds, lanes kBest): one tile's list
-  // of nodes, each mean field value's camera-space terms, and the
-  // points-per-node table with room for the lanes' 32-bit reads.
+  // of nodes and the points-per-node table with room for the lanes' 32-bit
+  // reads; and, for every set-up, each mean field value's camera-space terms.
   const bool node_lanes = avx2::kBuilt && c.lanes == PointLanes::kBest && c.tile_nodes > 0;
   l.tile_list = take(node_lanes ? 4 * size_t{point_raster_items(r)} : 0);
-  l.mean_terms = take(node_lanes ? sizeof(int32_t) * 3 * 3 * (size_t{1} << kMeanTermBits) : 0);
+  l.mean_terms = take(sizeof(int32_t) * 3 * 3 * (size_t{1} << kMeanTermBits));
   l.ppn = take(node_lanes ? sizeof(PpnTable) + 4 : 0);
   l.total = arena.total();
   return l;
@@ -116,6 +120,26 @@ inline void mean_axis_terms(const Camera& camera, int axis, int32_t d, int32_t o
 }
 
 inline int bit_length(uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); }
+
+// The frame's mean table: each position field value's camera-space terms
+// (mean_axis_terms), [q][3] an axis, q below 2^kMeanTermBits — the terms
+// draw_node would form, read by it and by the node lanes.
+void build_mean_terms(const Camera& camera, const NodeDecoder& decoder, int32_t* table, const int32_t* out[3]) {
+  for (int a = 0; a < 3; ++a) {
+    int32_t* t = table + size_t{3} * a * (size_t{1} << kMeanTermBits);
+    const uint32_t cells = decoder.mean_axis_cells(a, t, 3);  // the cell centres, then their terms in place
+    // mean_axis_terms with R's column in registers (the table's stores
+    // might alias the camera's words: they would be reloaded a cell).
+    const int32_t r0 = camera.rotation[0][a], r1 = camera.rotation[1][a], r2 = camera.rotation[2][a], eye = camera.eye[a];
+    for (uint32_t q = 0; q < cells; ++q) {
+      const int32_t d = t[3 * q] - eye;
+      t[3 * q] = mul_q14_fast(r0, d);
+      t[3 * q + 1] = mul_q14_fast(r1, d);
+      t[3 * q + 2] = mul_q14_fast(r2, d);
+    }
+    out[a] = t;
+  }
+}
 
 }  // namespace
 
@@ -182,7 +206,7 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   static_assert(kTileLinks == PointRaster::kItemLinks, "a tile node's row is the raster's item and its links");
   tile_nodes_.init(raster_.item_words(0), raster_.item_capacity());
   tile_list_ = l.tile_list != l.mean_terms ? reinterpret_cast<uint32_t*>(base + l.tile_list) : nullptr;
-  mean_terms_ = l.mean_terms != l.ppn ? reinterpret_cast<int32_t*>(base + l.mean_terms) : nullptr;
+  mean_terms_ = reinterpret_cast<int32_t*>(base + l.mean_terms);
   lane_ppn_ = l.ppn != l.total ? reinterpret_cast<uint16_t*>(base + l.ppn) : nullptr;
   lanes_ = config.lanes == PointLanes::kScalar ? PointLanes::kScalar
            : config.lanes == PointLanes::kBest && avx2::supported() ? PointLanes::kBest
@@ -236,6 +260,9 @@ struct PointRenderer::PointSetup {
 struct PointRenderer::FrameSetup {
   Camera camera;
   const NodeDecoder* decoder;
+  // Each mean field value's camera-space terms, [q][3] an axis (build_mean_terms),
+  // or null: draw_node forms them.
+  const int32_t* mean[3];
   int32_t width_q4, height_q4;
   int depth_shift;
   int16_t light[3], half[3];  // model space, Q14
@@ -246,12 +273,18 @@ struct PointRenderer::FrameSetup {
 template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
 void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uint32_t max_points, FrameStats& stats) {
   const NodeDecoder& decoder = *f.decoder;
-  // The mean in camera space, each axis's terms rounded (mean_axis_terms).
+  // The mean in camera space, each axis's terms rounded (mean_axis_terms),
+  // from the frame's table where it has one.
   int32_t c[3] = {0, 0, 0};
-  for (int a = 0; a < 3; ++a) {
-    int32_t t[3];
-    mean_axis_terms(f.camera, a, decoder.mean_axis_mu(a, fields.v[a]) - f.camera.eye[a], t);
-    for (int i = 0; i < 3; ++i) c[i] += t[i];
+  if (f.mean[0] != nullptr) {
+    const int32_t *t0 = f.mean[0] + 3 * fields.v[0], *t1 = f.mean[1] + 3 * fields.v[1], *t2 = f.mean[2] + 3 * fields.v[2];
+    for (int i = 0; i < 3; ++i) c[i] = t0[i] + t1[i] + t2[i];
+  } else {
+    for (int a = 0; a < 3; ++a) {
+      int32_t t[3];
+      mean_axis_terms(f.camera, a, decoder.mean_axis_mu(a, fields.v[a]) - f.camera.eye[a], t);
+      for (int i = 0; i < 3; ++i) c[i] += t[i];
+    }
   }
   if (!NodeProjection::in_view(f.camera, c)) {
     ++stats.nodes_culled;
@@ -532,13 +565,7 @@ NodeLaneFrame PointRenderer::lane_frame(const FrameSetup& f, const NodeCache& ca
   for (int i = 0; i < kFieldCount; ++i)
     lf.window[i] = cache.decoded() ? FieldWindow{static_cast<uint8_t>(2 * i), 0, 0xFFFF}
                                    : field_window(header.layout, static_cast<Field>(i));
-  // Each mean field value's camera-space terms (draw_node's).
-  for (int a = 0; a < 3; ++a) {
-    int32_t* t = mean_terms_ + size_t{3} * a * (size_t{1} << kMeanTermBits);
-    for (uint32_t q = 0; q < (1u << header.layout.bits[a]); ++q)
-      mean_axis_terms(f.camera, a, decoder.mean_axis_mu(a, q) - f.camera.eye[a], t + 3 * q);
-    lf.mean[a] = t;
-  }
+  for (int a = 0; a < 3; ++a) lf.mean[a] = f.mean[a];
   lf.position = angles_.position_table();
   lf.normal = angles_.normal_table();
   lf.light = angles_.light_table();
@@ -654,9 +681,21 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
 #undef STIPPLE_PICK_N
 #undef STIPPLE_PICK
 
-  FrameStats stats;
   const uint32_t count = cache.count();
+  // The mean table where the fields fit it: for the node lanes, and for
+  // draw_node where the cut repays building it (kMeanCellsPerNode).
+  const bool mean_fits = header.layout.bits[0] <= kMeanTermBits && header.layout.bits[1] <= kMeanTermBits &&
+                         header.layout.bits[2] <= kMeanTermBits;
+  const bool node_lanes = avx2::kBuilt && lane_ppn_ != nullptr && lanes_ == PointLanes::kBest &&
+                          config_.projection == Projection::kAffine && !f.model_color && config_.point_cap == 0 &&
+                          mean_fits && count >= 64;
+  const uint32_t mean_cells = (1u << header.layout.bits[0]) + (1u << header.layout.bits[1]) + (1u << header.layout.bits[2]);
+  f.mean[0] = f.mean[1] = f.mean[2] = nullptr;
+  FrameStats stats;
   stats.nodes = count;
+  stats.mean_table = node_lanes || (mean_fits && uint64_t{count} * kMeanCellsPerNode >= mean_cells);
+  if (stats.mean_table) build_mean_terms(f.camera, cache.decoder(), mean_terms_, f.mean);
+
   raster_.begin_frame();
   // The point cap: a node draws at most point_cap times the original points
   // under it (times the supersampling's n^2, so it means the same on screen).
@@ -677,10 +716,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
     // allows; what the lanes leave, and every node when the tile pass or the
     // budget runs short (so the order in which nodes claim them is the
     // scalar loop's), through draw_node.
-    const bool mean_fits = header.layout.bits[0] <= kMeanTermBits && header.layout.bits[1] <= kMeanTermBits &&
-                           header.layout.bits[2] <= kMeanTermBits;
-    if (mean_terms_ != nullptr && lanes_ == PointLanes::kBest && config_.projection == Projection::kAffine &&
-        !f.model_color && config_.point_cap == 0 && mean_fits && count >= 64) {
+    if (node_lanes) {
       const NodeLaneFrame lf = lane_frame(f, cache);
       using LaneFn = uint32_t (*)(const NodeLaneFrame&, uint32_t, uint32_t, TileNodes&, uint32_t, NodeLaneBatch*);
       const LaneFn lane_fn = point_normals == PointNormals::kSampled

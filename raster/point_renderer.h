@@ -112,6 +112,7 @@ struct FrameStats {
   uint32_t points_dropped = 0;  // refused by a full frame budget
   uint32_t nodes_in_tiles = 0;  // of nodes_drawn: drawn inside the tile pass (RendererConfig::tile_nodes)
   uint32_t nodes_in_lanes = 0;  // of nodes: set up 8 at a time in AVX2 lanes, culled or drawn (raster/node_lanes.h)
+  bool mean_table = false;      // the means' camera-space terms came from the frame's table (docs/fixed_point.md)
 };
 
 bool renderer_config_valid(const RendererConfig& config);
@@ -182,7 +183,7 @@ class PointRenderer {
   TileNodes tile_nodes_;            // the raster's items
   uint32_t* tile_list_ = nullptr;   // one tile's nodes (the AVX2 loop's input)
   PointLanes lanes_ = PointLanes::kScalar;  // what config_.lanes resolved to on this CPU
-  int32_t* mean_terms_ = nullptr;   // the node lanes' (node_lanes.h): [axis][q][3]
+  int32_t* mean_terms_ = nullptr;   // the frame's mean table (build_mean_terms): [axis][q][3]
   uint16_t* lane_ppn_ = nullptr;    // the points-per-node table, padded for 32-bit reads
   // sample_reach_[i][k]: the largest |g_k| (Q12) of the first
   // sample_reach_samples(i) position samples — a node of no more points

@@ -7,12 +7,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <set>
 #include <vector>
 
 #include "core/cut.h"
+#include "core/fixed_trig.h"
 #include "raster/client.h"
 #include "raster/point_kernel_avx2.h"
 #include "tests/portable/test_files.h"
@@ -226,6 +228,56 @@ TEST(Client, DrawsNothingBehindTheCameraAndCountsCulls) {
   EXPECT_EQ(stats.points, 0u);
   EXPECT_EQ(stats.nodes_culled, n);
   EXPECT_TRUE(std::all_of(frame.begin(), frame.end(), [](uint8_t v) { return v == 0; }));  // cleared to black
+}
+
+// The frame's mean table, built where the cut repays it, gives draw_node
+// the terms it would form itself: a few nodes (below the table's threshold)
+// draw the frame they draw beside enough nodes behind the camera to pass
+// it, in each projection, with and without SIMD point lanes.
+TEST(Client, MeanTableGivesTheTermsDrawNodeForms) {
+  const SpgView& v = bunny().view;
+  const uint32_t n = v.header.node_count;
+  constexpr uint32_t kFew = 300;
+  for (Projection projection : {Projection::kAffine, Projection::kExact})
+    for (PointLanes lanes : {PointLanes::kBaseline, PointLanes::kScalar}) {
+      ClientConfig c = small_config(n);
+      c.raster.max_points = 1u << 21;  // no point dropped
+      c.projection = projection;
+      c.lanes = lanes;  // not the x86 node lanes, which always read the table
+      Harness few(c), many(c);
+      ASSERT_EQ(few.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+      ASSERT_EQ(many.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
+      // The eye at the model's centre, looking as the orbit camera does: the
+      // nodes behind it are culled by their camera-space mean (in_view).
+      Camera cam = camera_for(few.client, 30, 20);
+      const int32_t* extent = few.client.decoder().extent_mu();
+      for (int k = 0; k < 3; ++k) cam.eye[k] = extent[k] / 2;
+      cam.near_mu = kCameraMinDistance;
+      const auto behind = [&](uint32_t id) {
+        const NodeFields f = unpack_record(v.header.layout, record(id));
+        int64_t m[3] = {0, 0, 0};
+        for (int i = 0; i < 3; ++i)
+          for (int a = 0; a < 3; ++a) m[i] += mul_q14(cam.rotation[i][a], few.client.decoder().mean_axis_mu(a, f.v[a]) - cam.eye[a]);
+        return !(m[2] > cam.near_mu && std::abs(m[0]) <= 8 * m[2] && std::abs(m[1]) <= 8 * m[2]);
+      };
+      for (uint32_t id = 0; id < kFew; ++id) {
+        ASSERT_EQ(few.client.put_node(NodeId{id}, record(id), v.record_bytes), ClientStatus::kOk);
+        ASSERT_EQ(many.client.put_node(NodeId{id}, record(id), v.record_bytes), ClientStatus::kOk);
+      }
+      uint32_t hidden = 0;
+      for (uint32_t id = kFew; id < n; ++id)
+        if (behind(id)) {
+          ASSERT_EQ(many.client.put_node(NodeId{id}, record(id), v.record_bytes), ClientStatus::kOk);
+          ++hidden;
+        }
+      FrameStats a, b;
+      EXPECT_EQ(draw(few.client, cam, &a), draw(many.client, cam, &b));
+      EXPECT_FALSE(a.mean_table);
+      EXPECT_TRUE(b.mean_table);
+      EXPECT_EQ(a.points, b.points);
+      EXPECT_EQ(b.nodes_culled, a.nodes_culled + hidden);
+      EXPECT_GT(a.points, 1000u);
+    }
 }
 
 // The tile pass (RendererConfig::tile_nodes: a node inside one tile has its
