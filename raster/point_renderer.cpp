@@ -112,14 +112,35 @@ inline int32_t abs32(int32_t v) { return v < 0 ? -v : v; }
 // One mean axis's camera-space terms: R's column `axis` (Q14) times d =
 // mean_a - eye_a (|d| <= 2^29 + 2^24), each rounded from Q14 (mul_q14_fast:
 // 32-bit products on 32-bit targets). A node's camera-space mean is their
-// sum over the three axes (every partial sum within int32); draw_node forms
-// them per node, the node lanes read them from a per-frame table over the
-// field's values — the same terms either way.
-inline void mean_axis_terms(const Camera& camera, int axis, int32_t d, int32_t out[3]) {
-  for (int i = 0; i < 3; ++i) out[i] = mul_q14_fast(camera.rotation[i][axis], d);
+// sum over the three axes (every partial sum within int32): formed per node
+// (camera_mean) or read from the frame's table over the field's values
+// (build_mean_terms) — the same terms either way. The column is taken by
+// value: the table's stores cannot alias it, so its loop keeps it in
+// registers.
+struct RotationColumn {
+  int32_t r0, r1, r2;
+};
+inline RotationColumn rotation_column(const Camera& camera, int axis) {
+  return RotationColumn{camera.rotation[0][axis], camera.rotation[1][axis], camera.rotation[2][axis]};
+}
+inline void mean_axis_terms(RotationColumn column, int32_t d, int32_t out[3]) {
+  out[0] = mul_q14_fast(column.r0, d);
+  out[1] = mul_q14_fast(column.r1, d);
+  out[2] = mul_q14_fast(column.r2, d);
 }
 
 inline int bit_length(uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); }
+
+// A node's camera-space mean formed from its fields (mean_axis_terms), in a
+// frame without the mean table.
+void camera_mean(const Camera& camera, const NodeDecoder& decoder, const NodeFields& fields, int32_t c[3]) {
+  c[0] = c[1] = c[2] = 0;
+  for (int a = 0; a < 3; ++a) {
+    int32_t t[3];
+    mean_axis_terms(rotation_column(camera, a), decoder.mean_axis_mu(a, fields.v[a]) - camera.eye[a], t);
+    for (int i = 0; i < 3; ++i) c[i] += t[i];
+  }
+}
 
 // The frame's mean table: each position field value's camera-space terms
 // (mean_axis_terms), [q][3] an axis, q below 2^kMeanTermBits — the terms
@@ -128,15 +149,9 @@ void build_mean_terms(const Camera& camera, const NodeDecoder& decoder, int32_t*
   for (int a = 0; a < 3; ++a) {
     int32_t* t = table + size_t{3} * a * (size_t{1} << kMeanTermBits);
     const uint32_t cells = decoder.mean_axis_cells(a, t, 3);  // the cell centres, then their terms in place
-    // mean_axis_terms with R's column in registers (the table's stores
-    // might alias the camera's words: they would be reloaded a cell).
-    const int32_t r0 = camera.rotation[0][a], r1 = camera.rotation[1][a], r2 = camera.rotation[2][a], eye = camera.eye[a];
-    for (uint32_t q = 0; q < cells; ++q) {
-      const int32_t d = t[3 * q] - eye;
-      t[3 * q] = mul_q14_fast(r0, d);
-      t[3 * q + 1] = mul_q14_fast(r1, d);
-      t[3 * q + 2] = mul_q14_fast(r2, d);
-    }
+    const RotationColumn column = rotation_column(camera, a);
+    const int32_t eye = camera.eye[a];
+    for (uint32_t q = 0; q < cells; ++q) mean_axis_terms(column, t[3 * q] - eye, t + 3 * q);
     out[a] = t;
   }
 }
@@ -275,16 +290,12 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   const NodeDecoder& decoder = *f.decoder;
   // The mean in camera space, each axis's terms rounded (mean_axis_terms),
   // from the frame's table where it has one.
-  int32_t c[3] = {0, 0, 0};
+  int32_t c[3];
   if (f.mean[0] != nullptr) {
     const int32_t *t0 = f.mean[0] + 3 * fields.v[0], *t1 = f.mean[1] + 3 * fields.v[1], *t2 = f.mean[2] + 3 * fields.v[2];
     for (int i = 0; i < 3; ++i) c[i] = t0[i] + t1[i] + t2[i];
   } else {
-    for (int a = 0; a < 3; ++a) {
-      int32_t t[3];
-      mean_axis_terms(f.camera, a, decoder.mean_axis_mu(a, fields.v[a]) - f.camera.eye[a], t);
-      for (int i = 0; i < 3; ++i) c[i] += t[i];
-    }
+    camera_mean(f.camera, decoder, fields, c);
   }
   if (!NodeProjection::in_view(f.camera, c)) {
     ++stats.nodes_culled;

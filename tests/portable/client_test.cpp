@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <random>
 #include <set>
@@ -17,6 +16,7 @@
 #include "core/fixed_trig.h"
 #include "raster/client.h"
 #include "raster/point_kernel_avx2.h"
+#include "raster/projection.h"
 #include "tests/portable/test_files.h"
 
 namespace stipple {
@@ -255,10 +255,10 @@ TEST(Client, MeanTableGivesTheTermsDrawNodeForms) {
       cam.near_mu = kCameraMinDistance;
       const auto behind = [&](uint32_t id) {
         const NodeFields f = unpack_record(v.header.layout, record(id));
-        int64_t m[3] = {0, 0, 0};
+        int32_t m[3] = {0, 0, 0};
         for (int i = 0; i < 3; ++i)
           for (int a = 0; a < 3; ++a) m[i] += mul_q14(cam.rotation[i][a], few.client.decoder().mean_axis_mu(a, f.v[a]) - cam.eye[a]);
-        return !(m[2] > cam.near_mu && std::abs(m[0]) <= 8 * m[2] && std::abs(m[1]) <= 8 * m[2]);
+        return !NodeProjection::in_view(cam, m);
       };
       for (uint32_t id = 0; id < kFew; ++id) {
         ASSERT_EQ(few.client.put_node(NodeId{id}, record(id), v.record_bytes), ClientStatus::kOk);
