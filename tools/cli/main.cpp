@@ -6,6 +6,7 @@
 #include <exception>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "core/protocol.h"
 #include "core/spg_format.h"
@@ -94,7 +95,11 @@ int main(int argc, char** argv) {
     }
     return 1;
   }
-  std::fprintf(stderr, "stipple: unknown command '%s'\n\n", argv[1]);
+  std::vector<std::string> names;
+  for (const Command& c : kCommands) names.emplace_back(c.name);
+  const std::string near = stipple::cli::nearest(argv[1], names);
+  std::fprintf(stderr, "stipple: unknown command '%s'%s\n\n", argv[1],
+               near.empty() ? "" : (" (did you mean '" + near + "'?)").c_str());
   usage(stderr);
   return 2;
 }

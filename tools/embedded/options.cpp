@@ -1,6 +1,7 @@
 // stipple tools — command-line options. See options.h.
 #include "tools/embedded/options.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -13,31 +14,47 @@ Args::Args(int argc, char** argv, int first) {
 }
 
 bool Args::flag(const char* name) {
+  known_.emplace_back(name);
   for (size_t i = 0; i < args_.size(); ++i)
     if (!used_[i] && args_[i] == name) return used_[i] = true;
   return false;
 }
 
 bool Args::value(const char* name, std::string& out) {
+  known_.emplace_back(name);
   const std::string prefix = std::string(name) + "=";
+  bool found = false;
   for (size_t i = 0; i < args_.size(); ++i) {
     if (used_[i]) continue;
+    std::string v;
     if (args_[i] == name) {
       if (i + 1 >= args_.size()) {
         error_ = std::string(name) + " needs a value";
         return false;
       }
+      // "-o --json": the value forgotten, the next option taken for it. No
+      // value of ours starts with "--"; one that did could be given as
+      // NAME=VALUE.
+      if (args_[i + 1].rfind("--", 0) == 0 && args_[i + 1].size() > 2) {
+        error_ = std::string(name) + " needs a value, but the next argument is the option '" + args_[i + 1] + "'";
+        return false;
+      }
       used_[i] = used_[i + 1] = true;
-      out = args_[i + 1];
-      return true;
-    }
-    if (args_[i].rfind(prefix, 0) == 0) {
+      v = args_[i + 1];
+    } else if (args_[i].rfind(prefix, 0) == 0) {
       used_[i] = true;
-      out = args_[i].substr(prefix.size());
-      return true;
+      v = args_[i].substr(prefix.size());
+    } else {
+      continue;
     }
+    if (found) {
+      error_ = std::string(name) + " is given twice ('" + out + "' and '" + v + "'): give it once";
+      return false;
+    }
+    found = true;
+    out = v;
   }
-  return false;
+  return found;
 }
 
 std::vector<std::string> Args::positionals() {
@@ -54,6 +71,38 @@ std::string Args::unknown_option() const {
   for (size_t i = 0; i < args_.size(); ++i)
     if (!used_[i]) return args_[i];
   return {};
+}
+
+std::string Args::unknown_option_message() const {
+  const std::string word = unknown_option();
+  if (word.empty()) return {};
+  if (word[0] != '-') return "unexpected argument '" + word + "'";
+  const std::string name = word.substr(0, word.find('='));
+  const std::string near = nearest(name, known_);
+  return "unknown option '" + word + "'" + (near.empty() ? "" : " (did you mean '" + near + "'?)");
+}
+
+std::string nearest(const std::string& word, const std::vector<std::string>& candidates) {
+  // Levenshtein distance, two rows.
+  const auto distance = [](const std::string& a, const std::string& b) {
+    std::vector<size_t> row(b.size() + 1), next(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+      next[0] = i;
+      for (size_t j = 1; j <= b.size(); ++j)
+        next[j] = std::min({row[j] + 1, next[j - 1] + 1, row[j - 1] + (a[i - 1] != b[j - 1])});
+      row.swap(next);
+    }
+    return row[b.size()];
+  };
+  std::string best;
+  size_t best_distance = 0;
+  for (const std::string& c : candidates) {
+    const size_t d = distance(word, c);
+    if (d == 0 || d > 3 || 3 * d > std::max(word.size(), c.size())) continue;
+    if (best.empty() || d < best_distance) best = c, best_distance = d;
+  }
+  return best;
 }
 
 bool parse_uint(const std::string& s, unsigned long long max, unsigned long long& out) {
