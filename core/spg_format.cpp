@@ -39,7 +39,9 @@ struct Cursor {
   size_t remaining() const { return size - pos; }
 };
 
-SpgResult fail(SpgError e, size_t offset) { return SpgResult{e, offset}; }
+SpgResult fail(SpgError e, size_t offset) { return SpgResult{e, offset, 0}; }
+// The file ends at `size`, short of the `needed` bytes its sections need.
+SpgResult truncated(size_t size, uint64_t needed) { return SpgResult{SpgError::kTruncated, size, needed}; }
 
 bool class_field_ok(int width, uint16_t count, bool present) {
   if (!present) return width == 0 && count == 0;
@@ -148,15 +150,15 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   SpgHeader& h = view.header;
 
   // §1 fixed header.
-  if (size < 4) return fail(SpgError::kTruncated, size);
+  if (size < 4) return truncated(size, kSpgFixedHeaderBytes);
   for (int i = 0; i < 4; ++i)
     if (data[spg_offset::kMagic + i] != kSpgMagic[i]) return fail(SpgError::kBadMagic, spg_offset::kMagic);
-  if (size < kSpgFixedHeaderBytes) return fail(SpgError::kTruncated, size);
+  if (size < kSpgFixedHeaderBytes) return truncated(size, kSpgFixedHeaderBytes);
   using namespace spg_offset;
   h.version = load_u16le(data + kVersion);
   if (h.version < kSpgOldestVersion || h.version > kSpgVersion) return fail(SpgError::kBadVersion, kVersion);
   const size_t header_bytes = spg_fixed_header_bytes(h.version);
-  if (size < header_bytes) return fail(SpgError::kTruncated, size);
+  if (size < header_bytes) return truncated(size, header_bytes);
   h.flags = load_u16le(data + kFlags);
   if ((h.flags & ~kAttrKnownMask) != 0) return fail(SpgError::kBadFlags, kFlags);
   h.tree_arity = data[kArity];
@@ -192,7 +194,7 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   // Every node needs a record and every leaf at least one LEB128 byte: bound
   // the counts by the file size before anything is sized from them.
   const uint64_t min_body = static_cast<uint64_t>(h.node_count) * h.layout.record_bytes() + h.leaf_count + 4;
-  if (whole_file && min_body > size - header_bytes) return fail(SpgError::kBadCounts, kNodeCount);
+  if (whole_file && min_body > size - header_bytes) return truncated(size, header_bytes + min_body);
   for (int i = 0; i < 6; ++i) {
     h.bbox_bits[i] = load_u32le(data + kBboxMin + 4 * i);
     if (!f32_finite(h.bbox_bits[i])) return fail(SpgError::kBadFloat, kBboxMin + 4 * static_cast<size_t>(i));
@@ -217,7 +219,7 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   // codes, every one of which is a valid value (version 2).
   const size_t value_bytes = spg_class_value_bytes(h.version);
   const size_t table_bytes = spg_startup_bytes(h.version, h.class_count) - header_bytes;
-  if (in.remaining() < table_bytes) return fail(SpgError::kTruncated, size);
+  if (in.remaining() < table_bytes) return truncated(size, uint64_t{in.pos} + table_bytes);
   view.sigma_p = data + in.pos;
   view.sigma_n = view.sigma_p + 3 * value_bytes * h.class_count[0];
   view.sigma_c = view.sigma_n + 2 * value_bytes * h.class_count[1];
@@ -257,7 +259,7 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
   // At most node_count / 2 + 1 bytes, below the record bytes already bounded
   // by the file size: fits size_t on 32-bit targets too.
   view.topology_bytes = static_cast<size_t>((static_cast<uint64_t>(h.node_count) * bits_per_node + 7) / 8);
-  if (in.remaining() < view.topology_bytes) return fail(SpgError::kTruncated, size);
+  if (in.remaining() < view.topology_bytes) return truncated(size, uint64_t{in.pos} + view.topology_bytes);
   view.topology = data + in.pos;
   {
     uint32_t next_child = 1, leaves = 0, level_end = 1, depth = 0;
@@ -296,7 +298,7 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
       const size_t start = in.pos;
       uint64_t value = 0;
       for (int shift = 0;; shift += 7) {
-        if (in.remaining() == 0) return fail(SpgError::kTruncated, size);
+        if (in.remaining() == 0) return truncated(size, uint64_t{in.pos} + 1);
         if (shift > 28) return fail(SpgError::kBadLeafCount, start);
         const uint8_t byte = data[in.pos++];
         value |= static_cast<uint64_t>(byte & 0x7Fu) << shift;
@@ -316,7 +318,7 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
   // §5 records: class indices inside their tables, padding bits zero.
   view.record_bytes = static_cast<size_t>(h.layout.record_bytes());
   const uint64_t records_size = static_cast<uint64_t>(h.node_count) * view.record_bytes;
-  if (in.remaining() < records_size) return fail(SpgError::kTruncated, size);
+  if (in.remaining() < records_size) return truncated(size, uint64_t{in.pos} + records_size);
   view.records = data + in.pos;
   {
     const int pad_bits = static_cast<int>(view.record_bytes * 8) - h.layout.total_bits();
@@ -333,7 +335,7 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
   in.pos += static_cast<size_t>(records_size);
 
   // §6 CRC-32 of everything before it, then end of file.
-  if (in.remaining() < 4) return fail(SpgError::kTruncated, size);
+  if (in.remaining() < 4) return truncated(size, uint64_t{in.pos} + 4);
   if (in.remaining() > 4) return fail(SpgError::kTrailingBytes, in.pos + 4);
   if (load_u32le(data + in.pos) != crc32(data, in.pos)) return fail(SpgError::kBadChecksum, in.pos);
 

@@ -167,6 +167,10 @@ struct SpgView {
 struct SpgResult {
   SpgError error = SpgError::kOk;
   size_t offset = 0;  // byte offset of the offending field (valid when error != kOk)
+  // kTruncated: the bytes the file needs at least — the sections read so far
+  // and, for a whole file, the minimum the header's counts need (so a count
+  // a file cannot hold reads as a file cut short of that size).
+  uint64_t needed = 0;
   bool ok() const { return error == SpgError::kOk; }
 };
 

@@ -146,6 +146,15 @@ TEST(SpgFormat, EveryTruncatedPrefixIsRejected) {
     std::vector<uint8_t> prefix(f.begin(), f.begin() + static_cast<ptrdiff_t>(n));
     const SpgError e = parse_error(prefix);
     ASSERT_NE(e, SpgError::kOk) << "prefix " << n;
+    // Past the magic, a prefix reads as what it is: a file cut short, with
+    // the bytes it needs at least — more than it has, no more than the file.
+    if (n >= 4) {
+      SpgView v;
+      const SpgResult r = spg_parse(prefix.data(), prefix.size(), &v);
+      ASSERT_EQ(r.error, SpgError::kTruncated) << "prefix " << n;
+      EXPECT_GT(r.needed, n) << "prefix " << n;
+      EXPECT_LE(r.needed, f.size()) << "prefix " << n;
+    }
   }
   std::vector<uint8_t> longer = f;
   longer.push_back(0);
@@ -178,7 +187,7 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
       {9, {17}, SpgError::kBadLayout},
       {10, {17}, SpgError::kBadLayout},                   // a field of 17 bits
       {10 + 11, {5}, SpgError::kBadLayout},               // colour field present without the flag
-      {28, {0xFF, 0xFF, 0xFF, 0xFF}, SpgError::kBadCounts},  // 4 billion nodes
+      {28, {0xFF, 0xFF, 0xFF, 0xFF}, SpgError::kTruncated},  // 4 billion nodes: more bytes than the file has
       {32, {0, 0, 0, 0}, SpgError::kBadCounts},
       {36, {1, 0, 0, 0}, SpgError::kBadCounts},
       {40, {99, 0}, SpgError::kBadDepth},

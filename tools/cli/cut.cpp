@@ -46,13 +46,13 @@ int cmd_cut(int argc, char** argv) {
   const bool json = args.flag("--json");
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("cut: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("cut: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("cut: " + args.unknown_option_message());
   if (files.size() != 1) return cli::fail("cut: expected one .spg file (see stipple cut --help)");
   std::vector<uint8_t> file;
   if (!read_file(files[0], file, error)) return cli::fail(error);
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
-  if (!r.ok()) return cli::fail(files[0] + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error));
+  if (!r.ok()) return cli::fail(spg_error_message(files[0], r, file.size()));
   std::vector<uint8_t> decoder_storage(node_decoder_bytes(view.header));
   NodeDecoder decoder;
   if (decoder.init(view, decoder_storage.data(), decoder_storage.size()) != DecodeStatus::kOk)

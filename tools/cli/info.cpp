@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "platform/file_io.h"
+#include "tools/embedded/embedded.h"
 #include "tools/cli/cli.h"
 #include "tools/encoder/hierarchy.h"
 #include "tools/encoder/orientation.h"
@@ -39,7 +40,7 @@ int cmd_info(int argc, char** argv) {
   const bool facing_point = args.value("--facing-point", point_text), facing_up = args.value("--facing-up", up_text);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("info: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("info: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("info: " + args.unknown_option_message());
   if (files.size() != 1) return cli::fail("info: expected one .spg file (see stipple info --help)");
   double target[3] = {0, 0, 0};
   SpgAxis up_axis = SpgAxis::kNone;
@@ -56,7 +57,7 @@ int cmd_info(int argc, char** argv) {
   SpgView view;
   const SpgResult parsed = spg_parse(file.data(), file.size(), &view);
   if (!parsed.ok())
-    return cli::fail(files[0] + ": byte " + std::to_string(parsed.offset) + ": " + spg_error_text(parsed.error));
+    return cli::fail(spg_error_message(files[0], parsed, file.size()));
   const SpgHeader& h = view.header;
   const std::vector<uint32_t> point_count = spg_point_counts(view);
   const auto sigma1_of = [&](uint32_t node) {

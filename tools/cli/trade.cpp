@@ -179,14 +179,14 @@ int cmd_trade(int argc, char** argv) {
   if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("trade: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("trade: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("trade: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("trade: " + args.unknown_option_message());
   if (files.size() != 1) return cli::fail("trade: expected one .spg file (see stipple trade --help)");
   if (output.empty()) return cli::fail("trade: -o DIR is required");
   std::vector<uint8_t> file;
   if (!read_file(files[0], file, error)) return cli::fail(error);
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
-  if (!r.ok()) return cli::fail(files[0] + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error));
+  if (!r.ok()) return cli::fail(spg_error_message(files[0], r, file.size()));
   base.config.node_capacity = std::max<uint32_t>(view.header.node_count, 1);  // the cut is never held back by the cache
   DecodedModel model;
   if (!decode_spg(files[0], file.data(), file.size(), model, error)) return cli::fail(error);

@@ -31,6 +31,11 @@ struct ViewSpec {
 // "yaw,pitch[,distance[,fov]]"; error names the bad part. Sets orbit_given.
 bool parse_view(const std::string& text, ViewSpec& out, std::string& error);
 
+// What spg_parse (or spg_parse_startup) refused, for a person:
+// "<name>: byte <offset>: <what>", and for a file cut short
+// "<name>: truncated: <size> of at least <needed> bytes (...)".
+std::string spg_error_message(const std::string& name, const SpgResult& result, size_t size);
+
 // The view a user gets for a model (docs/encoder.md, "Orientation"):
 //   up: --up, else the file's hint, else the thinnest axis (+) of a flat box
 //       (under half of each other extent: terrain), else +y;

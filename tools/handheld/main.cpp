@@ -93,7 +93,7 @@ int run(int argc, char** argv) {
   if (over_serial) connect = serial_dev;
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return fail(args.error());
-  if (!args.unknown_option().empty()) return fail("unknown option '" + args.unknown_option() + "' (see --help)");
+  if (!args.unknown_option().empty()) return fail(args.unknown_option_message() + " (see --help)");
   if (files.size() != (remote ? 0u : 1u)) return fail(remote ? "--connect takes no .spg file" : "expected one .spg file (see --help)");
   const std::string model = remote ? connect : files[0];
   ClientConfig& config = o.config;
@@ -156,7 +156,7 @@ int run(int argc, char** argv) {
     if (!read_file(model, file, error)) return fail(error);
     SpgView spg;
     const SpgResult r = spg_parse(file.data(), file.size(), &spg);
-    if (!r.ok()) return fail(model + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error));
+    if (!r.ok()) return fail(spg_error_message(model, r, file.size()));
     if (!render_fixed(spg, file.data(), config, o.rule, o.view, frame, error, static_cast<int>(frames),
                       memory ? heap_in_use : nullptr))
       return fail(model + ": " + error);

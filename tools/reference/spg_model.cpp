@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "platform/file_io.h"
+#include "tools/embedded/embedded.h"
 #include "tools/encoder/quantize.h"
 
 namespace stipple {
@@ -20,7 +21,7 @@ bool decode_spg(const std::string& name, const uint8_t* data, size_t size, Decod
   SpgView view;
   const SpgResult r = spg_parse(data, size, &view);
   if (!r.ok()) {
-    error = name + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error);
+    error = spg_error_message(name, r, size);
     return false;
   }
   model = DecodedModel{};

@@ -7,6 +7,7 @@
 
 #include "core/cobs.h"
 #include "platform/tcp/tcp_transport.h"
+#include "tools/embedded/embedded.h"
 
 namespace stipple {
 namespace {
@@ -86,7 +87,7 @@ bool Server::init(std::vector<uint8_t> file, const std::string& name, const Serv
   name_ = name;
   options_ = options;
   const SpgResult r = spg_parse(file_.data(), file_.size(), &view_);
-  if (!r.ok()) return error = name + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error), false;
+  if (!r.ok()) return error = spg_error_message(name, r, file_.size()), false;
   decoder_storage_.assign(node_decoder_bytes(view_.header) / 4 + 1, 0);
   if (decoder_.init(view_, decoder_storage_.data(), decoder_storage_.size() * 4) != DecodeStatus::kOk)
     return error = name + ": the angle fields are wider than the decoder supports", false;
