@@ -6,6 +6,7 @@
 #include <png.h>
 
 #include <cstdio>
+#include <filesystem>
 
 namespace stipple {
 
@@ -47,6 +48,20 @@ bool read_png(const std::string& path, Image& img, std::string& error) {
     error = path + ": " + image.message;
     return false;
   }
+  // Bound the allocation by the file and a sane maximum before taking it.
+  const uint64_t pixels = uint64_t{image.width} * image.height;
+  std::error_code ec;
+  const uintmax_t file_bytes = std::filesystem::file_size(path, ec);
+  const auto refuse = [&](const std::string& why) {
+    error = path + ": the header claims " + std::to_string(image.width) + " x " + std::to_string(image.height) +
+            " pixels, " + why;
+    png_image_free(&image);
+    return false;
+  };
+  if (!ec && pixels > png_pixels_bound(file_bytes))
+    return refuse("more than its " + std::to_string(file_bytes) + " bytes can hold (a damaged or hostile file)");
+  if (pixels > kPngMaxPixels)
+    return refuse("more than the " + std::to_string(kPngMaxPixels) + " this reader takes");
   image.format = PNG_FORMAT_RGB;
   width = static_cast<int>(image.width);
   height = static_cast<int>(image.height);

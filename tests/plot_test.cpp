@@ -1,6 +1,8 @@
 // Plot rendering and PNG round trip.
 #include <gtest/gtest.h>
 
+#include "core/spg_format.h"
+#include "platform/file_io.h"
 #include "platform/png_io.h"
 #include "tools/reference/plot.h"
 
@@ -51,6 +53,48 @@ TEST(Plot, PngRoundTripIsExact) {
   EXPECT_FALSE(write_png(path, back, error));  // size mismatch
   EXPECT_NE(error.find("does not match"), std::string::npos);
   EXPECT_FALSE(read_png(testing::TempDir() + "missing.png", back, error));
+}
+
+// A PNG whose IHDR claims `width` x `height`: a 1 x 1 image written by
+// libpng with its header's size rewritten and the chunk's CRC fixed.
+std::vector<uint8_t> png_claiming(uint32_t width, uint32_t height) {
+  const std::string path = testing::TempDir() + "tiny.png";
+  std::string error;
+  EXPECT_TRUE(write_png(path, Image{1, 1, {1, 2, 3}}, error)) << error;
+  std::vector<uint8_t> f;
+  EXPECT_TRUE(read_file(path, f, error)) << error;
+  // Signature (8), IHDR length (4) and type (4), then width and height big-endian.
+  const auto put = [&](size_t at, uint32_t v) {
+    for (int i = 0; i < 4; ++i) f[at + i] = static_cast<uint8_t>(v >> (24 - 8 * i));
+  };
+  put(16, width);
+  put(20, height);
+  put(29, crc32(f.data() + 12, 17));  // over the type and the 13 data bytes
+  return f;
+}
+
+TEST(Png, AHeaderClaimingMorePixelsThanTheFileHoldsIsRefusedBeforeAllocating) {
+  // 1,000,000 x 1,431 pixels (4.3 GB as RGB) in a file of under 100 bytes.
+  const std::vector<uint8_t> f = png_claiming(1000000, 1431);
+  ASSERT_LT(f.size(), 100u);
+  const std::string path = testing::TempDir() + "hostile.png";
+  std::string error;
+  ASSERT_TRUE(write_file_atomic(path, f, error)) << error;
+  Image img;
+  EXPECT_FALSE(read_png(path, img, error));
+  EXPECT_EQ(error, path + ": the header claims 1000000 x 1431 pixels, more than its " + std::to_string(f.size()) +
+                       " bytes can hold (a damaged or hostile file)");
+  EXPECT_TRUE(img.rgb.empty());
+  // Past the sane maximum, in a file long enough for it (64 KB after IEND).
+  std::vector<uint8_t> padded = png_claiming(16384, 16385);
+  padded.resize(padded.size() + 65536, 0);
+  ASSERT_TRUE(write_file_atomic(path, padded, error)) << error;
+  EXPECT_FALSE(read_png(path, img, error));
+  EXPECT_EQ(error, path + ": the header claims 16384 x 16385 pixels, more than the 134217728 this reader takes");
+  // Within both bounds, libpng's own error for the missing pixels, still no crash.
+  ASSERT_TRUE(write_file_atomic(path, png_claiming(40, 30), error)) << error;
+  EXPECT_FALSE(read_png(path, img, error));
+  EXPECT_EQ(error.rfind(path + ": ", 0), 0u) << error;
 }
 
 }  // namespace
