@@ -127,6 +127,27 @@ TEST(Extremes, EveryCaseEncodesDrawsAndStaysFinite) {
   }
 }
 
+// Coordinates at float32's edge: a cloud filling ±3e38 on every axis encodes
+// and decodes finite; one coordinate beyond it is refused by the encoder,
+// naming the point, the axis and the value — never an infinite box.
+TEST(Extremes, CoordinatesAtFloat32sEdgeEncodeAndBeyondItAreRefusedByName) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-3e38, 3e38);
+  PointCloud cloud;
+  for (int i = 0; i < 2000; ++i) cloud.positions.emplace_back(u(rng), u(rng), u(rng));
+  std::vector<uint8_t> spg;
+  EncodeReport report;
+  std::string error;
+  ASSERT_TRUE(encode_cloud(cloud, EncodeOptions{}, spg, report, error)) << error;
+  const DecodedModel model = test::decode(spg);
+  for (const DecodedNode& n : model.nodes) ASSERT_TRUE(n.position.mean.allFinite());
+  cloud.positions[1234].z() = -1e39;
+  cloud.normals.clear();
+  EXPECT_FALSE(encode_cloud(cloud, EncodeOptions{}, spg, report, error));
+  EXPECT_EQ(error, "the scan's point 1234 (counting from 0): z = -1e+39 is beyond float32's range (3.403e+38), in which "
+                   "a .spg stores positions");
+}
+
 // Cameras at the extremes, on the unit sphere: inside the model, close to its
 // surface, a million model sizes away, straight down the up axis, the
 // narrowest and widest fields of view. Each either draws (no crash; zoomed

@@ -110,6 +110,20 @@ TEST(Pcd, AsciiBinaryAndCompressedReadTheSamePoints) {
   }
 }
 
+TEST(Pcd, CommentsBeforeTheHeaderAreAPcdStill) {
+  // Writers other than PCL put their own comment first, or none at all.
+  for (const std::string& first : {std::string("# written by a scanner's export\n# second comment\n"), std::string()}) {
+    std::string text(reinterpret_cast<const char*>(pcd("ascii").data()), pcd("ascii").size());
+    text.replace(0, text.find('\n') + 1, first);
+    PointCloud c;
+    std::string error;
+    ASSERT_TRUE(parse("scan.pcd", bytes(text), c, error)) << error;
+    ASSERT_EQ(c.size(), 2u);  // the NaN point dropped, as from PCL's own header
+    EXPECT_EQ(c.positions[1], Vec3(-4, 5.5, 0.125));
+    ASSERT_TRUE(c.has_colors());
+  }
+}
+
 TEST(Pcd, AViewpointOrientsTheScan) {
   PointCloud c;
   std::string error;
@@ -131,6 +145,9 @@ TEST(Pcd, HostileHeadersAreRefusedByField) {
       {"FIELDS x y z", "FIELDS x y y", "field y appears twice"},
       {"DATA binary", "DATA zip", "DATA: expected ascii, binary or binary_compressed"},
       {"VERSION 0.7", "VERSIONS 0.7", "unknown keyword 'VERSIONS'"},
+      // WIDTH x HEIGHT wraps around 64 bits to POINTS: (2^63 + 1) x 2 = 2.
+      {"WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3", "WIDTH 9223372036854775809\nHEIGHT 2\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2",
+       "WIDTH x HEIGHT (9223372036854775809 x 2) is beyond 2^64 points"},
   };
   for (const auto& k : cases) {
     std::string text(reinterpret_cast<const char*>(pcd("binary").data()), pcd("binary").size());
@@ -310,6 +327,19 @@ TEST(TextScan, ColourColumnsDecimalCommasAndBinaryFilesAreTold) {
   // 1e999 is out of range, said as such.
   EXPECT_FALSE(parse("scan.xyz", bytes("1 2 1e999\n"), c, error));
   EXPECT_NE(error.find("line 1: '1e999' is beyond the range of a double"), std::string::npos) << error;
+  // 1e39 is a double but beyond float32, in which a .spg keeps its box:
+  // refused naming the line (text) or the point (every format), never an
+  // infinity inside the tree. 3e38 is within it.
+  EXPECT_FALSE(parse("scan.xyz", bytes("0 0 0\n1 2 3\n1e39 0 0\n"), c, error));
+  EXPECT_EQ(error, "scan.xyz: line 3: x = 1e+39 is beyond float32's range (3.403e+38), in which a .spg stores positions");
+  EXPECT_FALSE(parse("big.ply", bytes("ply\nformat ascii 1.0\nelement vertex 2\nproperty double x\nproperty double y\n"
+                                      "property double z\nend_header\n0 0 0\n0 -4e38 0\n"), c, error));
+  EXPECT_EQ(error, "big.ply: point 1 (counting from 0): y = -4e+38 is beyond float32's range (3.403e+38), in "
+                   "which a .spg stores positions");
+  ASSERT_TRUE(parse("scan.xyz", bytes("0 0 0\n1 2 3\n-3e38 0 3e38\n"), c, error)) << error;
+  // An empty file says so.
+  EXPECT_FALSE(parse("empty.ply", {}, c, error));
+  EXPECT_EQ(error, "empty.ply: the file is empty (0 bytes)");
   // A .spg or a binary file given as a scan.
   EXPECT_FALSE(parse("model.spg", bytes(std::string("STPG\x02\x00\x01\x00", 8)), c, error));
   EXPECT_NE(error.find("model.spg: byte 4: this is a .spg model, not a scan"), std::string::npos) << error;

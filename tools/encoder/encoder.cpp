@@ -10,6 +10,7 @@
 #include "tools/encoder/classify.h"
 #include "tools/encoder/normals.h"
 #include "tools/encoder/quantize.h"
+#include "tools/scan/ply_io.h"
 
 namespace stipple {
 namespace {
@@ -66,6 +67,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   if (!(o.tree.balance >= 0 && o.tree.balance <= 0.5)) return error = "--balance must be in [0, 0.5]", false;
   if (cloud.size() == 0) return error = "the scan has no points", false;
   if (cloud.size() > 0xFFFFFFFFu) return error = "the scan has more than 2^32-1 points", false;
+  if (std::string what = beyond_float_range(cloud.positions); !what.empty()) return error = "the scan's " + what, false;
 
   report = EncodeReport{};
   report.points = cloud.size();

@@ -78,8 +78,18 @@ Vec3 color_of(const uint8_t* p) { return Vec3(p[2], p[1], p[0]) / 255.0; }
 }  // namespace
 
 bool looks_like_pcd(const uint8_t* data, size_t size) {
-  const auto starts = [&](const char* s) { return size >= std::strlen(s) && std::memcmp(data, s, std::strlen(s)) == 0; };
-  return starts("# .PCD") || starts("VERSION ") || starts("VERSION\t");
+  // PCL writes "# .PCD v0.7 - Point Cloud Data file format" first, but any
+  // comment lines may come before the header's first keyword.
+  size_t pos = 0;
+  while (pos < size && data[pos] == '#') {
+    if (size - pos >= 6 && std::memcmp(data + pos, "# .PCD", 6) == 0) return true;
+    while (pos < size && data[pos] != '\n') ++pos;
+    ++pos;
+  }
+  const auto starts = [&](const char* s) {
+    return pos < size && size - pos >= std::strlen(s) && std::memcmp(data + pos, s, std::strlen(s)) == 0;
+  };
+  return starts("VERSION ") || starts("VERSION\t") || starts("FIELDS ") || starts("FIELDS\t");
 }
 
 bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error) {
@@ -168,6 +178,9 @@ bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointC
   if (ix < 0 || iy < 0 || iz < 0) return fail("no x, y and z fields");
   const bool normals = inx >= 0 && iny >= 0 && inz >= 0;
   if (irgb >= 0 && h.fields[irgb].size != 4) return fail("field " + h.fields[irgb].name + ": SIZE must be 4");
+  // WIDTH x HEIGHT compared by division: the product can wrap around 64 bits.
+  if (h.height != 0 && h.width > UINT64_MAX / h.height)
+    return fail("WIDTH x HEIGHT (" + std::to_string(h.width) + " x " + std::to_string(h.height) + ") is beyond 2^64 points");
   if (!h.has_points) h.points = h.width * h.height;
   if (h.width != 0 && h.points != h.width * h.height)
     return fail("POINTS " + std::to_string(h.points) + " is not WIDTH x HEIGHT (" + std::to_string(h.width) + " x " + std::to_string(h.height) + ")");

@@ -499,6 +499,16 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
       p = stop;
     }
     if (row.empty()) continue;
+    // A coordinate past float32's range: the line named (parse_point_cloud
+    // checks every format's points again, by index).
+    for (size_t k = 0; k < row.size() && k < 3; ++k) {
+      const size_t column = named ? static_cast<size_t>(at[TextColumns::kX + k]) : k;
+      if (column < row.size() && !(std::abs(row[column]) <= kMaxCoordinate)) {
+        error = name + ": line " + std::to_string(line_no) + ": " + "xyz"[k] + " = " + word_of(row[column]) +
+                " is beyond float32's range (3.403e+38), in which a .spg stores positions";
+        return false;
+      }
+    }
     if (named) {
       if (row.size() != layout.fields.size()) {
         error = name + ": line " + std::to_string(line_no) + ": expected " + std::to_string(layout.fields.size()) +
@@ -583,6 +593,20 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
 
 }  // namespace
 
+std::string beyond_float_range(const std::vector<Vec3>& points) {
+  for (size_t i = 0; i < points.size(); ++i)
+    for (int a = 0; a < 3; ++a)
+      if (!(std::abs(points[i][a]) <= kMaxCoordinate)) {
+        char text[200];
+        std::snprintf(text, sizeof text,
+                      "point %zu (counting from 0): %c = %.9g is beyond float32's range (%.4g), in which a .spg stores "
+                      "positions",
+                      i, "xyz"[a], points[i][a], kMaxCoordinate);
+        return text;
+      }
+  return {};
+}
+
 size_t count_duplicate_positions(const std::vector<Vec3>& points) {
   std::vector<uint32_t> order(points.size());
   for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
@@ -647,6 +671,10 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
     data = fixed.data();
     note += std::string(note.empty() ? "" : "; ") + "the PLY magic in capitals ('PLY'): read as 'ply'";
   }
+  if (size == 0) {
+    error = name + ": the file is empty (0 bytes)";
+    return false;
+  }
   enum class Format { kPly, kLas, kPcd, kText };
   const Format format = size >= 3 && std::memcmp(data, "ply", 3) == 0 ? Format::kPly
                         : looks_like_las(data, size)                    ? Format::kLas
@@ -665,6 +693,7 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
     case Format::kText: ok = parse_text(name, data, size, options.columns, cloud, error); break;
   }
   if (!ok) return false;
+  if (std::string what = beyond_float_range(cloud.positions); !what.empty()) return error = name + ": " + what, false;
   if (!note.empty()) cloud.warnings.insert(cloud.warnings.begin(), name + ": " + note);
   // Many points on one value: float32 coordinates far from the origin round
   // onto a coarse lattice (at 1e7, steps of 1), and the scan collapses.

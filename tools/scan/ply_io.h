@@ -58,6 +58,13 @@ bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& e
 bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
                        std::string& error, const ScanOptions& options = {});
 
+// The largest coordinate magnitude a scan may have: float32's largest value,
+// since a .spg stores its box in float32 (docs/format.md §1). Readers refuse a
+// scan with one beyond it, naming the point, the axis and the value.
+inline constexpr double kMaxCoordinate = 3.4028234663852886e38;
+// "" when every coordinate is within ±kMaxCoordinate; else what is not.
+std::string beyond_float_range(const std::vector<Vec3>& points);
+
 // Points whose position equals an earlier point's (exact comparison).
 size_t count_duplicate_positions(const std::vector<Vec3>& points);
 
