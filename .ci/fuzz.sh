@@ -16,7 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${FUZZ_SECONDS:-60}
 build=build/fuzz
-cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DSTIPPLE_FUZZ=ON -DSTIPPLE_CHECK_RANGES=ON \
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DSTIPPLE_FUZZ=ON -DSTIPPLE_CHECK_RANGES=ON -DSTIPPLE_WERROR=ON \
   -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1 -g" >/dev/null
 cmake --build "$build" -j2 --target spg_fuzz scan_fuzz stream_fuzz decoder_fuzz serial_fuzz
 mkdir -p "$build/crashes"
