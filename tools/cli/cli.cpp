@@ -1,6 +1,7 @@
 #include "tools/cli/cli.h"
 
 #include <charconv>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 
@@ -86,6 +87,25 @@ const char kScanOptionsHelp[] =
 bool parse_scan_options(Args& args, ScanOptions& options, std::string& error) {
   std::string spec;
   if (args.value("--columns", spec) && !parse_text_columns(spec, options.columns, error)) return false;
+  return true;
+}
+
+bool check_output_name(const std::string& output, const char* extension, const char* format, std::string& error) {
+  if (output.empty()) return true;
+  std::string ext = std::filesystem::path(output).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == extension) return true;
+  // Extensions that name a format of their own: bytes of another format
+  // under them would be misread by every program that opens them.
+  static const char* const kOtherFormats[] = {".png", ".jpg", ".jpeg", ".bmp", ".gif", ".tif", ".tiff", ".webp",
+                                              ".ppm", ".pgm", ".spg", ".ply", ".pcd", ".las", ".laz", ".e57",
+                                              ".xyz", ".pts", ".obj", ".csv", ".txt", ".json"};
+  for (const char* other : kOtherFormats)
+    if (ext == other)
+      return error = output + ": this writes " + format + ", not " + ext.substr(1) + " (name the output " + extension + ")",
+             false;
+  warn({output + ": written as " + format + (ext.empty() ? std::string(" (the name has no extension)") : ", whatever '" + ext + "' says") +
+        "; " + extension + " is its usual name"});
   return true;
 }
 

@@ -38,6 +38,12 @@ int fail(const std::string& message);  // prints "stipple: <message>" to stderr,
 bool output_is_input(const std::string& input, const std::string& output, std::string& error);
 void warn(const std::vector<std::string>& messages);
 
+// Whether `output`'s name says what `writer` writes (`extension`, e.g.
+// ".png", in the format `format`): a name that promises another image or
+// model format (x.jpg for PNG bytes) is refused; any other extension gets a
+// warning, printed here. An empty `output` passes.
+bool check_output_name(const std::string& output, const char* extension, const char* format, std::string& error);
+
 // The options of every verb that reads a scan (--columns), and their help.
 extern const char kScanOptionsHelp[];
 bool parse_scan_options(Args& args, ScanOptions& options, std::string& error);  // prints "stipple: warning: <message>" for each

@@ -48,7 +48,9 @@ int cmd_demo(int argc, char** argv) {
   if (!parse_render_options(args, render, error)) return cli::fail("demo: " + error);
   ScanOptions scan_options;
   if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("demo: " + e);
-  if (!args.unknown_option().empty()) return cli::fail("demo: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("demo: " + args.unknown_option_message());
+  if (!cli::check_output_name(image, ".png", "PNG", error) || !cli::check_output_name(output, ".spg", "a .spg model", error))
+    return cli::fail("demo: " + error);
 
   const double start = monotonic_seconds();
   ProgressBar progress("encode", !quiet);

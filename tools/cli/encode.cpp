@@ -76,8 +76,9 @@ int cmd_encode(int argc, char** argv) {
   ScanOptions scan_options;
   if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("encode: " + e);
   const std::vector<std::string> inputs = args.positionals();
-  if (!args.unknown_option().empty()) return cli::fail("encode: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("encode: " + args.unknown_option_message());
   if (inputs.size() != 1) return cli::fail("encode: expected one scan file (see stipple encode --help)");
+  if (!cli::check_output_name(output, ".spg", "a .spg model", error)) return cli::fail("encode: " + error);
   if (output.empty()) return cli::fail("encode: -o MODEL.spg is required");
   if (cli::output_is_input(inputs[0], output, error)) return cli::fail("encode: " + error);
 

@@ -30,10 +30,19 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
     for (int k = 0; k < 3; ++k) {
       const size_t comma = v.find(',', start);
       const std::string part = v.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-      if (!cli::parse_uint(part, 65535, c[k]) || (k < 2 && comma == std::string::npos))
+      if (!cli::parse_uint(part, ~0ull, c[k]) || (k < 2 && comma == std::string::npos) ||
+          (k == 2 && comma != std::string::npos))
         return error = "--classes: expected P,N,C (three integers), got '" + v + "'", false;
       start = comma + 1;
     }
+    // In range, or named: the count at fault and its range (0 is automatic).
+    const char* names[3] = {"P (sigma_p classes)", "N (sigma_n classes)", "C (sigma_c classes)"};
+    const unsigned long long most[3] = {4096, 4096, 64};
+    for (int k = 0; k < 3; ++k)
+      if (c[k] > most[k])
+        return error = "--classes: " + std::string(names[k]) + " is " + std::to_string(c[k]) + ", beyond 0.." +
+                       std::to_string(most[k]) + " (0: chosen from the scan)",
+               false;
     o.classes_p = static_cast<int>(c[0]);
     o.classes_n = static_cast<int>(c[1]);
     o.classes_c = static_cast<int>(c[2]);

@@ -21,7 +21,8 @@ int cmd_image_crc(int argc, char** argv) {
     return 0;
   }
   const std::vector<std::string> files = args.positionals();
-  if (!args.unknown_option().empty()) return cli::fail("image-crc: unknown option '" + args.unknown_option() + "'");
+  if (args.bad()) return cli::fail("image-crc: " + args.error());
+  if (!args.unknown_option().empty()) return cli::fail("image-crc: " + args.unknown_option_message());
   if (files.empty()) return cli::fail("image-crc: expected one or more PNG files");
   for (const std::string& f : files) {
     Image img;

@@ -40,8 +40,9 @@ int cmd_image_diff(int argc, char** argv) {
   const bool json = args.flag("--json");
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("image-diff: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("image-diff: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("image-diff: " + args.unknown_option_message());
   if (files.size() != 2) return cli::fail("image-diff: expected EXPECTED.png and ACTUAL.png");
+  if (!cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("image-diff: " + error);
   Image a, b;
   if (!read_png(files[0], a, error) || !read_png(files[1], b, error))
     return cli::fail(error);

@@ -48,11 +48,12 @@ int cmd_levels(int argc, char** argv) {
   if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("levels: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("levels: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("levels: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("levels: " + args.unknown_option_message());
   if (files.size() != 2) return cli::fail("levels: expected MODEL.spg and ORIGINAL (see stipple levels --help)");
   DecodedModel model;
   PointCloud original;
   std::string error;
+  if (!cli::check_output_name(plot_path, ".png", "PNG", error)) return cli::fail("levels: --plot " + error);
   if (!load_spg(files[0], model, error) || !read_point_cloud(files[1], original, error, scan_options)) return cli::fail(error);
   std::vector<int> levels;
   if (has_levels) {

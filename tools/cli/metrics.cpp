@@ -38,7 +38,7 @@ int cmd_metrics(int argc, char** argv) {
   if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("metrics: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("metrics: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("metrics: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("metrics: " + args.unknown_option_message());
   if (files.size() != 2) return cli::fail("metrics: expected ORIGINAL and GENERATED (see stipple metrics --help)");
   PointCloud original, generated;
   std::string error;

@@ -41,7 +41,7 @@ int cmd_ppn_table(int argc, char** argv) {
   args.value("--write", output);
   const bool quiet = args.flag("--quiet");
   if (args.bad()) return cli::fail("ppn-table: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("ppn-table: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("ppn-table: " + args.unknown_option_message());
   if (!args.positionals().empty()) return cli::fail("ppn-table: takes no files (see stipple ppn-table --help)");
 
   static PpnTable tables[2][kPpnPointSizes];

@@ -74,7 +74,7 @@ int cmd_rd(int argc, char** argv) {
   if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("rd: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("rd: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("rd: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("rd: " + args.unknown_option_message());
   if (files.size() != 1) return cli::fail("rd: expected one scan (see stipple rd --help)");
   if (output.empty()) return cli::fail("rd: -o DIR is required");
   std::vector<const RdSetting*> settings;

@@ -51,7 +51,7 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
                   const std::string& output, bool reference, bool psnr, bool json, int frames) {
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
-  if (!r.ok()) return cli::fail(name + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error));
+  if (!r.ok()) return cli::fail(spg_error_message(name, r, file.size()));
   const double start = monotonic_seconds();
   FixedRender fixed;
   std::string error;
@@ -116,7 +116,8 @@ int render_stream(const std::string& model_path, const std::string& connect, con
   ViewerSource src;
   if (!src.open(model_path, connect, serial, baud, o, error)) return cli::fail("render: " + error);
   RemoteModel& model = src.model();
-  if (folder) std::filesystem::create_directories(output);
+  if (std::error_code ec; folder && !std::filesystem::create_directories(output, ec) && ec)
+    return cli::fail("render: " + output + ": cannot make the folder: " + ec.message());
   // The view as render resolves it, from the header the server sent.
   const SpgHeader& h = model.header();
   const int32_t* extent = model.client().decoder().extent_mu();
@@ -167,8 +168,11 @@ int cmd_render(int argc, char** argv) {
   std::string serial_dev, baud_text;
   const bool over_serial = args.value("--serial", serial_dev);
   unsigned long long baud = 115200;
-  if (args.value("--baud", baud_text) && !cli::parse_uint(baud_text, 4000000, baud))
+  const bool has_baud = args.value("--baud", baud_text);
+  if (has_baud && !cli::parse_uint(baud_text, 4000000, baud))
     return cli::fail("render: --baud: expected a rate, got '" + baud_text + "'");
+  if (has_baud && !over_serial)
+    return cli::fail("render: --baud " + baud_text + " sets the serial line's rate, but no --serial DEVICE is given");
   const bool remote = args.value("--connect", connect) || over_serial, has_path = args.value("--path", path);
   const bool reference = args.flag("--reference"), psnr = args.flag("--psnr"), json = args.flag("--json");
   std::string frames_text;
@@ -178,18 +182,23 @@ int cmd_render(int argc, char** argv) {
   if (!parse_render_options(args, o, error)) return cli::fail("render: " + error);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("render: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("render: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("render: " + args.unknown_option_message());
   if (remote || has_path) {
     unsigned long long steps = 1;
     if (has_path && (path.rfind("orbit:", 0) != 0 || !cli::parse_uint(path.substr(6), 100000, steps) || steps == 0))
       return cli::fail("render: --path: expected orbit:N with N in 1..100000, got '" + path + "'");
     if (remote != files.empty()) return cli::fail(remote ? "render: --connect takes no MODEL.spg" : "render: expected one .spg file");
     if (output.empty()) return cli::fail(has_path ? "render: -o FOLDER is required with --path" : "render: -o IMAGE.png is required");
+    std::error_code ec;
+    if (has_path && std::filesystem::exists(output, ec) && !std::filesystem::is_directory(output, ec))
+      return cli::fail("render: --path writes a folder of frames, but " + output + " is a file (name a folder with -o)");
+    if (!has_path && !cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
     return render_stream(remote ? "" : files[0], over_serial ? "" : connect, serial_dev, static_cast<uint32_t>(baud), o,
                          static_cast<uint32_t>(steps), has_path, output);
   }
   if (files.size() != 1) return cli::fail("render: expected one .spg file (see stipple render --help)");
   if (output.empty() && !psnr && frames == 1) return cli::fail("render: -o IMAGE.png is required");
+  if (!cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
   std::vector<uint8_t> file;
   if (!read_file(files[0], file, error)) return cli::fail(error);
   return render_to_png(files[0], file, o, output, reference, psnr, json, static_cast<int>(frames));

@@ -46,11 +46,12 @@ int cmd_sample(int argc, char** argv) {
   if (!args.value("-o", output)) args.value("--output", output);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("sample: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("sample: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("sample: " + args.unknown_option_message());
   if (files.size() != 1) return cli::fail("sample: expected one .spg file (see stipple sample --help)");
   if (has_level == leaves) return cli::fail("sample: give exactly one of --level L and --leaves");
   if (output.empty()) return cli::fail("sample: -o POINTS.ply is required");
   std::string error;
+  if (!cli::check_output_name(output, ".ply", "PLY", error)) return cli::fail("sample: " + error);
   if (cli::output_is_input(files[0], output, error)) return cli::fail("sample: " + error);
   unsigned long long level = 0, per_node = 0;
   if (has_level && !cli::parse_uint(level_text, 65535, level))

@@ -61,12 +61,14 @@ int cmd_serve(int argc, char** argv) {
   std::string serial;
   const bool has_serial = args.value("--serial", serial);
   unsigned long long baud = 115200;
-  if (args.value("--baud", v) && !cli::parse_uint(v, 4000000, baud))
-    return cli::fail("serve: --baud: expected a rate, got '" + v + "'");
+  const bool has_baud = args.value("--baud", v);
+  if (has_baud && !cli::parse_uint(v, 4000000, baud)) return cli::fail("serve: --baud: expected a rate, got '" + v + "'");
+  if (has_baud && !has_serial)
+    return cli::fail("serve: --baud " + v + " sets the serial line's rate, but no --serial DEVICE is given");
   const bool once = args.flag("--once");
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("serve: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("serve: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("serve: " + args.unknown_option_message());
   if (files.size() != 1) return cli::fail("serve: expected one .spg file (see stipple serve --help)");
   std::string host;
   uint16_t port = 0;

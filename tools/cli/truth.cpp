@@ -45,9 +45,10 @@ int cmd_truth(int argc, char** argv) {
   if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("truth: " + e);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("truth: " + args.error());
-  if (!args.unknown_option().empty()) return cli::fail("truth: unknown option '" + args.unknown_option() + "'");
+  if (!args.unknown_option().empty()) return cli::fail("truth: " + args.unknown_option_message());
   if (files.size() != 1) return cli::fail("truth: expected one scan (see stipple truth --help)");
   if (output.empty()) return cli::fail("truth: -o TRUTH.png is required");
+  if (!cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("truth: " + error);
   if (cli::output_is_input(files[0], output, error)) return cli::fail("truth: " + error);
   PointCloud cloud;
   if (!read_point_cloud(files[0], cloud, error, scan_options)) return cli::fail(error);

@@ -34,7 +34,7 @@ bool parse_viewer_options(cli::Args& args, ViewerOptions& o, std::string& error)
   if (!parse_render_options(args, o.render, error)) return false;
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return error = args.error(), false;
-  if (!args.unknown_option().empty()) return error = "unknown option '" + args.unknown_option() + "'", false;
+  if (!args.unknown_option().empty()) return error = args.unknown_option_message(), false;
   if (files.size() > 1) return error = "expected one .spg file", false;
   o.model = files.empty() ? "" : files[0];
   if (o.model.empty() && o.connect.empty() && o.serial.empty())
