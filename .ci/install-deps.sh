@@ -6,6 +6,7 @@ packages=(cmake ninja-build g++ pkg-config libeigen3-dev libgtest-dev libgmock-d
   liblzf-dev  # PCD's binary_compressed
   g++-arm-linux-gnueabi g++-arm-linux-gnueabihf g++-aarch64-linux-gnu qemu-user  # cross builds, their emulator
   socat  # a linked pseudo-terminal pair: the serial line in the CLI tests
+  help2man dpkg-dev  # man pages from --help; the .deb's library dependencies (dpkg-shlibdeps)
   libsdl2-dev libepoxy-dev libegl-dev libgl-dev libgl1-mesa-dri libegl-mesa0  # the emulator, the GL client (llvmpipe)
   xvfb xauth  # their windows in the tests
   draco)  # Draco's rate against distortion beside ours (tools/draco_rd.sh)
