@@ -143,7 +143,7 @@ TEST(Ply, MalformedInputsGiveClearErrors) {
     nan_bin.append(b, 4);
   }
   const BadCase cases[] = {
-      {"no magic: read as text", "plx\n", "line 1: malformed number 'plx'"},
+      {"no magic: read as text", "plx\n", "line 1: a header line ('plx') names no x, y and z columns"},
       {"no end_header", "ply\nformat ascii 1.0\nelement vertex 1\n", "no end_header"},
       {"unknown type", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\nend_header\n",
        "header line 4: unknown property type 'float128'"},

@@ -347,6 +347,60 @@ TEST(TextScan, ColourColumnsDecimalCommasAndBinaryFilesAreTold) {
   EXPECT_NE(error.find("blob.bin: byte 4: a binary byte (1)"), std::string::npos) << error;
 }
 
+TEST(TextScan, TheFilesPeopleExportAreReadOrNamed) {
+  PointCloud c;
+  std::string error;
+  // CloudCompare's header line: the columns by name, colour 0..255.
+  ASSERT_TRUE(parse("cc.txt", bytes("//X,Y,Z,R,G,B\n0,0,0,255,0,0\n1.5,-2,3,0,128,255\n"), c, error)) << error;
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.positions[1], Vec3(1.5, -2, 3));
+  ASSERT_TRUE(c.has_colors());
+  EXPECT_EQ(c.colors[1], Vec3(0, 128, 255) / 255.0);
+  EXPECT_TRUE(any_warning(c, "cc.txt: line 1 names the columns: read as --columns x,y,z,r,g,b"));
+  // Other tools' names, in another order, with columns skipped by name.
+  ASSERT_TRUE(parse("h.csv", bytes("Intensity;x;y;z;Nx;Ny;Nz;red\n7;1;2;3;0;0;1;9\n"), c, error)) << error;
+  EXPECT_EQ(c.positions[0], Vec3(1, 2, 3));
+  ASSERT_TRUE(c.has_normals());
+  EXPECT_EQ(c.normals[0], Vec3(0, 0, 1));
+  EXPECT_FALSE(c.has_colors());  // red alone is no colour
+  EXPECT_TRUE(any_warning(c, "read as --columns -,x,y,z,nx,ny,nz,- (skipped: Intensity, red)"));
+  // A header naming no coordinates: what to do.
+  EXPECT_FALSE(parse("h.txt", bytes("# exported\nalpha beta gamma\n1 2 3\n"), c, error));
+  EXPECT_EQ(error, "h.txt: line 2: a header line ('alpha beta gamma') names no x, y and z columns: name them with "
+                   "--columns (for example --columns x,y,z,-,r,g,b)");
+  // Leica PTS: count lines opening each scan position, intensity skipped.
+  ASSERT_TRUE(parse("s.pts", bytes("2\n0 0 0 -120 255 0 0\n1 0 0 5 0 255 0\n1\n2 2 2 -2048 1 2 3\n"), c, error)) << error;
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c.positions[2], Vec3(2, 2, 2));
+  ASSERT_TRUE(c.has_colors());
+  EXPECT_EQ(c.colors[2], Vec3(1, 2, 3) / 255.0);
+  EXPECT_TRUE(any_warning(c, "s.pts: read as Leica PTS (a count line, then x y z intensity r g b; intensity is not kept)"));
+  ASSERT_TRUE(parse("s.pts", bytes("3\n0 0 0 1\n1 0 0 2\n"), c, error)) << error;  // x y z intensity, one short
+  EXPECT_EQ(c.size(), 2u);
+  EXPECT_FALSE(c.has_colors());
+  EXPECT_TRUE(any_warning(c, "s.pts: line 1 says 3 points follow, 2 do"));
+  // Wavefront OBJ: vertices (MeshLab's colours), faces for normals, the rest skipped.
+  const std::string obj = "# exported\nmtllib a.mtl\no part\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 0 0 1 1 1 1\n"
+                          "vn 0 0 1\nvt 0 0\nusemtl m\ns off\nf 1/1/1 2/1/1 3/1/1\nf -4//1 -2//1 -1//1 2//1\n";
+  ASSERT_TRUE(parse("m.obj", bytes(obj), c, error)) << error;
+  ASSERT_EQ(c.size(), 4u);
+  EXPECT_EQ(c.positions[3], Vec3(0, 0, 1));
+  ASSERT_TRUE(c.has_colors());
+  EXPECT_EQ(c.colors[1], Vec3(0, 1, 0));
+  ASSERT_EQ(c.triangles.size(), 3u);  // one triangle, then a quad fanned into two
+  EXPECT_EQ(c.triangles[1], (std::array<uint32_t, 3>{0, 2, 3}));
+  EXPECT_EQ(c.triangles[2], (std::array<uint32_t, 3>{0, 3, 1}));
+  EXPECT_TRUE(any_warning(c, "m.obj: read as Wavefront OBJ: 4 vertices, 3 triangles for normals"));
+  EXPECT_FALSE(parse("m.obj", bytes("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), c, error));
+  EXPECT_EQ(error, "m.obj: line 4: face vertex 9 beyond the file's 3 vertices");
+  EXPECT_FALSE(parse("m.obj", bytes("v 0 0\n"), c, error));
+  EXPECT_EQ(error, "m.obj: line 1: a vertex has 2 numbers (expected x y z, x y z w or x y z r g b)");
+  // E57: refused by name, with what to do.
+  EXPECT_FALSE(parse("site.e57", bytes(std::string("ASTM-E57\0\0\0\0\x01\0\0\0", 16)), c, error));
+  EXPECT_EQ(error, "site.e57: this is an E57 file (ASTM E2807), which stipple does not read: convert it to PLY, LAS or "
+                   "PTS first (CloudCompare: open it, then File > Save as PLY; PDAL: pdal translate site.e57 scan.las)");
+}
+
 TEST(TextScan, NamedColumnsAreReadAsNamed) {
   PointCloud c;
   std::string error;

@@ -21,9 +21,10 @@ namespace {
 const char kEncodeHelp[] =
     "usage: stipple encode SCAN -o MODEL.spg [options]\n"
     "\n"
-    "Builds the hierarchy of Gaussians of a scan (PLY, PCD, LAS 1.0-1.4 or\n"
-    "x y z [nx ny nz] [r g b] text; docs/robustness.md) and writes it as a .spg\n"
-    "file (docs/format.md).\n"
+    "Builds the hierarchy of Gaussians of a scan (PLY, PCD, LAS 1.0-1.4, Leica\n"
+    "PTS, OBJ vertices, or x y z [nx ny nz] [r g b] text with or without a line\n"
+    "of column names; E57 is refused with how to convert it; docs/robustness.md)\n"
+    "and writes it as a .spg file (docs/format.md).\n"
     "\n"
     "options:\n"
     "  -o, --output FILE     the .spg to write (required)\n"

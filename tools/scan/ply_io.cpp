@@ -1,5 +1,6 @@
 // stipple host — PLY and plain-text scan reader, PLY writer. See ply_io.h.
 #include "tools/scan/ply_io.h"
+#include "tools/scan/text_formats.h"
 
 #include <algorithm>
 #include <charconv>
@@ -412,9 +413,9 @@ bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointC
 // numbers use decimal commas (European spreadsheets: "1,5 2,25 3"), which is
 // told by its first data line: three or more whitespace- or ';'-separated
 // words, none with a '.', at least one with a single ','.
-bool parse_text(const std::string& name, const uint8_t* data, size_t size, const TextColumns& layout,
-                PointCloud& cloud, std::string& error) {
-  cloud = PointCloud{};
+bool parse_text(const std::string& name, const uint8_t* data, size_t size, const TextPlan& plan, PointCloud& cloud,
+                std::string& error) {
+  const TextColumns& layout = plan.columns;
   // Where each field sits in a row, when the user named the columns.
   int at[10];
   std::fill(at, at + 10, -1);
@@ -439,6 +440,14 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
   size_t columns = 0;
   std::vector<double> row, extra;  // extra: columns 4-6 of a 6-column file, decided at the end
   std::vector<int> extra_lines;
+  // PTS: the last count line, the count it gave and the points since.
+  int count_line = 0;
+  uint64_t count_said = 0, count_seen = 0;
+  const auto check_count = [&]() {
+    if (count_line > 0 && count_seen != count_said)
+      cloud.warnings.push_back(name + ": line " + std::to_string(count_line) + " says " + std::to_string(count_said) +
+                               " points follow, " + std::to_string(count_seen) + " do");
+  };
   while (pos < size) {
     size_t eol = pos;
     while (eol < size && data[eol] != '\n') ++eol;
@@ -446,6 +455,7 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
     const char* end = reinterpret_cast<const char*>(data + eol);
     pos = eol + 1;
     ++line_no;
+    if (line_no == plan.header_line) continue;  // the columns' names (plan_text read them)
     if (line_no == 1 && end - begin >= 3 && std::memcmp(begin, "\xEF\xBB\xBF", 3) == 0) begin += 3;  // a UTF-8 byte-order mark
     const char* hash = std::find(begin, end, '#');
     end = hash;
@@ -499,6 +509,14 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
       p = stop;
     }
     if (row.empty()) continue;
+    if (plan.pts && row.size() == 1 && row[0] >= 0 && row[0] == std::floor(row[0])) {
+      check_count();  // a PTS count line: another section (scan position) begins
+      count_line = line_no;
+      count_said = static_cast<uint64_t>(row[0]);
+      count_seen = 0;
+      continue;
+    }
+    ++count_seen;
     // A coordinate past float32's range: the line named (parse_point_cloud
     // checks every format's points again, by index).
     for (size_t k = 0; k < row.size() && k < 3; ++k) {
@@ -558,6 +576,7 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
       cloud.colors.push_back((Vec3(row[6], row[7], row[8]) / 255.0).cwiseMax(0.0).cwiseMin(1.0));
     }
   }
+  check_count();
   if (cloud.positions.empty()) {
     error = name + ": no points";
     return false;
@@ -675,14 +694,20 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
     error = name + ": the file is empty (0 bytes)";
     return false;
   }
-  enum class Format { kPly, kLas, kPcd, kText };
+  if (looks_like_e57(data, size)) {
+    error = e57_refusal(name);
+    return false;
+  }
+  enum class Format { kPly, kLas, kPcd, kObj, kText };
   const Format format = size >= 3 && std::memcmp(data, "ply", 3) == 0 ? Format::kPly
                         : looks_like_las(data, size)                    ? Format::kLas
                         : looks_like_pcd(data, size)                    ? Format::kPcd
+                        : looks_like_obj(data, size)                    ? Format::kObj
                                                                         : Format::kText;
   if (format != Format::kText && !options.columns.fields.empty()) {
     error = name + ": --columns names a text scan's columns, but this is " +
-            (format == Format::kPly ? "PLY" : format == Format::kLas ? "LAS" : "PCD") + ", whose header names them";
+            (format == Format::kPly ? "PLY" : format == Format::kLas ? "LAS" : format == Format::kPcd ? "PCD" : "OBJ") +
+            ", whose " + (format == Format::kObj ? "'v' lines are" : "header names") + " them";
     return false;
   }
   bool ok = false;
@@ -690,7 +715,14 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
     case Format::kPly: ok = parse_ply(name, data, size, cloud, error); break;
     case Format::kLas: ok = parse_las(name, data, size, cloud, error); break;
     case Format::kPcd: ok = parse_pcd(name, data, size, cloud, error); break;
-    case Format::kText: ok = parse_text(name, data, size, options.columns, cloud, error); break;
+    case Format::kObj: ok = parse_obj(name, data, size, cloud, error); break;
+    case Format::kText: {
+      TextPlan plan;
+      cloud = PointCloud{};
+      ok = plan_text(name, data, size, options.columns, plan, cloud, error) &&
+           parse_text(name, data, size, plan, cloud, error);
+      break;
+    }
   }
   if (!ok) return false;
   if (std::string what = beyond_float_range(cloud.positions); !what.empty()) return error = name + ": " + what, false;
