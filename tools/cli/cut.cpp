@@ -52,7 +52,7 @@ int cmd_cut(int argc, char** argv) {
   if (!read_file(files[0], file, error)) return cli::fail(error);
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
-  if (!r.ok()) return cli::fail(spg_error_message(files[0], r, file.size()));
+  if (!r.ok()) return cli::fail(spg_error_message(files[0], r, file.data(), file.size()));
   std::vector<uint8_t> decoder_storage(node_decoder_bytes(view.header));
   NodeDecoder decoder;
   if (decoder.init(view, decoder_storage.data(), decoder_storage.size()) != DecodeStatus::kOk)

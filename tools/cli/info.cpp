@@ -57,7 +57,7 @@ int cmd_info(int argc, char** argv) {
   SpgView view;
   const SpgResult parsed = spg_parse(file.data(), file.size(), &view);
   if (!parsed.ok())
-    return cli::fail(spg_error_message(files[0], parsed, file.size()));
+    return cli::fail(spg_error_message(files[0], parsed, file.data(), file.size()));
   const SpgHeader& h = view.header;
   const std::vector<uint32_t> point_count = spg_point_counts(view);
   const auto sigma1_of = [&](uint32_t node) {

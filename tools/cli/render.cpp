@@ -12,13 +12,14 @@
 #include "platform/progress.h"
 #include "tools/cli/cli.h"
 #include "tools/cli/render_output.h"
+#include "tools/encoder/encoder.h"
 #include "tools/viewer/viewer.h"
 
 namespace stipple {
 namespace {
 
 const char kRenderHelp[] =
-    "usage: stipple render MODEL.spg -o IMAGE.png [options]\n"
+    "usage: stipple render MODEL.spg|SCAN -o IMAGE.png [options]\n"
     "\n"
     "Renders a .spg file with the handheld client — fixed point, one arena, the\n"
     "same bytes on every platform — in this process: the view-dependent cut of the\n"
@@ -26,6 +27,8 @@ const char kRenderHelp[] =
     "culled by frustum and normal cone) is taken for the camera, its records are\n"
     "handed to the client, one frame is\n"
     "drawn and written as PNG (RGB565 frames expanded by bit replication).\n"
+    "A scan (PLY, PCD, LAS, PTS, OBJ, text) is encoded in memory first, with the\n"
+    "encoder's defaults (`stipple encode` writes it to a file once instead).\n"
     "\n";
 
 const char kRenderHelpOutput[] =
@@ -187,7 +190,7 @@ int cmd_render(int argc, char** argv) {
     unsigned long long steps = 1;
     if (has_path && (path.rfind("orbit:", 0) != 0 || !cli::parse_uint(path.substr(6), 100000, steps) || steps == 0))
       return cli::fail("render: --path: expected orbit:N with N in 1..100000, got '" + path + "'");
-    if (remote != files.empty()) return cli::fail(remote ? "render: --connect takes no MODEL.spg" : "render: expected one .spg file");
+    if (remote != files.empty()) return cli::fail(remote ? "render: --connect takes no MODEL.spg" : "render: expected one model (.spg or a scan)");
     if (output.empty()) return cli::fail(has_path ? "render: -o FOLDER is required with --path" : "render: -o IMAGE.png is required");
     std::error_code ec;
     if (has_path && std::filesystem::exists(output, ec) && !std::filesystem::is_directory(output, ec))
@@ -196,11 +199,13 @@ int cmd_render(int argc, char** argv) {
     return render_stream(remote ? "" : files[0], over_serial ? "" : connect, serial_dev, static_cast<uint32_t>(baud), o,
                          static_cast<uint32_t>(steps), has_path, output);
   }
-  if (files.size() != 1) return cli::fail("render: expected one .spg file (see stipple render --help)");
+  if (files.size() != 1) return cli::fail("render: expected one model, a .spg or a scan (see stipple render --help)");
   if (output.empty() && !psnr && frames == 1) return cli::fail("render: -o IMAGE.png is required");
   if (!cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
   std::vector<uint8_t> file;
-  if (!read_file(files[0], file, error)) return cli::fail(error);
+  std::string note;
+  if (!read_model(files[0], file, note, error)) return cli::fail(error);  // a scan is encoded in memory
+  if (!note.empty()) std::fprintf(stderr, "stipple: %s\n", note.c_str());
   return render_to_png(files[0], file, o, output, reference, psnr, json, static_cast<int>(frames));
 }
 

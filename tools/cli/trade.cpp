@@ -186,7 +186,7 @@ int cmd_trade(int argc, char** argv) {
   if (!read_file(files[0], file, error)) return cli::fail(error);
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
-  if (!r.ok()) return cli::fail(spg_error_message(files[0], r, file.size()));
+  if (!r.ok()) return cli::fail(spg_error_message(files[0], r, file.data(), file.size()));
   base.config.node_capacity = std::max<uint32_t>(view.header.node_count, 1);  // the cut is never held back by the cache
   DecodedModel model;
   if (!decode_spg(files[0], file.data(), file.size(), model, error)) return cli::fail(error);

@@ -238,4 +238,12 @@ std::string spg_error_message(const std::string& name, const SpgResult& r, size_
   return name + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error);
 }
 
+std::string spg_error_message(const std::string& name, const SpgResult& r, const uint8_t* data, size_t size) {
+  // A scan where a model belongs (the handheld reads only .spg): say what to do.
+  const auto starts = [&](const char* s) { return size >= std::strlen(s) && std::memcmp(data, s, std::strlen(s)) == 0; };
+  if (r.error == SpgError::kBadMagic && (starts("ply") || starts("LASF") || starts("# .PCD") || starts("VERSION")))
+    return name + ": a scan, not a .spg model: encode it first (stipple encode " + name + " -o MODEL.spg)";
+  return spg_error_message(name, r, size);
+}
+
 }  // namespace stipple

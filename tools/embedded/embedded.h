@@ -35,6 +35,9 @@ bool parse_view(const std::string& text, ViewSpec& out, std::string& error);
 // "<name>: byte <offset>: <what>", and for a file cut short
 // "<name>: truncated: <size> of at least <needed> bytes (...)".
 std::string spg_error_message(const std::string& name, const SpgResult& result, size_t size);
+// The same, knowing the bytes: a scan given where a model belongs is named
+// as one, with the command that encodes it.
+std::string spg_error_message(const std::string& name, const SpgResult& result, const uint8_t* data, size_t size);
 
 // The view a user gets for a model (docs/encoder.md, "Orientation"):
 //   up: --up, else the file's hint, else the thinnest axis (+) of a flat box

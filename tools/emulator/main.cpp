@@ -20,7 +20,7 @@ namespace stipple {
 namespace {
 
 const char kUsage[] =
-    "usage: stipple-emulator MODEL.spg [options]\n"
+    "usage: stipple-emulator MODEL.spg|SCAN [options]   (a scan is encoded in memory first)\n"
     "       stipple-emulator --connect HOST:PORT | --serial DEV [--baud N] [options]\n"
     "\n"
     "The handheld client in a window that emulates the device: its screen (240x320\n"

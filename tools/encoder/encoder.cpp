@@ -2,11 +2,14 @@
 #include "tools/encoder/encoder.h"
 
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <cstring>
 
 #include "core/spg_format.h"
 #include "core/spg_writer.h"
+#include "platform/file_io.h"
 #include "tools/encoder/classify.h"
 #include "tools/encoder/normals.h"
 #include "tools/encoder/quantize.h"
@@ -229,6 +232,32 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   report.record_bytes = record_bytes;
   report.bits_per_point = 8.0 * static_cast<double>(spg.size()) / static_cast<double>(cloud.size());
   if (progress) progress->update(1.0, "done");
+  return true;
+}
+
+bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string& note, std::string& error) {
+  note.clear();
+  if (!read_file(path, spg, error)) return false;
+  if (spg.size() >= 4 && std::memcmp(spg.data(), "STPG", 4) == 0) return true;  // a .spg: validated by its reader
+  std::vector<uint8_t> bytes;
+  bytes.swap(spg);
+  PointCloud cloud;
+  if (!parse_point_cloud(path, bytes.data(), bytes.size(), cloud, error)) return false;
+  bytes = {};
+  for (const std::string& w : cloud.warnings) std::fprintf(stderr, "stipple: warning: %s\n", w.c_str());
+  const auto start = std::chrono::steady_clock::now();
+  ProgressBar progress("encode " + path, true);
+  EncodeReport report;
+  if (!encode_cloud(cloud, EncodeOptions{}, spg, report, error, &progress)) return error = path + ": " + error, false;
+  progress.finish();
+  std::string nodes = std::to_string(report.nodes);
+  for (size_t at = nodes.size(); at > 3; at -= 3) nodes.insert(at - 3, ",");
+  char text[96];
+  std::snprintf(text, sizeof text, "%s nodes in %.2f s", nodes.c_str(),
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  std::string stem = path;
+  if (const size_t dot = stem.find_last_of('.'); dot != std::string::npos && dot > stem.find_last_of('/') + 1) stem.resize(dot);
+  note = path + ": a scan, encoded in memory: " + text + " (stipple encode " + path + " -o " + stem + ".spg keeps it)";
   return true;
 }
 

@@ -22,7 +22,7 @@ namespace stipple {
 namespace {
 
 const char kUsage[] =
-    "usage: stipple-gl MODEL.spg [options]\n"
+    "usage: stipple-gl MODEL.spg|SCAN [options]   (a scan is encoded in memory first)\n"
     "       stipple-gl --connect HOST:PORT | --serial DEV [--baud N] [options]\n"
     "\n"
     "The GL desktop client: the same node stream as the handheld, decoded and\n"

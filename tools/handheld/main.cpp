@@ -156,7 +156,7 @@ int run(int argc, char** argv) {
     if (!read_file(model, file, error)) return fail(error);
     SpgView spg;
     const SpgResult r = spg_parse(file.data(), file.size(), &spg);
-    if (!r.ok()) return fail(spg_error_message(model, r, file.size()));
+    if (!r.ok()) return fail(spg_error_message(model, r, file.data(), file.size()));
     if (!render_fixed(spg, file.data(), config, o.rule, o.view, frame, error, static_cast<int>(frames),
                       memory ? heap_in_use : nullptr))
       return fail(model + ": " + error);

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "platform/file_io.h"
+#include "tools/encoder/encoder.h"
 #include "platform/loopback/loopback_transport.h"
 #include "platform/serial/serial_transport.h"
 #include "platform/tcp/tcp_transport.h"
@@ -94,7 +95,9 @@ bool ViewerSource::open(const std::string& model, const std::string& connect, co
     name_ = "tcp " + connect;
   } else {
     std::vector<uint8_t> file;
-    if (!read_file(model, file, error)) return false;
+    std::string note;
+    if (!read_model(model, file, note, error)) return false;  // a scan is encoded in memory
+    if (!note.empty()) std::fprintf(stderr, "stipple: %s\n", note.c_str());
     ServerOptions so;
     so.cull = o.rule.cull;
     so.cones = cone_rule(o.rule);
