@@ -63,23 +63,111 @@ TEST(Orientation, CameraFrameFacesTheSensorWithYDown) {
   EXPECT_EQ(share_facing_point(c, Vec3::Zero()), 1.0);
 }
 
+// Four walls, floor and ceiling of a 12 x 8 x 3 room, as a scanner at the
+// origin (0.7 m off the room's centre) samples them: one point every half
+// degree of azimuth and every degree of elevation from -60 to 85 (the
+// tripod's blind cone below), 2 mm of range noise.
+std::vector<Vec3> scanned_room() {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> noise(-0.002, 0.002);
+  const Vec3 half(6, 4, 1.5), room_centre(-0.7, 0.5, -0.2);
+  std::vector<Vec3> out;
+  for (int az = 0; az < 720; ++az)
+    for (int el = -60; el <= 85; ++el) {
+      const double a = az * M_PI / 360, e = el * M_PI / 180;
+      const Vec3 d(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+      double t = INFINITY;
+      for (int k = 0; k < 3; ++k)
+        if (std::abs(d[k]) > 1e-9) t = std::min(t, (room_centre[k] + (d[k] > 0 ? half[k] : -half[k])) / d[k]);
+      out.push_back((t + noise(rng)) * d);
+    }
+  return out;
+}
+
+// A closed head-sized shape (an ellipsoid 15 x 22 x 18 cm with bumps),
+// its surface sampled evenly, centred on the origin as object scans are stored.
+std::vector<Vec3> centred_head() {
+  std::vector<Vec3> out;
+  const int n = 20000;
+  const double golden = M_PI * (3 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z);
+    const Vec3 u(r * std::cos(golden * i), r * std::sin(golden * i), z);
+    const double bump = 1 + 0.08 * std::sin(5 * u.x()) * std::cos(4 * u.y()) + 0.05 * std::sin(7 * u.z());
+    out.push_back(Vec3(0.075 * u.x(), 0.11 * u.y(), 0.09 * u.z()) * bump);
+  }
+  return out;
+}
+
 TEST(Orientation, ScanFromInsideFacesTheScanner) {
-  // Four walls, floor and ceiling of a 12 x 8 x 3 room around a scanner at the origin.
-  std::vector<Vec3> pts;
-  const auto add = [&](const std::vector<Vec3>& s) { pts.insert(pts.end(), s.begin(), s.end()); };
-  add(plane(Vec3(-6, -4, -1.5), Vec3(12, 0, 0), Vec3(0, 0, 3), 40, 1));
-  add(plane(Vec3(-6, 4, -1.5), Vec3(12, 0, 0), Vec3(0, 0, 3), 40, 2));
-  add(plane(Vec3(-6, -4, -1.5), Vec3(0, 8, 0), Vec3(0, 0, 3), 30, 3));
-  add(plane(Vec3(6, -4, -1.5), Vec3(0, 8, 0), Vec3(0, 0, 3), 30, 4));
-  add(plane(Vec3(-6, -4, -1.5), Vec3(12, 0, 0), Vec3(0, 8, 0), 50, 5));
-  add(plane(Vec3(-6, -4, 1.5), Vec3(12, 0, 0), Vec3(0, 8, 0), 50, 6));
   ScanFrame f;
-  const PointCloud c = oriented(pts, {}, &f);
+  const PointCloud c = oriented(scanned_room(), {}, &f);
   EXPECT_EQ(f.kind, ScanKind::kSensorInside) << f.reason;
   EXPECT_GE(f.visible_share, 0.95);
+  EXPECT_GE(f.spacing_slope, 1.0);       // a scanner's spacing grows with the range
   EXPECT_EQ(f.hint.up, SpgAxis::kPosZ);  // the room is flat: z is its thinnest extent
   EXPECT_TRUE(f.hint.sensor_at_origin);  // seen from the scanner
   EXPECT_GE(share_facing_point(c, Vec3::Zero()), 0.99);
+  // --orient outward says it is not seen from inside: no camera at the origin.
+  OrientOptions o;
+  o.mode = OrientMode::kOutward;
+  EXPECT_EQ(analyse_scan(c.positions, o).kind, ScanKind::kObject);
+  EXPECT_FALSE(analyse_scan(c.positions, o).hint.sensor_at_origin);
+}
+
+// Closed objects stored centred on the origin, the common case for object
+// scans: every point is in view from the origin, as in a room scan, but the
+// sampling is even — nothing grew with the distance from a scanner there —
+// so they are objects, their normals facing outward and their default view
+// from outside. The same shapes with the spacing a scanner at the origin
+// gives stay scans from inside.
+TEST(Orientation, CentredObjectsAreSeenFromOutside) {
+  const struct {
+    const char* name;
+    std::vector<Vec3> points;
+  } shapes[] = {{"sphere", test::sphere_cloud(20000, 0.1, false).positions}, {"head", centred_head()}};
+  for (const auto& s : shapes) {
+    ScanFrame f;
+    const PointCloud c = oriented(s.points, {}, &f);
+    EXPECT_EQ(f.kind, ScanKind::kObject) << s.name << ": " << f.reason;
+    EXPECT_GE(f.visible_share, 0.95) << s.name;  // what once made them rooms
+    EXPECT_FALSE(f.hint.sensor_at_origin) << s.name;
+    EXPECT_EQ(share_facing_point(c, Vec3::Zero()), 0.0) << s.name;  // every normal outward
+    std::printf("%s: %s; %.1f %% visible from the origin, %.1f %% of the normals outward\n", s.name, f.reason.c_str(),
+                100 * f.visible_share, 100 * (1 - share_facing_point(c, Vec3::Zero())));
+  }
+}
+
+// The Stanford scans moved to be centred (on their box's centre and on their
+// centroid) and stripped of their faces, as a bare export of them would be:
+// objects, and their k-NN normals agree in sign with the faces' normals.
+TEST(Orientation, CentredStanfordScansFaceLikeTheirFaces) {
+  for (const char* file : {"bunny.ply", "dragon.ply"}) {
+    const std::string path = std::string(STIPPLE_SHARED_DATA) + "/" + file;
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not present";
+    PointCloud scan;
+    std::string error;
+    ASSERT_TRUE(read_point_cloud(path, scan, error)) << error;
+    const Box3 box = bounding_box(scan.positions);
+    Vec3 centroid = Vec3::Zero();
+    for (const Vec3& p : scan.positions) centroid += p;
+    centroid /= static_cast<double>(scan.size());
+    for (const Vec3& centre : {Vec3((box.min + box.max) / 2), centroid}) {
+      PointCloud faces = scan, bare;
+      for (Vec3& p : faces.positions) p -= centre;
+      bare.positions = faces.positions;
+      prepare_scan(faces, EncodeOptions{});  // normals from the faces
+      const ScanFrame f = prepare_scan(bare, EncodeOptions{});
+      EXPECT_EQ(f.kind, ScanKind::kObject) << file << ": " << f.reason;
+      EXPECT_FALSE(f.hint.sensor_at_origin) << file;
+      size_t agree = 0;
+      for (size_t i = 0; i < bare.size(); ++i) agree += bare.normals[i].dot(faces.normals[i]) > 0;
+      const double share = static_cast<double>(agree) / static_cast<double>(bare.size());
+      std::printf("%s centred on its %s: %s; %.1f %% of the k-NN normals face as the faces do\n", file,
+                  centre == centroid ? "centroid" : "box", f.reason.c_str(), 100 * share);
+      EXPECT_GE(share, 0.9) << file;
+    }
+  }
 }
 
 TEST(Orientation, TerrainFacesTheSky) {
@@ -110,15 +198,15 @@ TEST(Orientation, ObjectAwayFromTheOriginFacesOutward) {
 }
 
 TEST(Orientation, OptionsOverrideTheData) {
-  // A sphere around the origin reads as a scan from inside (PCL's convention:
-  // the sensor is the origin); --orient outward says it is an object.
+  // A sphere around the origin is an object seen from outside; --orient
+  // sensor says its sensor stood at the origin (PCL's convention).
   const PointCloud s = test::sphere_cloud(3000, 2.0, false);
   ScanFrame f;
-  EXPECT_EQ(share_facing_point(oriented(s.positions, {}, &f), Vec3::Zero()), 1.0);
-  EXPECT_EQ(f.kind, ScanKind::kSensorInside);
+  EXPECT_EQ(share_facing_point(oriented(s.positions, {}, &f), Vec3::Zero()), 0.0);
+  EXPECT_EQ(f.kind, ScanKind::kObject);
   OrientOptions o;
-  o.mode = OrientMode::kOutward;
-  EXPECT_EQ(share_facing_point(oriented(s.positions, o), Vec3::Zero()), 0.0);
+  o.mode = OrientMode::kSensor;
+  EXPECT_EQ(share_facing_point(oriented(s.positions, o), Vec3::Zero()), 1.0);
   // A viewpoint: every normal faces it; the hint names its side.
   o = OrientOptions{};
   o.has_viewpoint = true;
@@ -138,10 +226,11 @@ TEST(Orientation, OptionsOverrideTheData) {
 
 // Normals the scan brings are evidence: a sphere around the origin whose
 // file normals face outward is an object, not a room seen from inside (so
-// its file gets no view hint: the committed sphere fixtures stay as they are).
+// its file gets no view hint: the committed sphere fixtures stay as they
+// are); with them all facing the origin, its sensor stood there.
 TEST(Orientation, GivenNormalsOverruleTheGeometry) {
   const PointCloud s = test::sphere_cloud(3000, 2.0, true);
-  EXPECT_EQ(analyse_scan(s.positions, {}).kind, ScanKind::kSensorInside);
+  EXPECT_EQ(analyse_scan(s.positions, {}).kind, ScanKind::kObject);
   const ScanFrame f = analyse_scan(s.positions, {}, &s.normals);
   EXPECT_EQ(f.kind, ScanKind::kObject) << f.reason;
   EXPECT_EQ(f.hint.encode(), 0);

@@ -66,19 +66,7 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
     if (!cli::parse_uint(v, 256, u) || u < 1) return error = "--threads: expected 1..256, got '" + v + "'", false;
     o.tree.threads = static_cast<int>(u);
   }
-  if (args.value("--orient", v)) {
-    const OrientMode modes[] = {OrientMode::kAuto, OrientMode::kSensor, OrientMode::kUp, OrientMode::kOutward};
-    bool found = false;
-    for (OrientMode m : modes)
-      if (v == orient_mode_name(m)) o.orient.mode = m, found = true;
-    if (!found) return error = "--orient: expected auto, sensor, up or outward, got '" + v + "'", false;
-  }
-  if (args.value("--viewpoint", v)) {
-    double xyz[3];
-    if (!cli::parse_vec3(v, xyz)) return error = "--viewpoint: expected X,Y,Z (three finite numbers), got '" + v + "'", false;
-    o.orient.has_viewpoint = true;
-    o.orient.viewpoint = Vec3(xyz[0], xyz[1], xyz[2]);
-  }
+  if (!parse_orient_options(args, o.orient, error)) return false;
   if (args.value("--up", v) && !spg_parse_axis(v.c_str(), &o.orient.up))
     return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
   if (args.value("--format-version", v)) {
@@ -93,6 +81,24 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
   quiet = args.flag("--quiet") || args.flag("-q");
   json = args.flag("--json");
   if (args.bad()) return error = args.error(), false;
+  return true;
+}
+
+bool parse_orient_options(cli::Args& args, OrientOptions& o, std::string& error) {
+  std::string v;
+  if (args.value("--orient", v)) {
+    const OrientMode modes[] = {OrientMode::kAuto, OrientMode::kSensor, OrientMode::kUp, OrientMode::kOutward};
+    bool found = false;
+    for (OrientMode m : modes)
+      if (v == orient_mode_name(m)) o.mode = m, found = true;
+    if (!found) return error = "--orient: expected auto, sensor, up or outward, got '" + v + "'", false;
+  }
+  if (args.value("--viewpoint", v)) {
+    double xyz[3];
+    if (!cli::parse_vec3(v, xyz)) return error = "--viewpoint: expected X,Y,Z (three finite numbers), got '" + v + "'", false;
+    o.has_viewpoint = true;
+    o.viewpoint = Vec3(xyz[0], xyz[1], xyz[2]);
+  }
   return true;
 }
 

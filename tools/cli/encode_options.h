@@ -12,6 +12,9 @@ namespace stipple {
 // Parses the options shared by encode and demo. Returns false on a bad value.
 bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& json, std::string& error);
 
+// --orient and --viewpoint alone (truth takes these; its --up is render's).
+bool parse_orient_options(cli::Args& args, OrientOptions& o, std::string& error);
+
 std::string summary_json(const std::string& scan, const EncodeReport& r, double seconds, double peak_mb);
 void print_summary(const std::string& scan, const EncodeReport& r, double seconds, double peak_mb);
 

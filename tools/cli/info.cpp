@@ -118,7 +118,8 @@ int cmd_info(int argc, char** argv) {
         .num("capr", ratios.capr)
         .integer("capr_excluded", static_cast<long long>(ratios.capr_excluded))
         .str("view_up", spg_axis_name(h.view_hint.up))
-        .str("view_sensor_side", spg_axis_name(h.view_hint.sensor_side));
+        .str("view_sensor_side", spg_axis_name(h.view_hint.sensor_side))
+        .boolean("view_sensor_at_origin", h.view_hint.sensor_at_origin);
     if (facing >= 0) j.num("facing_share", facing);
     std::printf("%s\n", j.done().c_str());
     return 0;
@@ -147,7 +148,8 @@ int cmd_info(int argc, char** argv) {
               o[1] + f32_value(h.bbox_bits[4]), o[2] + f32_value(h.bbox_bits[5]));
   if (o[0] != 0 || o[1] != 0 || o[2] != 0)
     std::printf("  origin       (%.17g, %.17g, %.17g): the box is stored relative to it\n", o[0], o[1], o[2]);
-  std::printf("  view         up %s, sensor side %s\n", spg_axis_name(h.view_hint.up), spg_axis_name(h.view_hint.sensor_side));
+  std::printf("  view         up %s, sensor side %s%s\n", spg_axis_name(h.view_hint.up), spg_axis_name(h.view_hint.sensor_side),
+              h.view_hint.sensor_at_origin ? ", sensor at the origin: viewers start there, inside the scan" : "");
   if (facing >= 0)
     std::printf("  facing       %.1f %% of the leaves' mean normals face %s %s\n", 100.0 * facing,
                 facing_point ? "the point" : "the axis", facing_point ? point_text.c_str() : up_text.c_str());

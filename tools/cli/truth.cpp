@@ -8,6 +8,7 @@
 
 #include "platform/png_io.h"
 #include "tools/cli/cli.h"
+#include "tools/cli/encode_options.h"
 #include "tools/embedded/render_options.h"
 #include "tools/encoder/encoder.h"
 #include "tools/reference/truth.h"
@@ -25,7 +26,8 @@ const char kTruthHelp[] =
     "shading of the encoder's normals), otherwise its points as z-buffered squares\n"
     "of the point size. Compare a render with it: stipple image-diff TRUTH.png\n"
     "RENDER.png (object PSNR, SSIM, dark-where-lit and outside-silhouette shares).\n"
-    "The view, size, format, shading, colour and point-size options are render's.\n";
+    "The view, size, format, shading, colour and point-size options are render's;\n"
+    "--orient and --viewpoint are encode's (give what the model was encoded with).\n";
 
 }  // namespace
 
@@ -41,6 +43,8 @@ int cmd_truth(int argc, char** argv) {
   std::string output, error;
   if (!args.value("-o", output)) args.value("--output", output);
   if (!parse_render_options(args, o, error)) return cli::fail("truth: " + error);
+  EncodeOptions encode;  // the encoder's view of the scan: --orient, --viewpoint as encode takes them
+  if (!parse_orient_options(args, encode.orient, error)) return cli::fail("truth: " + error);
   ScanOptions scan_options;
   if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("truth: " + e);
   const std::vector<std::string> files = args.positionals();
@@ -54,7 +58,7 @@ int cmd_truth(int argc, char** argv) {
   if (!read_point_cloud(files[0], cloud, error, scan_options)) return cli::fail(error);
   if (cloud.size() == 0) return cli::fail(files[0] + ": the scan has no points");
   // What the encoder would do: its normals, its frame (view hint), its box.
-  const ScanFrame frame = prepare_scan(cloud, EncodeOptions{});
+  const ScanFrame frame = prepare_scan(cloud, encode);
   float bmin[3], bmax[3];  // relative to the origin, as the encoder stores them
   const Vec3 origin = stored_origin(cloud.positions, kSpgVersion);
   stored_bounding_box(cloud.positions, origin, bmin, bmax);

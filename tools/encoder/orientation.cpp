@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "tools/scan/kdtree.h"
+
 namespace stipple {
 namespace {
 
@@ -83,6 +85,34 @@ double visible_share(const std::vector<Vec3>& points, const Vec3& eye) {
   return static_cast<double>(visible) / static_cast<double>(points.size());
 }
 
+double spacing_slope(const std::vector<Vec3>& points, const Vec3& eye) {
+  if (points.size() < 16) return NAN;
+  // A subsample spaces every point alike by one factor: the slope is unchanged.
+  const size_t tree_stride = std::max<size_t>(1, points.size() / 20000);
+  std::vector<Vec3> sample;
+  for (size_t i = 0; i < points.size(); i += tree_stride) sample.push_back(points[i]);
+  const KdTree tree(sample);
+  const size_t query_stride = std::max<size_t>(1, sample.size() / 2000);
+  std::vector<uint32_t> near;
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < sample.size(); i += query_stride) {
+    const double r = (sample[i] - eye).norm();
+    tree.knearest(sample[i], 7, near);  // itself, then six neighbours
+    if (near.size() < 7 || !(r > 0)) continue;
+    const double d = (sample[near.back()] - sample[i]).norm();
+    if (!(d > 0)) continue;
+    const double x = std::log(r), y = std::log(d);
+    sx += x, sy += y, sxx += x * x, sxy += x * y;
+    ++n;
+  }
+  if (n < 16) return NAN;
+  const double mean_x = sx / static_cast<double>(n);
+  const double var_x = sxx / static_cast<double>(n) - mean_x * mean_x;
+  if (!(var_x >= 0.01)) return NAN;
+  return (sxy / static_cast<double>(n) - mean_x * sy / static_cast<double>(n)) / var_x;
+}
+
 ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& o, const std::vector<Vec3>* normals) {
   ScanFrame f;
   const Box3 box = bounding_box(points);
@@ -114,12 +144,20 @@ ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& o, 
   // With normals in the file (or from faces) the data shows which way its
   // surfaces face: a rule that contradicts them (most facing away from the
   // sensor or the sky) does not apply.
-  const auto agrees = [&](const Vec3& sensor, const Vec3* sky) {
-    if (normals == nullptr || normals->size() != points.size()) return true;
+  const bool has_normals = normals != nullptr && normals->size() == points.size();
+  const auto facing_share = [&](const Vec3& sensor, const Vec3* sky) {
+    if (!has_normals) return 1.0;
     size_t toward = 0;
     for (size_t i = 0; i < points.size(); ++i)
       toward += sky ? (*normals)[i].dot(*sky) > 0 : (*normals)[i].dot(sensor - points[i]) > 0;
-    return 2 * toward >= points.size();
+    return static_cast<double>(toward) / static_cast<double>(points.size());
+  };
+  const auto agrees = [&](const Vec3& sensor, const Vec3* sky) { return facing_share(sensor, sky) >= 0.5; };
+  // Rule 3's evidence of a scanner at the origin, beyond seeing every point
+  // from it: spacing growing with distance, or the scan's own normals facing it.
+  const auto scanner_inside = [&]() {
+    f.spacing_slope = spacing_slope(points, Vec3::Zero());
+    return f.spacing_slope >= 0.5 || (has_normals && facing_share(Vec3::Zero(), nullptr) >= 0.9);
   };
   if (o.has_viewpoint) {
     f.kind = ScanKind::kViewpoint;
@@ -131,17 +169,31 @@ ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& o, 
     f.hint = SpgViewHint{SpgAxis::kNegY, SpgAxis::kNegZ};
     std::snprintf(text, sizeof text, "camera frame: %.1f %% of the points in front of the origin (+z forward, +y down)",
                   100.0 * static_cast<double>(in_cone) / static_cast<double>(points.size()));
-  } else if (inside && agrees(Vec3::Zero(), nullptr) && (f.visible_share = visible_share(points, Vec3::Zero())) >= 0.95) {
+  } else if (inside && agrees(Vec3::Zero(), nullptr) && (f.visible_share = visible_share(points, Vec3::Zero())) >= 0.95 &&
+             scanner_inside()) {
     f.kind = ScanKind::kSensorInside;
     // Seen from the scanner: from outside, the room shows the backs of its walls and ceiling.
     f.hint.sensor_at_origin = true;
     if (flat) f.hint.up = axis_code(thin, false);
-    std::snprintf(text, sizeof text, "sensor at the origin, inside the scan: %.1f %% of the points visible from it",
-                  100.0 * f.visible_share);
+    std::snprintf(text, sizeof text,
+                  "sensor at the origin, inside the scan: %.1f %% of the points visible from it, spacing growing with "
+                  "distance from it (slope %.2f)",
+                  100.0 * f.visible_share, f.spacing_slope);
   } else if (flat && agrees(Vec3::Zero(), &up)) {
     f.kind = ScanKind::kTerrain;
     f.hint = SpgViewHint{axis_code(thin, false), axis_code(thin, false)};
     std::snprintf(text, sizeof text, "terrain: the %c extent (%g) is under half the others", "xyz"[thin], extent[thin]);
+  } else if (f.visible_share >= 0.95) {
+    // Around the origin and all in view from it, but not sampled from there:
+    // an object stored centred, seen from outside.
+    f.kind = ScanKind::kObject;
+    if (std::isnan(f.spacing_slope))
+      std::snprintf(text, sizeof text, "object: around the origin, its points all at about one distance from it");
+    else
+      std::snprintf(text, sizeof text,
+                    "object: centred on the origin, but its spacing does not grow with the distance from it as a "
+                    "scanner's there would (slope %.2f)",
+                    f.spacing_slope);
   } else {
     f.kind = ScanKind::kObject;
     std::snprintf(text, sizeof text, "object: no sensor position or up axis in the data");
@@ -153,6 +205,11 @@ ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& o, 
     case ScanKind::kSensorInside: f.orient = OrientMode::kSensor; break;
     case ScanKind::kTerrain: f.orient = OrientMode::kUp; break;
     case ScanKind::kObject: f.orient = OrientMode::kOutward; break;
+  }
+  // --orient outward or up says what the scan is not: seen from inside.
+  if (f.kind == ScanKind::kSensorInside && (o.mode == OrientMode::kOutward || o.mode == OrientMode::kUp)) {
+    f.kind = ScanKind::kObject;
+    f.hint = SpgViewHint{};
   }
   if (o.up != SpgAxis::kNone) f.hint.up = o.up;
   if (o.mode != OrientMode::kAuto) {

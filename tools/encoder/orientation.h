@@ -13,9 +13,16 @@
 //      degrees of it both ways — an RGB-D or ToF frame; the sensor is the
 //      origin, +y points down;
 //   3. a sensor inside: the origin inside the bounding box (5-95 % of each
-//      axis) and at least 95 % of the points visible from it (no other point
-//      nearer along the same ray) — a terrestrial or 360-degree scan in its
-//      scanner's frame, seen from the scanner;
+//      axis), at least 95 % of the points visible from it (no other point
+//      nearer along the same ray), and sampled as a scanner there samples:
+//      at equal angles, so the spacing between points grows with their
+//      distance from it (log spacing against log distance has a slope of at
+//      least 0.5; a scanner's is about 1) — or, in a scan with normals, at
+//      least 90 % of them facing it. A terrestrial or 360-degree scan in its
+//      scanner's frame, seen from the scanner. A closed object stored centred
+//      on the origin passes the first two tests but not the third: its
+//      spacing does not depend on the distance from its centre (slope near
+//      0), so it is an object (rule 5), seen from outside;
 //   4. terrain: the thinnest extent below half of each other — airborne
 //      LiDAR, ground scans: up is the thinnest axis, normals face +up;
 //   5. otherwise an object: orientation propagates over the k-NN graph from
@@ -56,6 +63,7 @@ struct ScanFrame {
   Vec3 up = Vec3::UnitZ();                   // kUp: the direction they face
   SpgViewHint hint;                          // for the file's header
   double visible_share = 0;                  // rule 3's measure (0 when not measured)
+  double spacing_slope = 0;                  // rule 3's sampling measure (0 when not measured; NaN: no spread)
   std::string reason;                        // one line for the user
 };
 
@@ -70,6 +78,15 @@ ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& opt
 // binned in a cube map of about 4 points a cell, and a point counts as
 // visible when it lies within 20 % of its cell's nearest distance.
 double visible_share(const std::vector<Vec3>& points, const Vec3& eye);
+
+// How the spacing between points grows with their distance from `eye`: the
+// least-squares slope of log(distance to the 6th nearest neighbour) against
+// log(distance from eye), over up to 2,000 points of a deterministic sample.
+// About 1 for a scanner at `eye` (equal angular steps), about 0 for a
+// surface sampled evenly (a mesh's vertices, merged scans). NaN where the
+// distances from `eye` barely vary (standard deviation of their log under
+// 0.1: a sphere about its centre), which says nothing either way.
+double spacing_slope(const std::vector<Vec3>& points, const Vec3& eye);
 
 const char* scan_kind_name(ScanKind k);
 const char* orient_mode_name(OrientMode m);
