@@ -43,9 +43,33 @@ TEST(ImageMetrics, CountWhatTheySay) {
   EXPECT_DOUBLE_EQ(m.dark_where_lit, 64.0 / (1024 - 16));
   EXPECT_DOUBLE_EQ(m.outside, 32.0 / (1024 - 16 + 32));
   EXPECT_DOUBLE_EQ(m.missing, 16.0 / 1024);
+  EXPECT_DOUBLE_EQ(m.iou, (1024.0 - 16) / (1024 + 32));
+  EXPECT_EQ(silhouette_verdict(m), "silhouettes agree (IoU 0.95): the PSNR and SSIM measure the shading");
   EXPECT_LT(m.ssim, 1.0);
   EXPECT_GT(m.object_psnr, 0);
   EXPECT_EQ(compare_images(ref, blank(32, 32)).object_pixels, 0);  // sizes differ: nothing measured
+}
+
+// A nearly empty picture (a view from behind, a camera inside) can score a
+// higher object PSNR than a right one with its shading off, since the PSNR
+// is over the union: the silhouette's IoU tells them apart, and the verdict
+// says which measure to read.
+TEST(ImageMetrics, AnEmptyPictureIsToldByItsSilhouetteNotItsPsnr) {
+  Image ref = blank(64, 64), right = blank(64, 64), empty = blank(64, 64), bloated = blank(64, 64);
+  for (int y = 16; y < 48; ++y)
+    for (int x = 16; x < 48; ++x) put(ref, x, y, 40), put(right, x, y, 160), put(bloated, x, y, 40);
+  for (int y = 30; y < 33; ++y)
+    for (int x = 30; x < 33; ++x) put(empty, x, y, 40);  // 9 of the reference's 1,024 pixels
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 16; ++x) put(bloated, x, y, 40);
+  const ImageComparison r = compare_images(ref, right), e = compare_images(ref, empty), b = compare_images(ref, bloated);
+  EXPECT_GT(e.object_psnr, r.object_psnr);  // the trap
+  EXPECT_DOUBLE_EQ(r.iou, 1.0);
+  EXPECT_DOUBLE_EQ(e.iou, 9.0 / 1024);
+  EXPECT_EQ(silhouette_verdict(e), "silhouettes disagree (IoU 0.01): the picture leaves 99 % of the reference empty "
+                                   "(another view, a camera inside, a partial model); the PSNR says little");
+  EXPECT_EQ(silhouette_verdict(b), "silhouettes disagree (IoU 0.50): 50 % of the picture lies outside the reference "
+                                   "(another view, bloated points); the PSNR says little");
 }
 
 // A square of side 0.5 at the centre of a unit box, facing +z (the default

@@ -24,7 +24,10 @@ const char kDiffHelp[] =
     "PSNR over the object (the pixels either covers), SSIM of the luma, the share\n"
     "of lit reference pixels shown at under half their luma (dark where lit), the\n"
     "share of ACTUAL's pixels outside the reference's silhouette and of the\n"
-    "reference's pixels ACTUAL leaves empty (tools/reference/image_metrics.h).\n"
+    "reference's pixels ACTUAL leaves empty, the silhouettes' intersection over\n"
+    "union, and a line saying which of these dominates: object PSNR is over the\n"
+    "pixels either covers, so a nearly empty picture can score well on it — read\n"
+    "the IoU first (tools/reference/image_metrics.h).\n"
     "--json prints all of it as one object. Exit status 0 when identical, 1 when not.\n";
 
 }  // namespace
@@ -81,6 +84,8 @@ int cmd_image_diff(int argc, char** argv) {
                            .num("dark_where_lit", m.dark_where_lit)
                            .num("outside_silhouette", m.outside)
                            .num("missing", m.missing)
+                           .num("silhouette_iou", m.iou)
+                           .str("verdict", silhouette_verdict(m))
                            .done()
                            .c_str());
     return differing ? 1 : 0;
@@ -93,8 +98,9 @@ int cmd_image_diff(int argc, char** argv) {
               files[1].c_str(), differing, static_cast<long>(a.width) * a.height, largest, image_psnr(a, b),
               output.empty() ? "" : (" -> " + output).c_str());
   std::printf("against it as the reference: object PSNR %.2f dB over %ld pixels, SSIM %.4f, dark where lit %.2f %%, "
-              "outside its silhouette %.2f %%, missing %.2f %%\n",
-              m.object_psnr, m.object_pixels, m.ssim, 100 * m.dark_where_lit, 100 * m.outside, 100 * m.missing);
+              "outside its silhouette %.2f %%, missing %.2f %%, silhouette IoU %.3f\n",
+              m.object_psnr, m.object_pixels, m.ssim, 100 * m.dark_where_lit, 100 * m.outside, 100 * m.missing, m.iou);
+  std::printf("%s\n", silhouette_verdict(m).c_str());
   return 1;
 }
 

@@ -2,6 +2,7 @@
 #include "tools/reference/image_metrics.h"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <vector>
 
@@ -49,6 +50,7 @@ ImageComparison compare_images(const Image& a, const Image& b, uint32_t backgrou
   r.dark_where_lit = lit ? static_cast<double>(dark) / static_cast<double>(lit) : 0;
   r.outside = in_b ? static_cast<double>(outside) / static_cast<double>(in_b) : 0;
   r.missing = in_a ? static_cast<double>(missing) / static_cast<double>(in_a) : 0;
+  r.iou = r.object_pixels ? static_cast<double>(both) / static_cast<double>(r.object_pixels) : 1;
   // SSIM of the luma over 8x8 windows every 4 px that hold object pixels.
   const double c1 = (0.01 * 255) * (0.01 * 255), c2 = (0.03 * 255) * (0.03 * 255);
   double sum = 0;
@@ -83,6 +85,24 @@ ImageComparison compare_images(const Image& a, const Image& b, uint32_t backgrou
     }
   r.ssim = windows ? sum / static_cast<double>(windows) : 1;
   return r;
+}
+
+std::string silhouette_verdict(const ImageComparison& m) {
+  char text[256];
+  if (m.iou >= 0.8) {
+    std::snprintf(text, sizeof text, "silhouettes agree (IoU %.2f): the PSNR and SSIM measure the shading", m.iou);
+  } else if (m.missing >= m.outside) {
+    std::snprintf(text, sizeof text,
+                  "silhouettes disagree (IoU %.2f): the picture leaves %.0f %% of the reference empty (another view, "
+                  "a camera inside, a partial model); the PSNR says little",
+                  m.iou, 100 * m.missing);
+  } else {
+    std::snprintf(text, sizeof text,
+                  "silhouettes disagree (IoU %.2f): %.0f %% of the picture lies outside the reference (another view, "
+                  "bloated points); the PSNR says little",
+                  m.iou, 100 * m.outside);
+  }
+  return text;
 }
 
 }  // namespace stipple

@@ -14,9 +14,16 @@
 //                     reference does not: bloated silhouettes
 //   missing           of the pixels the reference covers, the share the
 //                     picture does not: holes
+//   silhouette IoU    the pixels both cover over the pixels either covers.
+//                     Object PSNR is over the union, so a picture that
+//                     covers almost nothing (a view from behind, the
+//                     camera inside the object) can score well on it: the
+//                     IoU, and silhouette_verdict, say when the silhouettes
+//                     disagree and the PSNR is not the measure to read
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include "platform/image.h"
 
@@ -27,7 +34,13 @@ struct ImageComparison {
   double object_psnr = 0;  // dB; +inf when equal over the object
   double ssim = 1;
   double dark_where_lit = 0, outside = 0, missing = 0;  // fractions
+  double iou = 1;                                         // silhouette intersection over union
 };
+
+// One line on which measure dominates: "silhouettes agree (IoU 0.97): the
+// PSNR and SSIM measure the shading", or that they disagree and which way
+// (the picture misses most of the reference, or covers where it is empty).
+std::string silhouette_verdict(const ImageComparison& m);
 
 // `reference` and `picture` of the same size (else all zero).
 ImageComparison compare_images(const Image& reference, const Image& picture, uint32_t background = 0);
