@@ -9,7 +9,8 @@
 set -euo pipefail
 S=$1 MODEL=$2 SCAN=$3 W=$4
 rm -rf "$W"
-"$S" trade "$MODEL" --scan "$SCAN" --views 2 --repeat 1 --size 160x120 -o "$W"
+"$S" trade "$MODEL" --scan "$SCAN" --views 2 --repeat 1 --size 160x120 -o "$W" | tee "$W.out"
+grep -q "^knee of the Pareto front: [a-z-]* [^ ]* ([0-9.]* ms, [0-9.]* dB); on the front: " "$W.out" || { echo "no knee named"; exit 1; }
 csv=$W/trade.csv
 [ -s "$W/trade.png" ] || { echo "no plot"; exit 1; }
 rows=$(($(wc -l <"$csv") - 1))

@@ -39,7 +39,7 @@ const char kRdHelp[] =
     "  leaf-32        leaves under 32 points\n"
     "  classes-1024   1024 sigma_p and sigma_n classes\n"
     "  classes-256    256 of each\n"
-    "  no-normals     positions only (9-byte records)\n"
+    "  no-normals     positions only: no normals, no colour (9-byte records)\n"
     "  float-tables   the defaults in format version 1 (float32 class tables,\n"
     "                 twice the startup of version 2's 16-bit codes)\n";
 
@@ -53,7 +53,7 @@ const RdSetting kSettings[] = {
     {"leaf-32", [](EncodeOptions& o) { o.tree.leaf_size = 32; }},
     {"classes-1024", [](EncodeOptions& o) { o.classes_p = o.classes_n = 1024; }},
     {"classes-256", [](EncodeOptions& o) { o.classes_p = o.classes_n = 256; }},
-    {"no-normals", [](EncodeOptions& o) { o.normals = false; }},
+    {"no-normals", [](EncodeOptions& o) { o.normals = o.colors = false; }},
     {"float-tables", [](EncodeOptions& o) { o.format_version = 1; }},
 };
 

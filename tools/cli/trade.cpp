@@ -279,7 +279,8 @@ int cmd_trade(int argc, char** argv) {
   const std::string name = std::filesystem::path(files[0]).filename().string();
   spec.title = name + ": object PSNR against frame time (" + std::to_string(base.config.raster.width) + "x" +
                std::to_string(base.config.raster.height) + ", " + std::to_string(views) + " views)";
-  spec.x_label = "frame time (ms, median)";
+  spec.x_label = "frame time (ms, median, log scale)";
+  spec.log_x = true;  // the knobs span 0.1 ms to tens of ms: a linear axis crushes most of them into its first tick
   spec.y_label = "object PSNR against the reference (dB)";
   static const uint32_t colors[] = {0x1f77b4, 0xff7f0e, 0x2ca02c, 0xd62728, 0x9467bd, 0x8c564b, 0xe377c2, 0x17becf, 0xbcbd22, 0x7f7f7f};
   for (size_t i = 0; i < rows.size(); ++i) {
@@ -296,20 +297,46 @@ int cmd_trade(int argc, char** argv) {
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return rows[a].time_ms < rows[b].time_ms; });
   PlotSeries front{"Pareto front", {}, {}, 0x000000, {}};
+  std::vector<size_t> on_front;
   double best = -1e300;
   for (size_t i : order)
     if (rows[i].m.object_psnr > best) {
       best = rows[i].m.object_psnr;
       front.x.push_back(rows[i].time_ms);
       front.y.push_back(rows[i].m.object_psnr);
+      on_front.push_back(i);
     }
   spec.series.push_back(front);
+  // The knee: the front's point farthest above the chord between its ends,
+  // in the plot's own terms (log time, PSNR), each axis scaled to its span.
+  size_t knee = on_front.empty() ? 0 : on_front.front();
+  if (on_front.size() >= 3) {
+    const auto lx = [&](size_t i) { return std::log10(std::max(rows[i].time_ms, 1e-6)); };
+    const size_t a = on_front.front(), b = on_front.back();
+    const double sx = std::max(lx(b) - lx(a), 1e-9), sy = std::max(rows[b].m.object_psnr - rows[a].m.object_psnr, 1e-9);
+    double farthest = -1;
+    for (size_t i : on_front) {
+      const double across = (lx(i) - lx(a)) / sx, up = (rows[i].m.object_psnr - rows[a].m.object_psnr) / sy;
+      if (up - across > farthest) farthest = up - across, knee = i;
+    }
+  }
+  if (!on_front.empty())
+    spec.series.push_back(PlotSeries{"knee: " + all[knee].knob + " " + all[knee].value, {rows[knee].time_ms},
+                                     {rows[knee].m.object_psnr}, 0x00a000, {}});
   for (size_t i = 0; i < rows.size(); ++i)
     if (all[i].is_default && all[i].knob == "max-size") {
       spec.series.push_back(PlotSeries{"defaults", {rows[i].time_ms}, {rows[i].m.object_psnr}, 0xff0000, {"default"}});
       break;
     }
-  if (!write_png(output + "/trade.png", render_plot(spec), error)) return cli::fail(error);
+  size_t left_out = 0;
+  if (!write_png(output + "/trade.png", render_plot(spec, &left_out), error)) return cli::fail(error);
+  if (!on_front.empty())
+    std::printf("knee of the Pareto front: %s %s (%.3f ms, %.2f dB); on the front: ", all[knee].knob.c_str(),
+                all[knee].value.c_str(), rows[knee].time_ms, rows[knee].m.object_psnr);
+  for (size_t k = 0; k < on_front.size(); ++k)
+    std::printf("%s%s %s", k ? ", " : "", all[on_front[k]].knob.c_str(), all[on_front[k]].value.c_str());
+  std::printf("\n");
+  if (left_out) std::printf("plot: %zu point labels left out where they would overlap (trade.csv has every point)\n", left_out);
   std::printf("%s: %zu settings over %llu views against %s -> %s/trade.csv, %s/trade.png\n", files[0].c_str(), rows.size(),
               views, scan_path.empty() ? "the reference renderer's leaves" : scan_path.c_str(), output.c_str(), output.c_str());
   return 0;

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 namespace stipple {
 namespace {
@@ -111,11 +112,15 @@ struct Axes {
   double xstep, ystep;
 };
 
+bool drawn(const PlotSpec& spec, double x, double y) {
+  return std::isfinite(x) && std::isfinite(y) && (!spec.log_x || x > 0);
+}
+
 Axes axes_for(const PlotSpec& spec) {
   double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
   for (const PlotSeries& s : spec.series)
     for (size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+      if (!drawn(spec, s.x[i], s.y[i])) continue;
       xmin = std::min(xmin, s.x[i]);
       xmax = std::max(xmax, s.x[i]);
       ymin = std::min(ymin, s.y[i]);
@@ -125,10 +130,18 @@ Axes axes_for(const PlotSpec& spec) {
   if (xmax - xmin < 1e-12) xmin -= 0.5, xmax += 0.5;
   if (ymax - ymin < 1e-12) ymin -= 0.5, ymax += 0.5;
   Axes a;
-  a.xstep = nice_step(xmax - xmin);
   a.ystep = nice_step(ymax - ymin);
-  a.x0 = std::floor(xmin / a.xstep) * a.xstep;
-  a.x1 = std::ceil(xmax / a.xstep) * a.xstep;
+  if (spec.log_x) {
+    if (!std::isfinite(xmin) || xmin <= 0) xmin = 1, xmax = 10;
+    a.x0 = std::pow(10.0, std::floor(std::log10(xmin)));
+    a.x1 = std::pow(10.0, std::ceil(std::log10(xmax)));
+    if (a.x1 <= a.x0) a.x1 = a.x0 * 10;
+    a.xstep = 0;  // ticks at 1, 2, 5 x 10^k
+  } else {
+    a.xstep = nice_step(xmax - xmin);
+    a.x0 = std::floor(xmin / a.xstep) * a.xstep;
+    a.x1 = std::ceil(xmax / a.xstep) * a.xstep;
+  }
   a.y0 = std::floor(ymin / a.ystep) * a.ystep;
   a.y1 = std::ceil(ymax / a.ystep) * a.ystep;
   return a;
@@ -136,7 +149,8 @@ Axes axes_for(const PlotSpec& spec) {
 
 void to_pixel(const PlotSpec& spec, const Axes& a, double x, double y, int& px, int& py) {
   const int w = spec.width - kLeft - kRight, h = spec.height - kTop - kBottom;
-  px = kLeft + static_cast<int>(std::lround((x - a.x0) / (a.x1 - a.x0) * w));
+  const double t = spec.log_x ? std::log10(x / a.x0) / std::log10(a.x1 / a.x0) : (x - a.x0) / (a.x1 - a.x0);
+  px = kLeft + static_cast<int>(std::lround(t * w));
   py = kTop + h - static_cast<int>(std::lround((y - a.y0) / (a.y1 - a.y0) * h));
 }
 
@@ -153,7 +167,9 @@ void plot_position(const PlotSpec& spec, double x, double y, int& px, int& py) {
   to_pixel(spec, axes_for(spec), x, y, px, py);
 }
 
-Image render_plot(const PlotSpec& spec) {
+Image render_plot(const PlotSpec& spec) { return render_plot(spec, nullptr); }
+
+Image render_plot(const PlotSpec& spec, size_t* labels_left_out) {
   Image img;
   img.width = spec.width;
   img.height = spec.height;
@@ -163,11 +179,19 @@ Image render_plot(const PlotSpec& spec) {
   const uint32_t kInk = 0x000000, kGrid = 0xDDDDDD;
   const int right = spec.width - kRight, bottom = spec.height - kBottom;
   int px, py;
-  for (double x = a.x0; x <= a.x1 + a.xstep * 1e-9; x += a.xstep) {
+  std::vector<double> xticks;
+  if (spec.log_x) {
+    for (double decade = a.x0; decade <= a.x1 * (1 + 1e-9); decade *= 10)
+      for (double m : {1.0, 2.0, 5.0})
+        if (m * decade <= a.x1 * (1 + 1e-9)) xticks.push_back(m * decade);
+  } else {
+    for (double x = a.x0; x <= a.x1 + a.xstep * 1e-9; x += a.xstep) xticks.push_back(x);
+  }
+  for (double x : xticks) {
     to_pixel(spec, a, x, a.y0, px, py);
     c.line(px, kTop, px, bottom, kGrid);
     c.line(px, bottom, px, bottom + 5, kInk);
-    const std::string label = tick_label(x, a.xstep);
+    const std::string label = spec.log_x ? tick_label(x, std::min(1.0, x)) : tick_label(x, a.xstep);
     c.text(px - text_width(label) / 2, bottom + 10, label, kInk);
   }
   for (double y = a.y0; y <= a.y1 + a.ystep * 1e-9; y += a.ystep) {
@@ -182,12 +206,30 @@ Image render_plot(const PlotSpec& spec) {
   c.text((spec.width - text_width(spec.title)) / 2, 15, spec.title, kInk);
   c.text(kLeft + (right - kLeft - text_width(spec.x_label)) / 2, spec.height - 28, spec.x_label, kInk);
   c.text(12, kTop + (bottom - kTop + text_width(spec.y_label)) / 2, spec.y_label, kInk, true);
-  int legend_y = bottom - 20 * static_cast<int>(spec.series.size()) - 10;
+  // What labels must not cover: the legend and every marker, then each
+  // label as it is placed.
+  struct Box {
+    int x0, y0, x1, y1;
+    bool overlaps(const Box& b) const { return x0 <= b.x1 && b.x0 <= x1 && y0 <= b.y1 && b.y0 <= y1; }
+  };
+  std::vector<Box> taken;
+  const int legend_top = bottom - 20 * static_cast<int>(spec.series.size()) - 10;
+  int legend_left = right;
+  for (const PlotSeries& s : spec.series) legend_left = std::min(legend_left, right - 20 - text_width(s.label) - 30);
+  taken.push_back(Box{legend_left - 4, legend_top - 4, right, bottom});
+  for (const PlotSeries& s : spec.series)
+    for (size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i)
+      if (drawn(spec, s.x[i], s.y[i])) {
+        to_pixel(spec, a, s.x[i], s.y[i], px, py);
+        taken.push_back(Box{px - 4, py - 4, px + 4, py + 4});
+      }
+  size_t left_out = 0;
+  int legend_y = legend_top;
   for (const PlotSeries& s : spec.series) {
     int prev_x = 0, prev_y = 0;
     bool have_prev = false;
     for (size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+      if (!drawn(spec, s.x[i], s.y[i])) continue;
       to_pixel(spec, a, s.x[i], s.y[i], px, py);
       if (have_prev) c.line(prev_x, prev_y, px, py, s.rgb, 2);
       prev_x = px;
@@ -195,16 +237,31 @@ Image render_plot(const PlotSpec& spec) {
       have_prev = true;
     }
     for (size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+      if (!drawn(spec, s.x[i], s.y[i])) continue;
       to_pixel(spec, a, s.x[i], s.y[i], px, py);
       c.rect(px - 3, py - 3, px + 3, py + 3, s.rgb);
-      if (i < s.point_labels.size()) c.text(px + 6, py - 18, s.point_labels[i], 0x555555);
+      if (i >= s.point_labels.size() || s.point_labels[i].empty()) continue;
+      const int w = text_width(s.point_labels[i]), h = 7 * kScale;
+      const int candidates[][2] = {{px + 6, py - h - 4}, {px + 6, py + 5}, {px - 6 - w, py - h - 4}, {px - 6 - w, py + 5},
+                                   {px + 8, py - h / 2}, {px - 8 - w, py - h / 2}};
+      bool placed = false;
+      for (const auto& at : candidates) {
+        const Box box{at[0] - 1, at[1] - 1, at[0] + w + 1, at[1] + h + 1};
+        if (box.x0 < kLeft || box.x1 > right || box.y0 < kTop || box.y1 > bottom) continue;
+        if (std::any_of(taken.begin(), taken.end(), [&](const Box& t) { return t.overlaps(box); })) continue;
+        c.text(at[0], at[1], s.point_labels[i], 0x555555);
+        taken.push_back(box);
+        placed = true;
+        break;
+      }
+      left_out += !placed;
     }
     const int lx = right - 20 - text_width(s.label) - 30;
     c.rect(lx, legend_y + 4, lx + 20, legend_y + 8, s.rgb);
     c.text(lx + 28, legend_y, s.label, kInk);
     legend_y += 20;
   }
+  if (labels_left_out) *labels_left_out = left_out;
   return img;
 }
 
