@@ -200,43 +200,11 @@ TEST(Extremes, WideAngleFieldsDrawAsTheNarrowOnes) {
   const std::vector<uint8_t> file = test::fixture("tests/data/sphere600_normals.spg");
   SpgView view;
   ASSERT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
-  const DecodedModel model = test::decode(file);
-  SpgHeader wide = view.header;
-  const int widths[6] = {14, 16, 13, 15, 16, 13};  // fp theta phi psi, fn theta phi psi
-  const Field fields[6] = {Field::kFpTheta, Field::kFpPhi, Field::kFpPsi, Field::kFnTheta, Field::kFnPhi, Field::kFnPsi};
-  for (int k = 0; k < 6; ++k) wide.layout.bits[static_cast<int>(fields[k])] = static_cast<uint8_t>(widths[k]);
-  const size_t rb = static_cast<size_t>(wide.layout.record_bytes());
-  ASSERT_LE(rb, 32u);
-  std::vector<uint8_t> records(rb * view.header.node_count), child(view.header.node_count);
-  std::vector<uint32_t> leaves;
-  for (uint32_t i = 0; i < view.header.node_count; ++i) {
-    NodeFields f = unpack_record(view.header.layout, view.records + size_t{i} * view.record_bytes);
-    for (int k = 0; k < 6; ++k) {
-      const int from = view.header.layout.bits[static_cast<int>(fields[k])], to = widths[k];
-      const double q = f[fields[k]];
-      // theta: q pi / (2^b - 1), poles exact; phi and psi: q 2pi / 2^b, q pi / 2^b.
-      const bool theta = k % 3 == 0;
-      f[fields[k]] = static_cast<uint16_t>(theta ? std::lround(q * ((1 << to) - 1) / ((1 << from) - 1)) : std::lround(q * (1 << (to - from))));
-    }
-    pack_record(wide.layout, f, records.data() + size_t{i} * rb);
-    child[i] = static_cast<uint8_t>(spg_child_count(view, i));
-    if (child[i] == 0) leaves.push_back(model.nodes[i].point_count);
-  }
-  const size_t value_bytes = spg_class_value_bytes(view.header.version);
-  std::vector<uint32_t> tables[3];
-  const uint8_t* t[3] = {view.sigma_p, view.sigma_n, view.sigma_c};
-  const uint32_t per[3] = {3, 2, 3};
-  for (int c = 0; c < 3; ++c)
-    for (uint32_t i = 0; i < per[c] * view.header.class_count[c]; ++i)
-      tables[c].push_back(value_bytes == 2 ? load_u16le(t[c] + 2 * i) : load_u32le(t[c] + 4 * i));
-  const SpgContent content{wide, SpgClassTables{tables[0].data(), tables[1].data(), tables[2].data()}, child.data(),
-                           leaves.data(), records.data()};
-  std::vector<uint8_t> out(spg_write_bound(wide));
-  size_t written = 0;
-  ASSERT_EQ(spg_write(content, out.data(), out.size(), &written), SpgWriteStatus::kOk);
-  out.resize(written);
+  const std::vector<uint8_t> out = test::widen_angles(file);
   SpgView wide_view;
   ASSERT_TRUE(spg_parse(out.data(), out.size(), &wide_view).ok());
+  const size_t rb = wide_view.record_bytes;
+  ASSERT_LE(rb, 32u);
   ClientConfig config;
   FixedRender a, b;
   std::string error;

@@ -53,11 +53,15 @@ class ServerWithLog : public testing::Test {
   std::vector<std::string> log;
 };
 
-// The camera `stipple render --camera yaw,20` uses for the bunny, and its frame.
+// The camera `stipple render --camera yaw,20` uses for the bunny (or
+// another model), and its frame.
 struct Local {
   std::vector<uint8_t> file = bunny_file();
   SpgView view;
   Local() { EXPECT_TRUE(spg_parse(file.data(), file.size(), &view).ok()); }
+  explicit Local(std::vector<uint8_t> model) : file(std::move(model)) {
+    EXPECT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
+  }
   ViewSpec spec(double yaw) const {
     ViewSpec s;
     std::string error;
@@ -122,6 +126,74 @@ TEST_F(ServerWithLog, LoopbackFramesEqualTheLocalRender) {
   EXPECT_EQ(r[0].bytes_out, remote.bytes_received());
   ASSERT_GE(log.size(), 2u);
   EXPECT_NE(log[1].find("hello 240x320 rgb565, attributes normals colour, cache 8000 nodes"), std::string::npos) << log[1];
+}
+
+// A valid model with 13-16-bit angle fields (a local render sizes its
+// client for them): a network client set up for the paper's widths is
+// re-sized for the startup it receives, over a stream and over a serial
+// line, and draws what the local client draws. It used to refuse it:
+// "startup message needs more than the client was configured for".
+TEST(Server, NetworkClientsAreSizedForTheStartupTheyReceive) {
+  const Local local(test::widen_angles(bunny_file()));
+  ASSERT_EQ(local.view.header.layout.bits[static_cast<int>(Field::kFpPhi)], 16);
+  for (const bool serial : {false, true}) {
+    SCOPED_TRACE(serial ? "serial" : "stream");
+    Server server;
+    std::string error;
+    ASSERT_TRUE(server.init(local.file, "wide", ServerOptions{}, error)) << error;
+    ShapedPipe pipe(kSerial115200, kSerial115200);
+    LoopbackPipe stream;
+    struct Loop {
+      Server* server;
+      ShapedPipe* pipe;
+    } loop{&server, serial ? &pipe : nullptr};
+    RemoteModel remote;
+    RemoteModel::Options ro;
+    ro.serial = serial;
+    ro.pump = [](void* p) {
+      auto* l = static_cast<Loop*>(p);
+      l->server->step(0);
+      if (l->pipe) l->pipe->advance(20000);
+      return true;
+    };
+    ro.pump_context = &loop;
+    if (serial) server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "serial", true);
+    else server.add_client(std::make_unique<TransportRef>(stream.server()), -1, "loopback");
+    ClientConfig config = device();
+    ASSERT_EQ(config.max_angle_bits, 10);
+    Transport& link = serial ? static_cast<Transport&>(pipe.client()) : static_cast<Transport&>(stream.client());
+    ASSERT_TRUE(remote.connect(link, config, ro, error)) << error;
+    EXPECT_EQ(remote.client().cache().header().layout.bits[static_cast<int>(Field::kFnPhi)], 16);
+    const std::vector<uint8_t> frame = remote_frame(remote, local, 60, error);
+    ASSERT_FALSE(frame.empty()) << error;
+    EXPECT_EQ(frame, local.render(60).frame);
+  }
+}
+
+// A link that is gone (a USB serial adapter pulled: reads and writes end)
+// says so, in the same words whichever way the client noticed — it said
+// "the server went away: " with nothing after it.
+TEST(Server, AVanishedLinkSaysWhatHappened) {
+  struct Gone final : Transport {
+    bool writes = true;  // the hello goes out, then the line is gone
+    TransportStatus read(uint8_t*, size_t, size_t* moved) override { return *moved = 0, TransportStatus::kClosed; }
+    TransportStatus write(const uint8_t*, size_t size, size_t* moved) override {
+      *moved = writes ? size : 0;
+      return writes ? TransportStatus::kOk : TransportStatus::kClosed;
+    }
+    void close() override {}
+    const char* last_error() const override { return ""; }
+  };
+  for (const bool on_write : {false, true}) {
+    Gone gone;
+    gone.writes = !on_write;
+    RemoteModel remote;
+    RemoteModel::Options ro;
+    ro.pump = [](void*) { return true; };
+    std::string error;
+    EXPECT_FALSE(remote.connect(gone, device(), ro, error));
+    EXPECT_EQ(error, "the server went away: the link closed (the server stopped, or the cable was pulled)") << on_write;
+  }
 }
 
 // A client that does not read: over a 4 KB loopback ring not even the

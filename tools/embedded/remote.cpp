@@ -3,7 +3,9 @@
 
 #include <poll.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 
 namespace stipple {
 
@@ -46,8 +48,7 @@ bool RemoteModel::send(MessageType type, const uint8_t* payload, size_t size, st
       in_reconnect_ = false;
       return ok;
     }
-    if (s == TransportStatus::kClosed || s == TransportStatus::kError)
-      return error = std::string("the server went away: ") + transport_->last_error(), false;
+    if (s == TransportStatus::kClosed || s == TransportStatus::kError) return error = went_away(s), false;
     at += moved;
     if (moved == 0) {
       if (options_.pump && !options_.pump(options_.pump_context)) return error = "stopped", false;
@@ -83,8 +84,7 @@ bool RemoteModel::service(int wait_ms, std::string& error) {
     if (!ask_again(error)) return false;
   }
   if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
-    if (options_.reconnect == nullptr)
-      return error = std::string("the server went away") + (s == TransportStatus::kError ? std::string(": ") + transport_->last_error() : ""), false;
+    if (options_.reconnect == nullptr) return error = went_away(s), false;
     return reconnect(error);
   }
   if (options_.pump && !options_.pump(options_.pump_context)) return error = "stopped", false;
@@ -120,7 +120,17 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
     return false;
   };
   if (!options_.serial) {
-    const ReceiveStatus r = receiver_.receive(data, size);
+    const bool before_startup = !client_.cache().ready();
+    if (before_startup && early_.size() < 2 * kMaxFrameBytes) early_.insert(early_.end(), data, data + size);
+    ReceiveStatus r = receiver_.receive(data, size);
+    if (r == ReceiveStatus::kCacheRefused && receiver_.cache_status() == CacheStatus::kStartupTooLarge && before_startup) {
+      // Sized for the startup it received, then the same bytes again.
+      const std::vector<uint8_t> bytes = std::move(early_);
+      early_.clear();
+      if (!fit_startup(bytes.data(), bytes.size(), error)) return false;
+      r = receiver_.receive(bytes.data(), bytes.size());
+    }
+    if (client_.cache().ready()) early_ = {};
     return r == ReceiveStatus::kOk || fail(r);
   }
   // A serial line: packet by packet, each a whole frame in sequence. Noise
@@ -146,7 +156,11 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
       // view asked for again.
       receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
       gap_ = false;
-      const ReceiveStatus r = receiver_.receive(p, n);
+      ReceiveStatus r = receiver_.receive(p, n);
+      if (r == ReceiveStatus::kCacheRefused && receiver_.cache_status() == CacheStatus::kStartupTooLarge) {
+        if (!fit_startup(p, n, error)) return false;
+        r = receiver_.receive(p, n);
+      }
       if (r != ReceiveStatus::kOk) return fail(r);
       if (has_camera_) {
         uint8_t payload[kCameraUpdateBytes];
@@ -160,7 +174,12 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
       continue;
     }
     gap_ = false;
-    const ReceiveStatus r = receiver_.receive(p, n);
+    ReceiveStatus r = receiver_.receive(p, n);
+    if (r == ReceiveStatus::kCacheRefused && receiver_.cache_status() == CacheStatus::kStartupTooLarge &&
+        p[0] == static_cast<uint8_t>(MessageType::kStartup)) {
+      if (!fit_startup(p, n, error)) return false;  // sized for it, then the same frame again
+      r = receiver_.receive(p, n);
+    }
     if (r != ReceiveStatus::kOk) return fail(r);
     // Acknowledge every 8 frames and each update-end: the server forgets
     // what it kept for a resend.
@@ -221,9 +240,48 @@ bool RemoteModel::reconnect(std::string& error) {
   return true;
 }
 
+std::string RemoteModel::went_away(TransportStatus s) const {
+  const std::string why = s == TransportStatus::kError ? transport_->last_error() : std::string();
+  return "the server went away: " + (why.empty() ? std::string("the link closed (the server stopped, or the cable was pulled)") : why);
+}
+
+bool RemoteModel::fit_startup(const uint8_t* frame, size_t size, std::string& error) {
+  FrameReader reader;
+  std::vector<uint8_t> storage(kMaxFrameBytes);
+  reader.init(storage.data(), storage.size());
+  Frame f;
+  if (reader.feed(frame, size) == 0 || reader.next(&f) != FrameStatus::kOk || f.type != MessageType::kStartup)
+    return error = "the client refused the server's startup (too large) and it could not be read again", false;
+  SpgView view;
+  size_t used = 0;
+  if (!spg_parse_startup(f.payload, f.payload_bytes, &view, &used).ok())
+    return error = "the client refused the server's startup: it does not validate", false;
+  const SpgHeader& h = view.header;
+  ClientConfig wide = config_;
+  uint8_t widest = 0;
+  for (Field theta : {Field::kFpTheta, Field::kFnTheta, Field::kFcTheta})
+    for (int k = 0; k < 3; ++k) widest = std::max<uint8_t>(widest, h.layout.bits[static_cast<int>(theta) + k]);
+  wide.max_angle_bits = std::max(wide.max_angle_bits, widest);
+  wide.max_record_bytes = std::max<uint8_t>(wide.max_record_bytes, static_cast<uint8_t>(h.layout.record_bytes()));
+  for (int c = 0; c < 3; ++c) wide.max_classes[c] = std::max(wide.max_classes[c], h.class_count[c]);
+  const size_t bytes = client_arena_bytes(wide);
+  char widths[160];
+  std::snprintf(widths, sizeof widths, "angle fields of up to %u bits (this client was set up for %u), %u-byte records",
+                unsigned{widest}, unsigned{config_.max_angle_bits}, static_cast<unsigned>(h.layout.record_bytes()));
+  if (bytes == 0) return error = std::string("the server's model needs ") + widths + ": beyond any client configuration", false;
+  arena_.assign(bytes / 8 + 1, 0);
+  if (client_.init(wide, arena_.data(), arena_.size() * 8) != ClientStatus::kOk)
+    return error = std::string("the client could not be set up for the server's model: ") + widths, false;
+  config_ = wide;
+  receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
+  return true;
+}
+
 bool RemoteModel::connect(Transport& transport, const ClientConfig& config, const Options& options, std::string& error) {
   transport_ = &transport;
   options_ = options;
+  config_ = config;
+  early_.clear();
   const size_t bytes = client_arena_bytes(config);
   if (bytes == 0) return error = "invalid client configuration", false;
   arena_.assign(bytes / 8 + 1, 0);

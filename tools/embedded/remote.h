@@ -44,6 +44,11 @@ class RemoteModel {
     void* reconnect_context = nullptr;
   };
   // `config` sizes the client (screen, cache capacity, attributes asked for).
+  // A startup that needs more than it allows — angle fields wider than its
+  // max_angle_bits (a valid .spg may use up to 16 bits), wider records or
+  // larger class tables — re-sizes the client for that startup before any
+  // node arrives, as a local file's client is sized for its file; the
+  // refusal, where even that fails, names the widths.
   bool connect(Transport& transport, const ClientConfig& config, const Options& options, std::string& error);
   // Sends the camera and waits for its update-end.
   bool view(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error);
@@ -75,9 +80,15 @@ class RemoteModel {
   bool lost(std::string& error);       // serial: a frame did not arrive whole: ask for a resend
   bool ask_again(std::string& error);  // serial: a silence: the hello, or a resend and the camera, again
   bool reconnect(std::string& error);  // a new link, a new stream
+  // The startup `frame` (a whole frame) was refused as too large: the
+  // client re-made for it (a new arena), the receiver started over.
+  bool fit_startup(const uint8_t* frame, size_t size, std::string& error);
+  std::string went_away(TransportStatus s) const;  // "the server went away: <why>"
 
   Transport* transport_ = nullptr;
   Options options_;
+  ClientConfig config_;
+  std::vector<uint8_t> early_;  // TCP: the bytes before the startup was taken
   std::vector<uint64_t> arena_;
   Client client_;
   std::vector<uint8_t> reader_storage_, frame_;
