@@ -170,6 +170,43 @@ TEST(Server, NetworkClientsAreSizedForTheStartupTheyReceive) {
   }
 }
 
+// A serial line too noisy for its rate (a bit error in 10^4: 800 bytes in a
+// million flipped): the startup's frames never arrive whole. The client
+// gives up after its timeout saying what happened — bytes arrived, frames
+// damaged, resends asked — not only that there was no answer.
+TEST_F(ServerWithLog, ATooNoisyLineSaysWhatHappened) {
+  LinkProfile down = kSerial115200;
+  down.flip_per_million = 800;
+  down.seed = 11;
+  ShapedPipe pipe(down, kSerial115200);
+  server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "serial", true);
+  struct Loop {
+    Server* server;
+    ShapedPipe* pipe;
+  } loop{&server, &pipe};
+  RemoteModel remote;
+  RemoteModel::Options ro;
+  ro.serial = true;
+  ro.pump = [](void* p) {
+    auto* l = static_cast<Loop*>(p);
+    l->server->step(0);
+    l->pipe->advance(20000);
+    return true;
+  };
+  ro.pump_context = &loop;
+  ro.timeout_ms = 1500;
+  ro.silence_ms = 250;
+  EXPECT_FALSE(remote.connect(pipe.client(), device(), ro, error));
+  const std::string said = "no answer from the server within 1500 ms: ";
+  ASSERT_EQ(error.rfind(said, 0), 0u) << error;
+  EXPECT_NE(error.find(" bytes arrived, but "), std::string::npos) << error;
+  EXPECT_NE(error.find(" frames were damaged on the way and "), std::string::npos) << error;
+  EXPECT_NE(error.find("the line is too noisy for its rate"), std::string::npos) << error;
+  EXPECT_GT(remote.damaged(), 0u);
+  EXPECT_GT(remote.bytes_received(), 10000u);
+  std::printf("%s\n", error.c_str());
+}
+
 // A link that is gone (a USB serial adapter pulled: reads and writes end)
 // says so, in the same words whichever way the client noticed — it said
 // "the server went away: " with nothing after it.

@@ -98,9 +98,24 @@ bool RemoteModel::service(int wait_ms, std::string& error) {
 bool RemoteModel::wait(Awaited what, std::string& error) {
   const auto start = std::chrono::steady_clock::now();
   heard_ = start;
+  const uint64_t received = bytes_received_, damaged = damaged_, resyncs = resyncs_;
   while (!done(what)) {
-    if (std::chrono::steady_clock::now() - start > std::chrono::milliseconds(options_.timeout_ms))
-      return error = "no answer from the server within " + std::to_string(options_.timeout_ms) + " ms", false;
+    if (std::chrono::steady_clock::now() - start > std::chrono::milliseconds(options_.timeout_ms)) {
+      // What the wait saw: nothing at all, or bytes that never made a whole answer.
+      error = "no answer from the server within " + std::to_string(options_.timeout_ms) + " ms";
+      const uint64_t got = bytes_received_ - received;
+      if (got == 0) {
+        error += ": nothing arrived (is the server running, and on this line at this rate?)";
+      } else if (damaged_ > damaged) {
+        error += ": " + std::to_string(got) + " bytes arrived, but " + std::to_string(damaged_ - damaged) +
+                 " frames were damaged on the way and " + std::to_string(resyncs_ - resyncs) +
+                 " resends asked for did not get through whole: the line is too noisy for its rate (a lower --baud, "
+                 "a shorter or shielded cable)";
+      } else {
+        error += ": " + std::to_string(got) + " bytes arrived, but not the answer";
+      }
+      return false;
+    }
     if (!service(100, error)) return false;
   }
   return true;
@@ -140,12 +155,16 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
   // it stays applied.
   for (size_t i = 0; i < size; ++i) {
     const CobsStatus cs = deframer_.push(data[i]);
-    if (cs == CobsStatus::kDropped && !lost(error)) return false;
+    if (cs == CobsStatus::kDropped) {
+      ++damaged_;
+      if (!lost(error)) return false;
+    }
     if (cs != CobsStatus::kPacket) continue;
     const uint8_t* p = deframer_.packet();
     const size_t n = deframer_.packet_bytes();
     const bool whole = n >= kFrameHeaderBytes + kFrameTrailerBytes && load_u32le(p + n - 4) == crc32(p, n - 4);
     if (!whole) {
+      ++damaged_;
       if (!lost(error)) return false;
       continue;
     }

@@ -69,6 +69,7 @@ class RemoteModel {
   uint64_t bytes_received() const { return bytes_received_; }
   uint64_t bytes_sent() const { return bytes_sent_; }
   uint32_t resyncs() const { return resyncs_; }  // serial: resends asked for, and hellos repeated
+  uint64_t damaged() const { return damaged_; }  // serial: frames that arrived damaged
   uint32_t reconnects() const { return reconnects_; }
 
  private:
@@ -101,6 +102,7 @@ class RemoteModel {
   bool gap_ = false, has_camera_ = false, in_reconnect_ = false;
   uint32_t unacknowledged_ = 0;
   uint32_t resyncs_ = 0, reconnects_ = 0;
+  uint64_t damaged_ = 0;
   Hello hello_;
   CameraUpdate last_camera_;
   Awaited awaiting_ = Awaited::kStartup;
