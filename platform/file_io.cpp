@@ -1,5 +1,7 @@
 #include "platform/file_io.h"
 
+#include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -50,18 +52,51 @@ bool read_file(const std::string& path, std::vector<uint8_t>& out, std::string& 
   return true;
 }
 
+namespace {
+
+// Removes PATH.partial.PID files whose writer is gone (killed mid-write):
+// PID is all digits and no process has it.
+void remove_stale_partials(const std::string& path) {
+  std::error_code ec;
+  const std::filesystem::path target(path);
+  const std::filesystem::path folder = target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+  const std::string prefix = target.filename().string() + ".partial.";
+  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(digits));
+    if (pid > 0 && kill(pid, 0) != 0 && errno == ESRCH) std::filesystem::remove(it->path(), ec);
+  }
+}
+
+// fsync of the folder holding `path`: its new entry survives a power loss.
+void sync_folder(const std::string& path) {
+  const std::filesystem::path target(path);
+  const std::string folder = target.has_parent_path() ? target.parent_path().string() : std::string(".");
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) return;
+  (void)::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
 bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data, std::string& error) {
   // A temporary name of this process's own beside the target, renamed over
   // it when complete: two runs writing one output at once each leave a
   // whole file, never a mixture, and a failed write leaves the old one.
+  remove_stale_partials(path);
   const std::string tmp = path + ".partial." + std::to_string(static_cast<long>(getpid()));
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) {
     error = path + ": " + std::strerror(errno);
     return false;
   }
-  const bool wrote = data.empty() || std::fwrite(data.data(), 1, data.size(), f) == data.size();
-  const int write_errno = wrote ? 0 : errno;
+  bool wrote = data.empty() || std::fwrite(data.data(), 1, data.size(), f) == data.size();
+  int write_errno = wrote ? 0 : errno;
+  if (wrote && (std::fflush(f) != 0 || ::fsync(fileno(f)) != 0)) wrote = false, write_errno = errno;  // on the disk
   const bool closed = std::fclose(f) == 0;
   const int close_errno = closed ? 0 : errno;
   if (!wrote || !closed) {
@@ -75,6 +110,7 @@ bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data
     std::remove(tmp.c_str());
     return false;
   }
+  sync_folder(path);
   return true;
 }
 

@@ -15,9 +15,13 @@ bool read_file(const std::string& path, std::vector<uint8_t>& out, std::string& 
 // Writes `data` to `path` through a temporary file in the same folder, named
 // for this process, and a rename: a failed or interrupted write never leaves
 // a partial file, and two processes writing one path at once each leave a
-// whole one. The reason of a failure (a full disk: "No space left on
-// device") is in the message. Refuses a directory as input ("is a
-// directory").
+// whole one. The file's bytes are flushed to the disk (fsync) before the
+// rename and the folder's entry after it, so a power loss leaves the old
+// file or the new one, never an empty one. A temporary file left by a
+// writer that was killed (`PATH.partial.PID`, PID no longer running) is
+// removed by the next write of PATH. The reason of a failure (a full disk:
+// "No space left on device") is in the message. Refuses a directory as
+// input ("is a directory").
 bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data, std::string& error);
 
 }  // namespace stipple

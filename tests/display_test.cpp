@@ -4,9 +4,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <string>
 #include <vector>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
 
 #include "platform/file_io.h"
 #include "platform/image.h"
@@ -65,6 +72,20 @@ TEST(NullDisplay, KeepsWritesAndTimesFrames) {
   NullDisplay bad(4, 3, PixelFormat::kRgb565, dir + "no_such_dir/frame.ppm");
   EXPECT_FALSE(bad.present(f.data(), 14, 5, 3, PixelFormat::kRgb565, error));
   EXPECT_NE(error.find("no_such_dir/frame.ppm"), std::string::npos) << error;
+  // A disk that fills up mid-frame (a file-size limit of 20 bytes here):
+  // the reason is said. It said "cannot write the frame" and nothing more.
+  rlimit old{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+  const auto previous = std::signal(SIGXFSZ, SIG_IGN);  // the write fails with EFBIG instead of a signal
+  rlimit tiny = old;
+  tiny.rlim_cur = 20;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &tiny), 0);
+  NullDisplay limited(4, 3, PixelFormat::kRgb565, dir + "limited.ppm");
+  const bool presented = limited.present(f.data(), 14, 5, 3, PixelFormat::kRgb565, error);
+  setrlimit(RLIMIT_FSIZE, &old);
+  std::signal(SIGXFSZ, previous);
+  EXPECT_FALSE(presented);
+  EXPECT_EQ(error, dir + "limited.ppm: cannot write the frame: File too large");
 }
 
 TEST(NullDisplay, ReplaysQueuedInputInOrder) {
@@ -81,6 +102,44 @@ TEST(NullDisplay, ReplaysQueuedInputInOrder) {
     EXPECT_EQ(e.y, 2 * i);
   }
   EXPECT_FALSE(d.poll(&e));
+}
+
+// A writer killed mid-write (SIGKILL) leaves PATH.partial.PID: the next
+// write of PATH removes it, but not a live writer's, and the output is
+// whole. The dead writer is a real one: a child killed inside its write.
+TEST(FileIo, AKilledWritersPartialFileIsRemovedByTheNextWrite) {
+  const std::string folder = testing::TempDir() + "file_io_partial/";
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  const std::string out = folder + "frame.png";
+  // A child that starts writing 512 MB and is killed while at it.
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    std::string e;
+    const std::vector<uint8_t> big(512u << 20, 7);
+    (void)write_file_atomic(out, big, e);
+    _exit(0);
+  }
+  const std::string dead = out + ".partial." + std::to_string(child);
+  for (int i = 0; i < 500 && !std::filesystem::exists(dead); ++i) usleep(10000);
+  ASSERT_TRUE(std::filesystem::exists(dead)) << "the child never began its write";
+  kill(child, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  ASSERT_TRUE(std::filesystem::exists(dead));  // what a SIGKILL leaves
+  // A live writer's temporary file (this process's parent is alive) stays.
+  const std::string live = out + ".partial." + std::to_string(getppid());
+  std::string error;
+  ASSERT_TRUE(write_file_atomic(live, {1}, error)) << error;  // a file of that name, written by us
+  ASSERT_TRUE(write_file_atomic(out, {1, 2, 3}, error)) << error;
+  EXPECT_FALSE(std::filesystem::exists(dead));
+  EXPECT_TRUE(std::filesystem::exists(live));
+  std::vector<uint8_t> back;
+  ASSERT_TRUE(read_file(out, back, error)) << error;
+  EXPECT_EQ(back, (std::vector<uint8_t>{1, 2, 3}));
+  std::filesystem::remove_all(folder);
 }
 
 }  // namespace

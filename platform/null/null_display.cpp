@@ -40,11 +40,17 @@ bool NullDisplay::present(const uint8_t* frame, size_t stride, uint16_t width, u
   std::snprintf(temp_, sizeof temp_, "%s.tmp", name_);
   std::FILE* f = std::fopen(temp_, "wb");
   if (f == nullptr) return error = std::string(name_) + ": " + std::strerror(errno), false;
-  const bool ok = std::fprintf(f, "P6\n%d %d\n255\n", image_.width, image_.height) > 0 &&
-                  std::fwrite(image_.rgb.data(), 1, image_.rgb.size(), f) == image_.rgb.size();
-  if (std::fclose(f) != 0 || !ok || std::rename(temp_, name_) != 0) {
+  // The first failure's reason (a full disk: "No space left on device").
+  int why = 0;
+  const bool wrote = std::fprintf(f, "P6\n%d %d\n255\n", image_.width, image_.height) > 0 &&
+                     std::fwrite(image_.rgb.data(), 1, image_.rgb.size(), f) == image_.rgb.size();
+  if (!wrote) why = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (!closed && why == 0) why = errno;
+  if (!wrote || !closed || std::rename(temp_, name_) != 0) {
+    if (why == 0) why = errno;
     std::remove(temp_);
-    return error = std::string(name_) + ": cannot write the frame", false;
+    return error = std::string(name_) + ": cannot write the frame: " + std::strerror(why), false;
   }
   return true;
 }
