@@ -2,7 +2,9 @@
 // with core's own sender, so they follow the protocol as it is: the startup of
 // the 600-point sphere fixture, a coarse cut of it (a few dozen nodes), an
 // update-end, a finer cut's change (nodes and drops) and its update-end — as
-// a socket carries them, and each frame COBS-framed as a serial line does.
+// a socket carries them, and each frame COBS-framed as a serial line does;
+// and the server fuzzer's seeds (client_stream.{bin,cobs}): what a client
+// sends — a hello, two cameras, an ack, a resend, a keep-alive, a close.
 // Regenerate after a deliberate protocol change:
 //   make_stream_seed tests/data/sphere600_normals.spg tests/fuzz/seeds
 #include <cstdio>
@@ -79,9 +81,37 @@ int main(int argc, char** argv) {
   u.camera = camera_at(decoder.extent_mu(), 0x20000000u);  // 45 degrees on: nodes enter and leave
   ok = ok && sender.update(u, true, Link::sink, &link);
   if (!ok) return std::fprintf(stderr, "make_stream_seed: the sender refused\n"), 1;
+  // The client's side of the same conversation.
+  Link up;
+  std::vector<uint8_t> frame(kMaxFrameBytes);
+  uint16_t sequence = 0;
+  const auto say = [&](MessageType type, const uint8_t* payload, size_t bytes) {
+    const size_t n = write_frame(type, sequence++, payload, bytes, frame.data(), frame.size());
+    Link::sink(&up, frame.data(), n);
+  };
+  uint8_t payload[kCameraUpdateBytes];
+  write_hello(hello, payload);
+  say(MessageType::kHello, payload, kHelloBytes);
+  u.sequence = 0;
+  u.camera = camera_at(decoder.extent_mu(), 0);
+  write_camera_update(u, payload);
+  say(MessageType::kCamera, payload, kCameraUpdateBytes);
+  write_sequence(3, payload);
+  say(MessageType::kAck, payload, kSequenceBytes);
+  write_sequence(2, payload);
+  say(MessageType::kResend, payload, kSequenceBytes);
+  u.sequence = 1;
+  u.camera = camera_at(decoder.extent_mu(), 0x20000000u);
+  write_camera_update(u, payload);
+  say(MessageType::kCamera, payload, kCameraUpdateBytes);
+  say(MessageType::kKeepAlive, nullptr, 0);
+  write_fault(Fault{}, payload);
+  say(MessageType::kClose, payload, kFaultBytes);
   const std::string dir = argv[2];
   if (!write_file_atomic(dir + "/sphere_stream.bin", link.bytes, error) ||
-      !write_file_atomic(dir + "/sphere_stream.cobs", link.cobs, error))
+      !write_file_atomic(dir + "/sphere_stream.cobs", link.cobs, error) ||
+      !write_file_atomic(dir + "/client_stream.bin", up.bytes, error) ||
+      !write_file_atomic(dir + "/client_stream.cobs", up.cobs, error))
     return std::fprintf(stderr, "make_stream_seed: %s\n", error.c_str()), 1;
   std::printf("%s/sphere_stream.bin: %zu bytes; sphere_stream.cobs: %zu bytes\n", dir.c_str(), link.bytes.size(),
               link.cobs.size());
