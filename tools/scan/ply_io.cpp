@@ -509,7 +509,8 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
       p = stop;
     }
     if (row.empty()) continue;
-    if (plan.pts && row.size() == 1 && row[0] >= 0 && row[0] == std::floor(row[0])) {
+    // (A count beyond 2^53 is no count a file holds: read as a row, refused by its width.)
+    if (plan.pts && row.size() == 1 && row[0] >= 0 && row[0] <= 9007199254740992.0 && row[0] == std::floor(row[0])) {
       check_count();  // a PTS count line: another section (scan position) begins
       count_line = line_no;
       count_said = static_cast<uint64_t>(row[0]);
