@@ -255,8 +255,9 @@ bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string&
   char text[96];
   std::snprintf(text, sizeof text, "%s nodes in %.2f s", nodes.c_str(),
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  std::string stem = path;
-  if (const size_t dot = stem.find_last_of('.'); dot != std::string::npos && dot > stem.find_last_of('/') + 1) stem.resize(dot);
+  // The model's name: the scan's, in the current folder (the scan's own may be read-only).
+  std::string stem = path.substr(path.find_last_of('/') + 1);
+  if (const size_t dot = stem.find_last_of('.'); dot != std::string::npos && dot > 0) stem.resize(dot);
   note = path + ": a scan, encoded in memory: " + text + " (stipple encode " + path + " -o " + stem + ".spg keeps it)";
   return true;
 }

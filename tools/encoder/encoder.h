@@ -52,8 +52,8 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& options, std::vector<u
 // bytes as they are, or — as pcl_viewer opens a scan — any scan
 // read_point_cloud reads, encoded in memory with the default options (a
 // progress bar on a terminal). `note` says which was done, for the user:
-// "bunny.ply: a scan, encoded in memory: 6,913 nodes in 0.41 s (stipple
-// encode bunny.ply -o bunny.spg keeps it)"; empty for a .spg. The error
+// "data/bunny.ply: a scan, encoded in memory: 6,913 nodes in 0.41 s (stipple
+// encode data/bunny.ply -o bunny.spg keeps it)"; empty for a .spg. The error
 // names the file as the reader or the encoder does.
 bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string& note, std::string& error);
 
