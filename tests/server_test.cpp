@@ -101,6 +101,28 @@ std::vector<uint8_t> remote_frame(RemoteModel& remote, const Local& local, doubl
   return frame;
 }
 
+// A server and the link emulator it serves through, stepped together while
+// a client waits: each wait moves the link's clock by `step_us`.
+struct SerialLoop {
+  Server* server;
+  ShapedPipe* pipe;  // null: a loopback pipe, no clock to move
+  uint32_t step_us;
+};
+RemoteModel::Options serial_options(SerialLoop& loop, int timeout_ms) {
+  RemoteModel::Options ro;
+  ro.serial = loop.pipe != nullptr;
+  ro.pump = [](void* p) {
+    auto* l = static_cast<SerialLoop*>(p);
+    l->server->step(0);
+    if (l->pipe) l->pipe->advance(l->step_us);
+    return true;
+  };
+  ro.pump_context = &loop;
+  ro.timeout_ms = timeout_ms;
+  ro.silence_ms = 250;
+  return ro;
+}
+
 TEST_F(ServerWithLog, LoopbackFramesEqualTheLocalRender) {
   const Local local;
   LoopbackPipe pipe;
@@ -143,20 +165,9 @@ TEST(Server, NetworkClientsAreSizedForTheStartupTheyReceive) {
     ASSERT_TRUE(server.init(local.file, "wide", ServerOptions{}, error)) << error;
     ShapedPipe pipe(kSerial115200, kSerial115200);
     LoopbackPipe stream;
-    struct Loop {
-      Server* server;
-      ShapedPipe* pipe;
-    } loop{&server, serial ? &pipe : nullptr};
+    SerialLoop loop{&server, serial ? &pipe : nullptr, 20000};
     RemoteModel remote;
-    RemoteModel::Options ro;
-    ro.serial = serial;
-    ro.pump = [](void* p) {
-      auto* l = static_cast<Loop*>(p);
-      l->server->step(0);
-      if (l->pipe) l->pipe->advance(20000);
-      return true;
-    };
-    ro.pump_context = &loop;
+    const RemoteModel::Options ro = serial_options(loop, 15000);
     if (serial) server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "serial", true);
     else server.add_client(std::make_unique<TransportRef>(stream.server()), -1, "loopback");
     ClientConfig config = device();
@@ -180,23 +191,9 @@ TEST_F(ServerWithLog, ATooNoisyLineSaysWhatHappened) {
   down.seed = 11;
   ShapedPipe pipe(down, kSerial115200);
   server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "serial", true);
-  struct Loop {
-    Server* server;
-    ShapedPipe* pipe;
-  } loop{&server, &pipe};
+  SerialLoop loop{&server, &pipe, 20000};
   RemoteModel remote;
-  RemoteModel::Options ro;
-  ro.serial = true;
-  ro.pump = [](void* p) {
-    auto* l = static_cast<Loop*>(p);
-    l->server->step(0);
-    l->pipe->advance(20000);
-    return true;
-  };
-  ro.pump_context = &loop;
-  ro.timeout_ms = 1500;
-  ro.silence_ms = 250;
-  EXPECT_FALSE(remote.connect(pipe.client(), device(), ro, error));
+  EXPECT_FALSE(remote.connect(pipe.client(), device(), serial_options(loop, 1500), error));
   const std::string said = "no answer from the server within 1500 ms: ";
   ASSERT_EQ(error.rfind(said, 0), 0u) << error;
   EXPECT_NE(error.find(" bytes arrived, but "), std::string::npos) << error;
@@ -308,23 +305,9 @@ TEST_F(ServerWithLog, NoisySerialLinkRecoversToTheCleanImage) {
   up.seed = 3;
   ShapedPipe pipe(down, up);
   server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "serial", true);
-  struct Loop {
-    Server* server;
-    ShapedPipe* pipe;
-  } loop{&server, &pipe};
+  SerialLoop loop{&server, &pipe, 200};
   RemoteModel remote;
-  RemoteModel::Options ro;
-  ro.serial = true;
-  ro.pump = [](void* p) {
-    auto* l = static_cast<Loop*>(p);
-    l->server->step(0);
-    l->pipe->advance(200);
-    return true;
-  };
-  ro.pump_context = &loop;
-  ro.timeout_ms = 20000;
-  ro.silence_ms = 250;
-  ASSERT_TRUE(remote.connect(pipe.client(), device(), ro, error)) << error;
+  ASSERT_TRUE(remote.connect(pipe.client(), device(), serial_options(loop, 20000), error)) << error;
   for (double yaw : {30.0, 75.0, 120.0, 200.0}) {
     const std::vector<uint8_t> frame = remote_frame(remote, local, yaw, error);
     ASSERT_FALSE(frame.empty()) << error << " at " << static_cast<double>(pipe.now_us()) / 1e6 << " s, resyncs "
