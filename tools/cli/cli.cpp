@@ -58,16 +58,6 @@ Json& Json::raw(const char* k, const std::string& json) {
   return *this;
 }
 
-std::string with_commas(unsigned long long v) {
-  const std::string digits = std::to_string(v);
-  std::string out;
-  for (size_t i = 0; i < digits.size(); ++i) {
-    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
-    out += digits[i];
-  }
-  return out;
-}
-
 bool output_is_input(const std::string& input, const std::string& output, std::string& error) {
   std::error_code ec;
   if (input == output || (std::filesystem::exists(output, ec) && std::filesystem::equivalent(input, output, ec))) {

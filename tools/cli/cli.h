@@ -28,9 +28,6 @@ class Json {
   std::string body_;
 };
 
-// Human-readable byte count with thousands separators.
-std::string with_commas(unsigned long long v);
-
 int fail(const std::string& message);  // prints "stipple: <message>" to stderr, returns 1
 
 // True (and `error` says so) when writing `output` would replace `input`:

@@ -186,6 +186,7 @@ int cmd_render(int argc, char** argv) {
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("render: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("render: " + args.unknown_option_message());
+  if (!has_path && !cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
   if (remote || has_path) {
     unsigned long long steps = 1;
     if (has_path && (path.rfind("orbit:", 0) != 0 || !cli::parse_uint(path.substr(6), 100000, steps) || steps == 0))
@@ -195,17 +196,13 @@ int cmd_render(int argc, char** argv) {
     std::error_code ec;
     if (has_path && std::filesystem::exists(output, ec) && !std::filesystem::is_directory(output, ec))
       return cli::fail("render: --path writes a folder of frames, but " + output + " is a file (name a folder with -o)");
-    if (!has_path && !cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
     return render_stream(remote ? "" : files[0], over_serial ? "" : connect, serial_dev, static_cast<uint32_t>(baud), o,
                          static_cast<uint32_t>(steps), has_path, output);
   }
   if (files.size() != 1) return cli::fail("render: expected one model, a .spg or a scan (see stipple render --help)");
   if (output.empty() && !psnr && frames == 1) return cli::fail("render: -o IMAGE.png is required");
-  if (!cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
   std::vector<uint8_t> file;
-  std::string note;
-  if (!read_model(files[0], file, note, error)) return cli::fail(error);  // a scan is encoded in memory
-  if (!note.empty()) std::fprintf(stderr, "stipple: %s\n", note.c_str());
+  if (!read_model(files[0], file, error)) return cli::fail(error);  // a scan is encoded in memory
   return render_to_png(files[0], file, o, output, reference, psnr, json, static_cast<int>(frames));
 }
 

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "platform/progress.h"
+#include "tools/embedded/options.h"
 
 namespace stipple {
 namespace {
@@ -223,18 +224,9 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
 
 std::string spg_error_message(const std::string& name, const SpgResult& r, size_t size) {
   if (r.error == SpgError::kTruncated && size == 0) return name + ": the file is empty (0 bytes), not a .spg model";
-  if (r.error == SpgError::kTruncated && r.needed > size) {
-    const auto commas = [](uint64_t v) {
-      std::string digits = std::to_string(v), out;
-      for (size_t i = 0; i < digits.size(); ++i) {
-        if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
-        out += digits[i];
-      }
-      return out;
-    };
-    return name + ": truncated: " + commas(size) + " of at least " + commas(r.needed) +
+  if (r.error == SpgError::kTruncated && r.needed > size)
+    return name + ": truncated: " + cli::with_commas(size) + " of at least " + cli::with_commas(r.needed) +
            " bytes (the file was cut short, or its header's counts are wrong)";
-  }
   return name + ": byte " + std::to_string(r.offset) + ": " + spg_error_text(r.error);
 }
 

@@ -35,6 +35,9 @@ class Args {
 // none is.
 std::string nearest(const std::string& word, const std::vector<std::string>& candidates);
 
+// A count with thousands separators: "6,913" (every program's messages).
+std::string with_commas(unsigned long long v);
+
 bool parse_uint(const std::string& s, unsigned long long max, unsigned long long& out);
 bool parse_double(const std::string& s, double& out);
 // "X,Y,Z": three finite numbers.

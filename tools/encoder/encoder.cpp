@@ -10,6 +10,7 @@
 #include "core/spg_format.h"
 #include "core/spg_writer.h"
 #include "platform/file_io.h"
+#include "tools/embedded/options.h"
 #include "tools/encoder/classify.h"
 #include "tools/encoder/normals.h"
 #include "tools/encoder/quantize.h"
@@ -235,10 +236,9 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   return true;
 }
 
-bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string& note, std::string& error) {
-  note.clear();
+bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string& error) {
   if (!read_file(path, spg, error)) return false;
-  if (spg.size() >= 4 && std::memcmp(spg.data(), "STPG", 4) == 0) return true;  // a .spg: validated by its reader
+  if (spg.size() >= 4 && std::memcmp(spg.data(), kSpgMagic, 4) == 0) return true;  // a .spg: validated by its reader
   std::vector<uint8_t> bytes;
   bytes.swap(spg);
   PointCloud cloud;
@@ -250,20 +250,12 @@ bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string&
   EncodeReport report;
   if (!encode_cloud(cloud, EncodeOptions{}, spg, report, error, &progress)) return error = path + ": " + error, false;
   progress.finish();
-  // Thousands separated by appending (an insert here trips GCC 12's -O3 -Wrestrict false positive).
-  const std::string digits = std::to_string(report.nodes);
-  std::string nodes;
-  for (size_t i = 0; i < digits.size(); ++i) {
-    if (i > 0 && (digits.size() - i) % 3 == 0) nodes += ',';
-    nodes += digits[i];
-  }
-  char text[96];
-  std::snprintf(text, sizeof text, "%s nodes in %.2f s", nodes.c_str(),
-                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   // The model's name: the scan's, in the current folder (the scan's own may be read-only).
   std::string stem = path.substr(path.find_last_of('/') + 1);
   if (const size_t dot = stem.find_last_of('.'); dot != std::string::npos && dot > 0) stem.resize(dot);
-  note = path + ": a scan, encoded in memory: " + text + " (stipple encode " + path + " -o " + stem + ".spg keeps it)";
+  std::fprintf(stderr, "stipple: %s: a scan, encoded in memory: %s nodes in %.2f s (stipple encode %s -o %s.spg keeps it)\n",
+               path.c_str(), cli::with_commas(report.nodes).c_str(),
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), path.c_str(), stem.c_str());
   return true;
 }
 

@@ -51,11 +51,12 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& options, std::vector<u
 // A model for the programs that draw (render, the viewers): a .spg file's
 // bytes as they are, or — as pcl_viewer opens a scan — any scan
 // read_point_cloud reads, encoded in memory with the default options (a
-// progress bar on a terminal). `note` says which was done, for the user:
-// "data/bunny.ply: a scan, encoded in memory: 6,913 nodes in 0.41 s (stipple
-// encode data/bunny.ply -o bunny.spg keeps it)"; empty for a .spg. The error
-// names the file as the reader or the encoder does.
-bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string& note, std::string& error);
+// progress bar on a terminal). For a scan it says so on stderr, with the
+// reader's warnings: "stipple: data/bunny.ply: a scan, encoded in memory:
+// 6,913 nodes in 0.41 s (stipple encode data/bunny.ply -o bunny.spg keeps
+// it)"; a .spg passes silently. The error names the file as the reader or
+// the encoder does.
+bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string& error);
 
 // What the encoder does to a scan before its tree: normals where it has none
 // (its faces' first, else k nearest neighbours, oriented by analyse_scan's

@@ -95,9 +95,7 @@ bool ViewerSource::open(const std::string& model, const std::string& connect, co
     name_ = "tcp " + connect;
   } else {
     std::vector<uint8_t> file;
-    std::string note;
-    if (!read_model(model, file, note, error)) return false;  // a scan is encoded in memory
-    if (!note.empty()) std::fprintf(stderr, "stipple: %s\n", note.c_str());
+    if (!read_model(model, file, error)) return false;  // a scan is encoded in memory
     ServerOptions so;
     so.cull = o.rule.cull;
     so.cones = cone_rule(o.rule);
