@@ -175,11 +175,8 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
       // view asked for again.
       receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
       gap_ = false;
-      ReceiveStatus r = receiver_.receive(p, n);
-      if (r == ReceiveStatus::kCacheRefused && receiver_.cache_status() == CacheStatus::kStartupTooLarge) {
-        if (!fit_startup(p, n, error)) return false;
-        r = receiver_.receive(p, n);
-      }
+      ReceiveStatus r;
+      if (!receive_frame(p, n, r, error)) return false;
       if (r != ReceiveStatus::kOk) return fail(r);
       if (has_camera_) {
         uint8_t payload[kCameraUpdateBytes];
@@ -193,12 +190,8 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
       continue;
     }
     gap_ = false;
-    ReceiveStatus r = receiver_.receive(p, n);
-    if (r == ReceiveStatus::kCacheRefused && receiver_.cache_status() == CacheStatus::kStartupTooLarge &&
-        p[0] == static_cast<uint8_t>(MessageType::kStartup)) {
-      if (!fit_startup(p, n, error)) return false;  // sized for it, then the same frame again
-      r = receiver_.receive(p, n);
-    }
+    ReceiveStatus r;
+    if (!receive_frame(p, n, r, error)) return false;
     if (r != ReceiveStatus::kOk) return fail(r);
     // Acknowledge every 8 frames and each update-end: the server forgets
     // what it kept for a resend.
@@ -255,6 +248,16 @@ bool RemoteModel::reconnect(std::string& error) {
   if (has_camera_) {
     write_camera_update(last_camera_, payload);
     if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
+  }
+  return true;
+}
+
+bool RemoteModel::receive_frame(const uint8_t* frame, size_t size, ReceiveStatus& status, std::string& error) {
+  status = receiver_.receive(frame, size);
+  if (status == ReceiveStatus::kCacheRefused && receiver_.cache_status() == CacheStatus::kStartupTooLarge &&
+      frame[0] == static_cast<uint8_t>(MessageType::kStartup)) {
+    if (!fit_startup(frame, size, error)) return false;  // sized for it, then the same frame again
+    status = receiver_.receive(frame, size);
   }
   return true;
 }

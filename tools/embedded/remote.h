@@ -84,6 +84,10 @@ class RemoteModel {
   // The startup `frame` (a whole frame) was refused as too large: the
   // client re-made for it (a new arena), the receiver started over.
   bool fit_startup(const uint8_t* frame, size_t size, std::string& error);
+  // Serial: one whole frame to the receiver (its status in `status`); a
+  // startup the client is too small for re-sizes it first. False only when
+  // that fails (`error` says why).
+  bool receive_frame(const uint8_t* frame, size_t size, ReceiveStatus& status, std::string& error);
   std::string went_away(TransportStatus s) const;  // "the server went away: <why>"
 
   Transport* transport_ = nullptr;
