@@ -152,24 +152,24 @@ ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& o, 
       toward += sky ? (*normals)[i].dot(*sky) > 0 : (*normals)[i].dot(sensor - points[i]) > 0;
     return static_cast<double>(toward) / static_cast<double>(points.size());
   };
-  const auto agrees = [&](const Vec3& sensor, const Vec3* sky) { return facing_share(sensor, sky) >= 0.5; };
+  const double facing_origin = facing_share(Vec3::Zero(), nullptr);  // rules 2 and 3 both ask
   // Rule 3's evidence of a scanner at the origin, beyond seeing every point
   // from it: spacing growing with distance, or the scan's own normals facing it.
   const auto scanner_inside = [&]() {
     f.spacing_slope = spacing_slope(points, Vec3::Zero());
-    return f.spacing_slope >= 0.5 || (has_normals && facing_share(Vec3::Zero(), nullptr) >= 0.9);
+    return f.spacing_slope >= 0.5 || (has_normals && facing_origin >= 0.9);
   };
   if (o.has_viewpoint) {
     f.kind = ScanKind::kViewpoint;
     f.viewpoint = o.viewpoint;
     f.hint.sensor_side = dominant_axis(o.viewpoint - (box.min + box.max) / 2);
     std::snprintf(text, sizeof text, "viewpoint (%g, %g, %g) given", o.viewpoint.x(), o.viewpoint.y(), o.viewpoint.z());
-  } else if (camera && agrees(Vec3::Zero(), nullptr)) {
+  } else if (camera && facing_origin >= 0.5) {
     f.kind = ScanKind::kCameraFrame;
     f.hint = SpgViewHint{SpgAxis::kNegY, SpgAxis::kNegZ};
     std::snprintf(text, sizeof text, "camera frame: %.1f %% of the points in front of the origin (+z forward, +y down)",
                   100.0 * static_cast<double>(in_cone) / static_cast<double>(points.size()));
-  } else if (inside && agrees(Vec3::Zero(), nullptr) && (f.visible_share = visible_share(points, Vec3::Zero())) >= 0.95 &&
+  } else if (inside && facing_origin >= 0.5 && (f.visible_share = visible_share(points, Vec3::Zero())) >= 0.95 &&
              scanner_inside()) {
     f.kind = ScanKind::kSensorInside;
     // Seen from the scanner: from outside, the room shows the backs of its walls and ceiling.
@@ -179,7 +179,7 @@ ScanFrame analyse_scan(const std::vector<Vec3>& points, const OrientOptions& o, 
                   "sensor at the origin, inside the scan: %.1f %% of the points visible from it, spacing growing with "
                   "distance from it (slope %.2f)",
                   100.0 * f.visible_share, f.spacing_slope);
-  } else if (flat && agrees(Vec3::Zero(), &up)) {
+  } else if (flat && facing_share(Vec3::Zero(), &up) >= 0.5) {
     f.kind = ScanKind::kTerrain;
     f.hint = SpgViewHint{axis_code(thin, false), axis_code(thin, false)};
     std::snprintf(text, sizeof text, "terrain: the %c extent (%g) is under half the others", "xyz"[thin], extent[thin]);
