@@ -154,6 +154,14 @@ class Input {
 
 std::string at_byte(size_t pos) { return "byte " + std::to_string(pos); }
 
+// "x = 1e+39 is beyond float32's range (3.403e+38), in which a .spg stores positions".
+std::string beyond_float(int axis, double value) {
+  char text[160];
+  std::snprintf(text, sizeof text, "%c = %.9g is beyond float32's range (%.4g), in which a .spg stores positions",
+                "xyz"[axis], value, kMaxCoordinate);
+  return text;
+}
+
 std::string word_of(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", v);
@@ -523,8 +531,7 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
     for (size_t k = 0; k < row.size() && k < 3; ++k) {
       const size_t column = named ? static_cast<size_t>(at[TextColumns::kX + k]) : k;
       if (column < row.size() && !(std::abs(row[column]) <= kMaxCoordinate)) {
-        error = name + ": line " + std::to_string(line_no) + ": " + "xyz"[k] + " = " + word_of(row[column]) +
-                " is beyond float32's range (3.403e+38), in which a .spg stores positions";
+        error = name + ": line " + std::to_string(line_no) + ": " + beyond_float(static_cast<int>(k), row[column]);
         return false;
       }
     }
@@ -616,14 +623,8 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
 std::string beyond_float_range(const std::vector<Vec3>& points) {
   for (size_t i = 0; i < points.size(); ++i)
     for (int a = 0; a < 3; ++a)
-      if (!(std::abs(points[i][a]) <= kMaxCoordinate)) {
-        char text[200];
-        std::snprintf(text, sizeof text,
-                      "point %zu (counting from 0): %c = %.9g is beyond float32's range (%.4g), in which a .spg stores "
-                      "positions",
-                      i, "xyz"[a], points[i][a], kMaxCoordinate);
-        return text;
-      }
+      if (!(std::abs(points[i][a]) <= kMaxCoordinate))
+        return "point " + std::to_string(i) + " (counting from 0): " + beyond_float(a, points[i][a]);
   return {};
 }
 
