@@ -127,7 +127,8 @@ bool plan_text(const std::string& name, const uint8_t* data, size_t size, const 
     int seen[10] = {};
     for (const std::string& w : w1) {
       TextColumns::Field f = field_of(w);
-      if (f != TextColumns::kSkip && seen[f]++) f = TextColumns::kSkip;  // a name twice: the first one counts
+      if (f != TextColumns::kSkip && seen[f]) f = TextColumns::kSkip;  // a name twice: the first one counts
+      if (f != TextColumns::kSkip) seen[f] = 1;
       fields.push_back(f);
     }
     if (!seen[TextColumns::kX] || !seen[TextColumns::kY] || !seen[TextColumns::kZ]) {
