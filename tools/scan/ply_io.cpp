@@ -629,15 +629,31 @@ std::string beyond_float_range(const std::vector<Vec3>& points) {
 }
 
 size_t count_duplicate_positions(const std::vector<Vec3>& points) {
-  std::vector<uint32_t> order(points.size());
-  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-  const auto less = [&](uint32_t a, uint32_t b) {
-    const Vec3 &p = points[a], &q = points[b];
-    return p.x() != q.x() ? p.x() < q.x() : p.y() != q.y() ? p.y() < q.y() : p.z() < q.z();
+  // Sorting 64-bit keys, not indices into the points: a scan of 10^7 points
+  // is counted in a fraction of a second instead of seconds of cache misses.
+  // A key is the position's bits hashed; equal keys are then compared as
+  // positions, so the count is exact unless two different positions collide
+  // in 64 bits and interleave with a repeat (about n^2 / 2^65: never at 10^9).
+  const auto bits = [](double v) {
+    uint64_t b;
+    v += 0.0;  // -0 and +0 are one position
+    std::memcpy(&b, &v, 8);
+    return b;
   };
-  std::sort(order.begin(), order.end(), less);
+  const auto mix = [](uint64_t x) {  // SplitMix64's finaliser
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+  };
+  std::vector<std::pair<uint64_t, uint32_t>> keys(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Vec3& p = points[i];
+    keys[i] = {mix(mix(mix(bits(p.x())) ^ bits(p.y())) ^ bits(p.z())), static_cast<uint32_t>(i)};
+  }
+  std::sort(keys.begin(), keys.end());
   size_t duplicates = 0;
-  for (size_t i = 1; i < order.size(); ++i) duplicates += points[order[i]] == points[order[i - 1]];
+  for (size_t i = 1; i < keys.size(); ++i)
+    duplicates += keys[i].first == keys[i - 1].first && points[keys[i].second] == points[keys[i - 1].second];
   return duplicates;
 }
 
