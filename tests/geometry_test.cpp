@@ -213,6 +213,9 @@ TEST(KdTree, MatchesBruteForce) {
     double d2;
     EXPECT_EQ(tree.nearest(q, &d2), all[0].second);
     EXPECT_EQ(d2, all[0].first);
+    // A hint (k-means' previous answer) changes the cost, not the distance.
+    const uint32_t hinted = tree.nearest(q, static_cast<uint32_t>((q.x() > 0 ? 7 : 4000)));
+    EXPECT_EQ((pts[hinted] - q).squaredNorm(), all[0].first);
     tree.knearest(q, 10, knn);
     ASSERT_EQ(knn.size(), 10u);
     for (size_t k = 0; k < 10; ++k) EXPECT_EQ(knn[k], all[k].second);

@@ -13,6 +13,9 @@ namespace stipple {
 namespace {
 
 // A uniform double in [0, 1) from a 64-bit generator, identical everywhere.
+// Lloyd's sample: this many tuples a class, and at least this many.
+constexpr size_t kLloydPerClass = 16, kLloydAtLeast = 16384;
+
 double uniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
 void assign_all(const std::vector<Vec3>& points, const std::vector<Vec3>& centers, std::vector<uint16_t>& index,
@@ -20,7 +23,7 @@ void assign_all(const std::vector<Vec3>& points, const std::vector<Vec3>& center
   const KdTree tree(centers);
   const size_t n = points.size();
   auto work = [&](size_t lo, size_t hi) {
-    for (size_t i = lo; i < hi; ++i) index[i] = static_cast<uint16_t>(tree.nearest(points[i]));
+    for (size_t i = lo; i < hi; ++i) index[i] = static_cast<uint16_t>(tree.nearest(points[i], uint32_t{index[i]}));
   };
   std::vector<std::thread> pool;
   const size_t parts = static_cast<size_t>(std::max(1, threads));
@@ -79,18 +82,28 @@ Classification classify_sigmas(const std::vector<Vec3>& tuples, int dims, int ma
       }
       centers.push_back(sample[pick]);
     }
-    // Lloyd iterations over every tuple.
+    // Lloyd iterations on a deterministic sample of the tuples (all of them
+    // up to kLloydPerClass a class): the centres need a few dozen members
+    // each to settle, and more only cost time (docs/encoder.md "Classes").
+    const size_t lloyd_size = std::min(n, std::max(kLloydPerClass * k, kLloydAtLeast));
+    std::vector<Vec3> lloyd;
+    if (lloyd_size < n) {
+      lloyd.reserve(lloyd_size);
+      for (size_t i = 0; i < lloyd_size; ++i) lloyd.push_back(logs[i * n / lloyd_size]);
+    }
+    const std::vector<Vec3>& members = lloyd_size < n ? lloyd : logs;
+    std::vector<uint16_t> index(members.size(), 0), before;
     std::vector<Vec3> sums;
     std::vector<uint32_t> counts;
     for (int it = 0; it < max_iterations; ++it) {
-      const std::vector<uint16_t> before = out.index;
-      assign_all(logs, centers, out.index, threads);
-      if (it > 0 && out.index == before) break;
+      before = index;
+      assign_all(members, centers, index, threads);
+      if (it > 0 && index == before) break;
       sums.assign(centers.size(), Vec3::Zero());
       counts.assign(centers.size(), 0);
-      for (size_t i = 0; i < n; ++i) {
-        sums[out.index[i]] += logs[i];
-        ++counts[out.index[i]];
+      for (size_t i = 0; i < members.size(); ++i) {
+        sums[index[i]] += members[i];
+        ++counts[index[i]];
       }
       for (size_t c = 0; c < centers.size(); ++c)
         if (counts[c]) centers[c] = sums[c] / static_cast<double>(counts[c]);  // an empty class keeps its centre

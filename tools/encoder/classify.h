@@ -3,8 +3,10 @@
 // stores only its class index.
 //
 // Scales to millions of tuples: k-means++ seeding on a deterministic sample
-// of at most 4k tuples, then Lloyd iterations whose nearest-centre queries go
-// through a kd-tree of the centres (O(n log k) per iteration, never n x k).
+// of at most 4k tuples, then Lloyd iterations on a deterministic sample of at
+// most max(16k, 16384) tuples (every tuple below that), then one assignment
+// of every tuple; nearest-centre queries go through a kd-tree of the centres
+// (O(log k) each, never k).
 // If there are at most k distinct tuples, each becomes its own class exactly.
 // Deterministic: a fixed-seed generator, ties to the lower index.
 #pragma once

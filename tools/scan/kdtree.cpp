@@ -89,6 +89,13 @@ uint32_t KdTree::nearest(const Vec3& q, double* dist2) const {
   return best.count == 0 ? 0u : best.items[0].second;
 }
 
+uint32_t KdTree::nearest(const Vec3& q, uint32_t hint) const {
+  Best best{1, 0, 0, {}};
+  if (hint < points_.size()) best.offer((points_[hint] - q).squaredNorm(), hint);
+  search(0, static_cast<uint32_t>(order_.size()), q, best);
+  return best.count == 0 ? 0u : best.items[0].second;
+}
+
 void KdTree::knearest(const Vec3& q, size_t k, std::vector<uint32_t>& out, size_t* visited) const {
   Best best{std::min(k, kMaxK), 0, 0, {}};
   search(0, static_cast<uint32_t>(order_.size()), q, best);

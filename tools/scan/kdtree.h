@@ -25,6 +25,11 @@ class KdTree {
 
   // Index of the nearest point to `q` and its squared distance.
   uint32_t nearest(const Vec3& q, double* dist2 = nullptr) const;
+  // The same, starting from point `hint` as the best so far (a query's
+  // previous answer, in k-means): subtrees that cannot beat it are skipped
+  // from the start. Among equidistant points the answer may then be the hint,
+  // so it is a function of the points and the hint.
+  uint32_t nearest(const Vec3& q, uint32_t hint) const;
 
   // The `k` nearest points to `q` (k at most kMaxK), closest first (fewer if
   // the tree is smaller). `visited`, when given, receives the number of
@@ -32,6 +37,9 @@ class KdTree {
   void knearest(const Vec3& q, size_t k, std::vector<uint32_t>& out, size_t* visited = nullptr) const;
 
   size_t size() const { return order_.size(); }
+  // The points' indices in the tree's order: neighbours in space are mostly
+  // neighbours here, so queries made in this order share cache lines.
+  const std::vector<uint32_t>& spatial_order() const { return order_; }
 
  private:
   struct Best;
