@@ -2,7 +2,9 @@
 #include "tools/encoder/normals.h"
 
 #include <algorithm>
+#include <atomic>
 #include <queue>
+#include <thread>
 
 #include "tools/scan/kdtree.h"
 #include "tools/encoder/node_stats.h"
@@ -10,7 +12,7 @@
 namespace stipple {
 
 void estimate_normals(PointCloud& cloud, int k, const ScanFrame& frame,
-                      const std::function<void(double, const char*)>& progress) {
+                      const std::function<void(double, const char*)>& progress, int threads) {
   if (cloud.has_normals()) return;
   const size_t n = cloud.size();
   const std::vector<Vec3>& p = cloud.positions;
@@ -29,27 +31,49 @@ void estimate_normals(PointCloud& cloud, int k, const ScanFrame& frame,
     const bool from_faces = missing.size() < n;  // some normals came from faces
     const KdTree tree(p);
     const size_t kk = std::min<size_t>(static_cast<size_t>(std::clamp(k, 3, 64)), n);
-    std::vector<uint32_t> nb;
     // Neighbour lists are kept only when orientation must be propagated.
     std::vector<uint32_t> graph;
     const bool propagate = !from_faces && frame.orient == OrientMode::kOutward;
     if (propagate) graph.resize(n * kk);
-    for (size_t m = 0; m < missing.size(); ++m) {
-      const uint32_t i = missing[m];
-      tree.knearest(p[i], kk, nb);
-      // The smallest-variance axis of the neighbourhood.
-      Vec3 nrm = nb.size() >= 3 ? Vec3(pca3(p.data(), nb.data(), nb.size()).frame.col(2)) : Vec3::UnitZ();
-      if (!nrm.allFinite()) nrm = Vec3::UnitZ();
-      if (from_faces) {
-        Vec3 ref = Vec3::Zero();
-        for (uint32_t j : nb) ref += normals[j];
-        if (nrm.dot(ref) < 0) nrm = -nrm;
-      } else if (propagate) {
-        std::copy(nb.begin(), nb.end(), graph.begin() + static_cast<ptrdiff_t>(i * kk));
+    // Each point's normal depends on the points alone, so the threads may take
+    // them in any order: the tree's, which keeps neighbours' queries close in
+    // memory. Face normals are read, never written, here (`missing` ones only).
+    std::vector<uint8_t> is_missing(n, 0);
+    for (uint32_t i : missing) is_missing[i] = 1;
+    std::vector<uint32_t> todo;
+    todo.reserve(missing.size());
+    for (uint32_t i : tree.spatial_order())
+      if (is_missing[i]) todo.push_back(i);
+    std::vector<Vec3> estimated(n, Vec3::Zero());
+    std::atomic<size_t> next{0}, finished{0};
+    constexpr size_t kBlock = 4096;
+    auto worker = [&](bool report) {
+      std::vector<uint32_t> nb;
+      for (size_t lo; (lo = next.fetch_add(kBlock)) < todo.size();) {
+        for (size_t m = lo; m < std::min(todo.size(), lo + kBlock); ++m) {
+          const uint32_t i = todo[m];
+          tree.knearest(p[i], kk, nb);
+          // The smallest-variance axis of the neighbourhood.
+          Vec3 nrm = nb.size() >= 3 ? Vec3(pca3(p.data(), nb.data(), nb.size()).frame.col(2)) : Vec3::UnitZ();
+          if (!nrm.allFinite()) nrm = Vec3::UnitZ();
+          if (from_faces) {
+            Vec3 ref = Vec3::Zero();
+            for (uint32_t j : nb) ref += normals[j];
+            if (nrm.dot(ref) < 0) nrm = -nrm;
+          } else if (propagate) {
+            std::copy(nb.begin(), nb.end(), graph.begin() + static_cast<ptrdiff_t>(i * kk));
+          }
+          estimated[i] = nrm;
+        }
+        const size_t done = finished.fetch_add(kBlock) + kBlock;
+        if (report && progress) progress(0.5 * static_cast<double>(std::min(done, todo.size())) / static_cast<double>(todo.size()), "normals");
       }
-      normals[i] = nrm;
-      if (progress && (m & 4095) == 0) progress(0.5 * static_cast<double>(m) / static_cast<double>(missing.size()), "normals");
-    }
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(worker, false);
+    worker(true);
+    for (std::thread& t : pool) t.join();
+    for (uint32_t i : missing) normals[i] = estimated[i];
     if (!from_faces && frame.orient == OrientMode::kSensor) {
       for (size_t i = 0; i < n; ++i)
         if (normals[i].dot(frame.viewpoint - p[i]) < 0) normals[i] = -normals[i];

@@ -21,8 +21,10 @@
 namespace stipple {
 
 // Fills `cloud.normals` if empty. `k` is the neighbourhood size (3..64).
-// `progress(fraction, phase)` is called now and then with fraction in [0, 1].
+// `progress(fraction, phase)` is called now and then with fraction in [0, 1],
+// from the calling thread. The k-NN fits run on `threads` threads; the result
+// is the same for any count.
 void estimate_normals(PointCloud& cloud, int k = 12, const ScanFrame& frame = {},
-                      const std::function<void(double, const char*)>& progress = {});
+                      const std::function<void(double, const char*)>& progress = {}, int threads = 2);
 
 }  // namespace stipple
