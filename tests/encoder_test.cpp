@@ -112,6 +112,21 @@ TEST(Encoder, SameInputSameBytesAnyThreadCount) {
   EXPECT_EQ(test::encode(cloud, o1), test::encode(cloud, o2));
 }
 
+// Above 65,536 points a node's sums run in chunks; with every node "wide"
+// the chunks of one node go to several threads. The bytes stay the same, and
+// so do the bare scan's estimated normals (its k-NN fits run in threads too).
+TEST(Encoder, LargeNodesSameBytesAnyThreadCount) {
+  PointCloud cloud = test::sphere_cloud(140000, 1.0, false);
+  EncodeOptions o1, o3;
+  o1.tree.threads = 1;
+  o3.tree.threads = 3;
+  o3.tree.wide_node = 1000;
+  EncodeReport report;
+  const std::vector<uint8_t> one = test::encode(cloud, o1, &report);
+  EXPECT_EQ(report.normals_source, "k-NN");
+  EXPECT_EQ(one, test::encode(cloud, o3));
+}
+
 TEST(Encoder, RejectsBadOptionsByName) {
   PointCloud c = test::sphere_cloud(100);
   EncodeOptions o;

@@ -91,10 +91,14 @@ int cmd_encode(int argc, char** argv) {
   if (!cloud.warnings.empty()) progress.finish();  // the warnings get lines of their own
   cli::warn(cloud.warnings);
   if (every > 1) keep_every(cloud, every, options);
+  const double read_seconds = monotonic_seconds() - start;
   std::vector<uint8_t> spg;
   EncodeReport report;
   if (!encode_cloud(cloud, options, spg, report, error, &progress)) return cli::fail(error);
+  report.seconds.read = read_seconds;
+  const double write_start = monotonic_seconds();
   if (!write_file_atomic(output, spg, error)) return cli::fail(error);
+  report.seconds.write += monotonic_seconds() - write_start;
   progress.finish();
   const double seconds = monotonic_seconds() - start;
   const double peak_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);

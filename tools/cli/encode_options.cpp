@@ -123,11 +123,19 @@ std::string summary_json(const std::string& scan, const EncodeReport& r, double 
       .integer("classes_p", r.classes[0])
       .integer("classes_n", r.classes[1])
       .integer("classes_c", r.classes[2])
+      .num("class_rms_log_error_p", r.class_rms_log_error[0])
+      .num("class_rms_log_error_n", r.class_rms_log_error[1])
+      .num("class_rms_log_error_c", r.class_rms_log_error[2])
       .num("apr", r.ratios.apr)
       .num("capr", r.ratios.capr)
       .integer("capr_excluded", static_cast<long long>(r.ratios.capr_excluded))
       .integer("euclidean_fallbacks", static_cast<long long>(r.tree.euclidean_fallbacks))
-      .integer("unbalanced_splits", static_cast<long long>(r.tree.unbalanced));
+      .integer("unbalanced_splits", static_cast<long long>(r.tree.unbalanced))
+      .num("read_seconds", r.seconds.read)
+      .num("normals_seconds", r.seconds.normals)
+      .num("hierarchy_seconds", r.seconds.hierarchy)
+      .num("classes_seconds", r.seconds.classes)
+      .num("write_seconds", r.seconds.write);
   return j.done();
 }
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cmath>
 #include <cstring>
+#include <thread>
 
 #include "core/spg_format.h"
 #include "core/spg_writer.h"
@@ -49,14 +50,14 @@ void stored_bounding_box(const std::vector<Vec3>& points, const Vec3& origin, fl
 
 ScanFrame prepare_scan(PointCloud& cloud, const EncodeOptions& o, const std::function<void(double, const char*)>& progress) {
   const bool estimate = o.normals && !cloud.has_normals();
-  if (estimate && !cloud.triangles.empty()) estimate_normals(cloud, o.normal_neighbours, ScanFrame{}, progress);
+  if (estimate && !cloud.triangles.empty()) estimate_normals(cloud, o.normal_neighbours, ScanFrame{}, progress, o.tree.threads);
   OrientOptions orient = o.orient;
   if (cloud.has_viewpoint && !orient.has_viewpoint) {  // the file's sensor position, unless an option gives one
     orient.has_viewpoint = true;
     orient.viewpoint = cloud.viewpoint;
   }
   const ScanFrame frame = analyse_scan(cloud.positions, orient, cloud.has_normals() ? &cloud.normals : nullptr);
-  if (estimate && !cloud.has_normals()) estimate_normals(cloud, o.normal_neighbours, frame, progress);
+  if (estimate && !cloud.has_normals()) estimate_normals(cloud, o.normal_neighbours, frame, progress, o.tree.threads);
   return frame;
 }
 
@@ -88,7 +89,14 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   const auto normals_progress = [&](double f, const char* phase) {
     if (progress) progress->update(0.3 * f, phase);
   };
+  double stage_start = monotonic_seconds();
+  const auto stage_done = [&stage_start](double& seconds) {
+    const double now = monotonic_seconds();
+    seconds = now - stage_start;
+    stage_start = now;
+  };
   report.frame = prepare_scan(cloud, o, normals_progress);
+  stage_done(report.seconds.normals);
   if (!normals) cloud.normals.clear();
   if (!colors) cloud.colors.clear();
 
@@ -111,6 +119,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   report.depth = tree.depth;
   report.ratios = partition_ratios(tree);
   report.tree = tree.report;
+  stage_done(report.seconds.hierarchy);
 
   // Classes.
   if (progress) progress->update(0.85, "classifying sigmas");
@@ -137,6 +146,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   report.class_rms_log_error[0] = cp.rms_log_error;
   report.class_rms_log_error[1] = cn.rms_log_error;
   report.class_rms_log_error[2] = cc.rms_log_error;
+  stage_done(report.seconds.classes);
 
   // Layout: the thinnest axis gets 10 position bits.
   int thin = 0;
@@ -190,33 +200,43 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   const AngleBits fc_bits = frame_bits(layout, Field::kFcTheta, true);
   const size_t record_bytes = static_cast<size_t>(layout.record_bytes());
   std::vector<uint8_t> records(n * record_bytes);
-  for (size_t i = 0; i < n; ++i) {
-    const NodeStats& s = tree.nodes[i].stats;
-    NodeFields f;
-    for (int a = 0; a < 3; ++a) f.v[a] = quantize_cell(s.position.mean[a] - origin[a], bmin[a], bmax[a], layout.bits[a]);
-    const FrameCode fp = encode_frame(s.position.frame, fp_bits);
-    f[Field::kFpTheta] = fp.theta;
-    f[Field::kFpPhi] = fp.phi;
-    f[Field::kFpPsi] = fp.psi;
-    f[Field::kSigmaP] = cp.index[i];
-    if (normals) {
-      const FrameCode fn = encode_frame(s.normal_frame, fn_bits);
-      f[Field::kFnTheta] = fn.theta;
-      f[Field::kFnPhi] = fn.phi;
-      f[Field::kFnPsi] = fn.psi;
-      f[Field::kSigmaN] = cn.index[i];
+  // Each record depends on its node alone: the threads take a share each.
+  const auto pack = [&](size_t lo, size_t hi) {
+    for (size_t i = lo; i < hi; ++i) {
+      const NodeStats& s = tree.nodes[i].stats;
+      NodeFields f;
+      for (int a = 0; a < 3; ++a) f.v[a] = quantize_cell(s.position.mean[a] - origin[a], bmin[a], bmax[a], layout.bits[a]);
+      const FrameCode fp = encode_frame(s.position.frame, fp_bits);
+      f[Field::kFpTheta] = fp.theta;
+      f[Field::kFpPhi] = fp.phi;
+      f[Field::kFpPsi] = fp.psi;
+      f[Field::kSigmaP] = cp.index[i];
+      if (normals) {
+        const FrameCode fn = encode_frame(s.normal_frame, fn_bits);
+        f[Field::kFnTheta] = fn.theta;
+        f[Field::kFnPhi] = fn.phi;
+        f[Field::kFnPsi] = fn.psi;
+        f[Field::kSigmaN] = cn.index[i];
+      }
+      if (colors) {
+        f[Field::kColorR] = quantize_unit(s.color.mean[0], layout.width(Field::kColorR));
+        f[Field::kColorG] = quantize_unit(s.color.mean[1], layout.width(Field::kColorG));
+        f[Field::kColorB] = quantize_unit(s.color.mean[2], layout.width(Field::kColorB));
+        const FrameCode fc = encode_frame(s.color.frame, fc_bits);
+        f[Field::kFcTheta] = fc.theta;
+        f[Field::kFcPhi] = fc.phi;
+        f[Field::kFcPsi] = fc.psi;
+        f[Field::kSigmaC] = cc.index[i];
+      }
+      pack_record(layout, f, records.data() + i * record_bytes);
     }
-    if (colors) {
-      f[Field::kColorR] = quantize_unit(s.color.mean[0], layout.width(Field::kColorR));
-      f[Field::kColorG] = quantize_unit(s.color.mean[1], layout.width(Field::kColorG));
-      f[Field::kColorB] = quantize_unit(s.color.mean[2], layout.width(Field::kColorB));
-      const FrameCode fc = encode_frame(s.color.frame, fc_bits);
-      f[Field::kFcTheta] = fc.theta;
-      f[Field::kFcPhi] = fc.phi;
-      f[Field::kFcPsi] = fc.psi;
-      f[Field::kSigmaC] = cc.index[i];
-    }
-    pack_record(layout, f, records.data() + i * record_bytes);
+  };
+  {
+    std::vector<std::thread> pool;
+    const size_t parts = static_cast<size_t>(std::max(1, threads));
+    for (size_t t = 1; t < parts; ++t) pool.emplace_back(pack, n * t / parts, n * (t + 1) / parts);
+    pack(0, n / parts);
+    for (std::thread& t : pool) t.join();
   }
   const SpgContent content{header, SpgClassTables{sigma_p.data(), sigma_n.data(), sigma_c.data()}, child_counts.data(),
                            leaf_points.data(), records.data()};
@@ -232,6 +252,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   report.bytes = spg.size();
   report.record_bytes = record_bytes;
   report.bits_per_point = 8.0 * static_cast<double>(spg.size()) / static_cast<double>(cloud.size());
+  stage_done(report.seconds.write);
   if (progress) progress->update(1.0, "done");
   return true;
 }

@@ -41,6 +41,11 @@ struct EncodeReport {
   PartitionRatios ratios;
   TreeReport tree;
   ScanFrame frame;  // what analyse_scan decided: normal orientation, view hint
+  // Wall seconds of each stage: the scan's reading (the caller's), its
+  // normals and frame, the hierarchy, the sigma classes, the records and file.
+  struct Stages {
+    double read = 0, normals = 0, hierarchy = 0, classes = 0, write = 0;
+  } seconds;
 };
 
 // Encodes `cloud` (normals may be added to it). Returns false with a message

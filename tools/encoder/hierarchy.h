@@ -40,6 +40,11 @@ struct TreeOptions {
   double init_step = 0.8;   // initial centres at +- init_step * sigma1 along f1
   int max_depth = 512;
   int threads = 2;
+  // Nodes of at least this many points are split one at a time with every
+  // thread inside them (the top levels); smaller ones a node per thread.
+  // Sums run over fixed chunks of 65,536 points either way, so neither this
+  // nor `threads` changes a bit of the tree.
+  uint32_t wide_node = 8 << 16;
   StatsOptions stats;
 };
 

@@ -15,21 +15,9 @@ Vec3 any_perpendicular(const Vec3& v) {
   return v.cross(Vec3::Unit(axis)).normalized();
 }
 
-Gaussian3 pca3(const Vec3* values, const uint32_t* ids, size_t n) {
+Gaussian3 gaussian_from_covariance(const Vec3& mean, const Mat3& cov) {
   Gaussian3 g;
-  if (n == 0) return g;
-  // Pass 1: the mean, accumulated relative to the first value.
-  const Vec3 origin = values[ids[0]];
-  Vec3 sum = Vec3::Zero();
-  for (size_t i = 0; i < n; ++i) sum += values[ids[i]] - origin;
-  g.mean = origin + sum / static_cast<double>(n);
-  // Pass 2: covariance of the centred values.
-  Mat3 cov = Mat3::Zero();
-  for (size_t i = 0; i < n; ++i) {
-    const Vec3 d = values[ids[i]] - g.mean;
-    cov.noalias() += d * d.transpose();
-  }
-  cov /= static_cast<double>(n);
+  g.mean = mean;
   const Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
   const Vec3 lambda = eig.eigenvalues();  // ascending
   for (int k = 0; k < 3; ++k) g.sigma[k] = std::sqrt(std::max(0.0, lambda[2 - k]));
@@ -39,10 +27,72 @@ Gaussian3 pca3(const Vec3* values, const uint32_t* ids, size_t n) {
   return g;
 }
 
-void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3& fallback_z, Mat3& frame,
-                  Vec2& sigma_n) {
+namespace {
+
+// Mean and sum of centred outer products of value(0) .. value(n - 1), two
+// passes (the mean relative to the first value, then the products about it).
+template <class Value>
+void centred_moments(const Value& value, size_t n, Vec3& mean, Mat3& m2) {
+  const Vec3 origin = value(0);
   Vec3 sum = Vec3::Zero();
-  for (size_t i = 0; i < n; ++i) sum += normals[ids[i]];
+  for (size_t i = 0; i < n; ++i) sum += value(i) - origin;
+  mean = origin + sum / static_cast<double>(n);
+  m2 = Mat3::Zero();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 d = value(i) - mean;
+    m2.noalias() += d * d.transpose();
+  }
+}
+
+}  // namespace
+
+Gaussian3 pca3(const Vec3* values, const uint32_t* ids, size_t n) {
+  if (n == 0) return Gaussian3{};
+  Vec3 mean;
+  Mat3 m2;
+  centred_moments([&](size_t i) -> const Vec3& { return values[ids[i]]; }, n, mean, m2);
+  return gaussian_from_covariance(mean, m2 / static_cast<double>(n));
+}
+
+Gaussian3 pca3(const Vec3* values, size_t n) {
+  if (n == 0) return Gaussian3{};
+  Vec3 mean;
+  Mat3 m2;
+  centred_moments([&](size_t i) -> const Vec3& { return values[i]; }, n, mean, m2);
+  return gaussian_from_covariance(mean, m2 / static_cast<double>(n));
+}
+
+
+void ColorMoments::add(const ColorMoments& o) {
+  if (o.count == 0) return;
+  if (count == 0) {
+    *this = o;
+    return;
+  }
+  // Chan, Golub and LeVeque's pairwise update: exact, and stable where the
+  // means are far apart.
+  const double n = count + o.count;
+  const Vec3 delta = o.mean - mean;
+  mean += delta * (o.count / n);
+  m2 += o.m2 + delta * delta.transpose() * (count * o.count / n);
+  count = n;
+}
+
+ColorMoments color_moments(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& o) {
+  ColorMoments m;
+  if (o.colors && cloud.has_colors() && n > 0) {
+    m.count = static_cast<double>(n);
+    centred_moments([&](size_t i) -> const Vec3& { return cloud.colors[ids[i]]; }, n, m.mean, m.m2);
+  }
+  return m;
+}
+
+namespace {
+
+template <class Normal>
+void log_map_stats(const Normal& normal, size_t n, const Vec3& fallback_z, Mat3& frame, Vec2& sigma_n) {
+  Vec3 sum = Vec3::Zero();
+  for (size_t i = 0; i < n; ++i) sum += normal(i);
   const double len = sum.norm();
   const Vec3 m = (len > 1e-9 * static_cast<double>(n) && std::isfinite(len)) ? Vec3(sum / len) : fallback_z;
   const Vec3 t1 = any_perpendicular(m);
@@ -50,7 +100,7 @@ void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3
   Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
   size_t used = 0;
   for (size_t i = 0; i < n; ++i) {
-    const Vec3& nv = normals[ids[i]];
+    const Vec3& nv = normal(i);
     if (nv.squaredNorm() == 0) continue;
     const double x = nv.dot(t1), y = nv.dot(t2), z = nv.dot(m);
     const double r = std::hypot(x, y);
@@ -69,13 +119,20 @@ void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3
   frame.col(2) = m;
 }
 
-NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& o) {
+}  // namespace
+
+void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3& fallback_z, Mat3& frame,
+                  Vec2& sigma_n) {
+  log_map_stats([&](size_t i) -> const Vec3& { return normals[ids[i]]; }, n, fallback_z, frame, sigma_n);
+}
+
+NodeStats finish_stats(const Vec3* normals, size_t n, const Gaussian3& position, const StatsOptions& o) {
   NodeStats s;
   s.count = static_cast<uint32_t>(n);
   Gaussian3& g = s.position;
-  g = pca3(cloud.positions.data(), ids, n);
-  const bool normals = o.normals && cloud.has_normals();
-  if (normals) normal_stats(cloud.normals.data(), ids, n, g.frame.col(2), s.normal_frame, s.sigma_n);
+  g = position;
+  if (normals)
+    log_map_stats([&](size_t i) -> const Vec3& { return normals[i]; }, n, g.frame.col(2), s.normal_frame, s.sigma_n);
   const Vec3 normal = normals ? Vec3(s.normal_frame.col(2)) : Vec3::UnitZ();
 
   const double tiny = std::max(o.sigma_floor, o.vanish_ratio * g.sigma[0]);
@@ -101,10 +158,21 @@ NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, con
   for (int k = 0; k < 3; ++k) g.sigma[k] = std::max(g.sigma[k], o.sigma_floor);
   if (normals) s.sigma_n = s.sigma_n.cwiseMax(o.spread_floor);
 
-  if (o.colors && cloud.has_colors()) {
-    s.color = pca3(cloud.colors.data(), ids, n);
-    for (int k = 0; k < 3; ++k) s.color.sigma[k] = std::max(s.color.sigma[k], o.spread_floor);
-  }
+  return s;
+}
+
+void set_color_stats(NodeStats& s, const ColorMoments& colors, const StatsOptions& o) {
+  if (colors.count == 0) return;
+  s.color = gaussian_from_covariance(colors.mean, colors.m2 / colors.count);
+  for (int k = 0; k < 3; ++k) s.color.sigma[k] = std::max(s.color.sigma[k], o.spread_floor);
+}
+
+NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& o) {
+  std::vector<Vec3> normals;
+  if (o.normals && cloud.has_normals())
+    for (size_t i = 0; i < n; ++i) normals.push_back(cloud.normals[ids[i]]);
+  NodeStats s = finish_stats(normals.empty() ? nullptr : normals.data(), n, pca3(cloud.positions.data(), ids, n), o);
+  set_color_stats(s, color_moments(cloud, ids, n, o), o);
   return s;
 }
 

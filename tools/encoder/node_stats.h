@@ -22,10 +22,17 @@
 // Normals: z = the mean normal m; each normal is mapped to the tangent plane at
 // m by the log map (u, v) = theta (cos phi, sin phi) — theta its angle from m,
 // phi its azimuth — and a 2-D PCA about the origin gives sigma_n1 >= sigma_n2
-// and the frame fn = (x, y, m) with x the major axis.
+// and the frame fn = (x, y, m) with x the major axis. The log map does not
+// add up from children to parent (it is taken about the node's own m), so
+// every node reads its normals; sigma_n in radians is what the cut's
+// back-face cones rely on (core/view_cut.h), which the tangent projection
+// (sin theta, from moments) would understate for wide nodes: with it the
+// bunny's cut culled leaves that face the eye (docs/encoder.md).
 //
-// Colours: 3-D PCA like positions, no orientation rule.
-//
+// Colours: 3-D PCA like positions, no orientation rule; the mean and centred
+// sum of outer products merge exactly from children (Chan, Golub and
+// LeVeque), so a parent never reads its points' colours.
+
 // Curvature-aware shrink (docs/encoder.md): sigma3 *= beta with
 // beta = eta0 + (1 - eta0) * max(0, 1 - eta1 * sqrt(sigma_n1)).
 #pragma once
@@ -33,6 +40,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <vector>
 
 #include "tools/scan/point_cloud.h"
 
@@ -67,13 +75,35 @@ struct StatsOptions {
 
 // Plain PCA of `values[ids[0..n)]`: mean, descending sigmas, right-handed frame.
 Gaussian3 pca3(const Vec3* values, const uint32_t* ids, size_t n);
+// The same of values[0..n).
+Gaussian3 pca3(const Vec3* values, size_t n);
+// The same from a mean and covariance.
+Gaussian3 gaussian_from_covariance(const Vec3& mean, const Mat3& cov);
+
+// A node's colours as count, mean and centred sum of outer products; a
+// parent's is its children's added in order (`add`), so the hierarchy
+// computes them from the leaves up.
+struct ColorMoments {
+  double count = 0;  // 0: no colours (none in the scan, or not wanted)
+  Vec3 mean = Vec3::Zero();
+  Mat3 m2 = Mat3::Zero();
+  void add(const ColorMoments& other);
+};
+ColorMoments color_moments(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& options);
 
 // Mean-normal frame and sigma_n of `normals[ids[0..n)]`. `fallback_z` is used
 // when the normals cancel out (or are all zero).
 void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3& fallback_z, Mat3& frame,
                   Vec2& sigma_n);
 
-// All statistics of one node, with the degenerate-node rules and the shrink.
+// The statistics of a node of n points but its colours: from its positions'
+// PCA and its normals normals[0..n) (nullptr: none), with the degenerate-node
+// rules and the shrink.
+NodeStats finish_stats(const Vec3* normals, size_t n, const Gaussian3& position, const StatsOptions& options);
+// Its colours' Gaussian from their moments (nothing when there are none).
+void set_color_stats(NodeStats& stats, const ColorMoments& colors, const StatsOptions& options);
+// All of them from the points: finish_stats(pca3(positions)), then
+// set_color_stats(color_moments).
 NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& options);
 
 // A unit vector perpendicular to unit `v`, chosen deterministically.
