@@ -139,17 +139,17 @@ int main(int argc, char** argv) {
   const auto fail = [](const std::string& m) { return std::fprintf(stderr, "stipple-make-scan: %s\n", m.c_str()), 2; };
   if (args.bad()) return fail(args.error());
   if (!args.unknown_option().empty()) return fail(args.unknown_option_message());
-  if (!args.positionals().empty()) return fail("unexpected argument '" + args.positionals()[0] + "' (see --help)");
+  if (!args.positionals().empty()) return fail(std::string("unexpected argument '") + args.positionals()[0] + "' (see --help)");
   double count_real = 0;
   if (count_text.empty() || !cli::parse_double(count_text, count_real) || count_real < 1 || count_real > 4294967295.0 ||
       count_real != std::floor(count_real))
-    return fail("--points: expected a whole number from 1 to 4,294,967,295, got '" + count_text + "'");
+    return fail(std::string("--points: expected a whole number from 1 to 4,294,967,295, got '") + count_text + "'");
   const uint64_t count = static_cast<uint64_t>(count_real);
   double offset[3] = {0, 0, 0};
-  if (has_offset && !cli::parse_vec3(offset_text, offset)) return fail("--offset: expected X,Y,Z, got '" + offset_text + "'");
+  if (has_offset && !cli::parse_vec3(offset_text, offset)) return fail(std::string("--offset: expected X,Y,Z, got '") + offset_text + "'");
   const bool las = output.size() > 4 && output.compare(output.size() - 4, 4, ".las") == 0;
   const bool ply = output.size() > 4 && output.compare(output.size() - 4, 4, ".ply") == 0;
-  if (!las && !ply) return fail("-o: expected a name ending in .ply or .las, got '" + output + "'");
+  if (!las && !ply) return fail(std::string("-o: expected a name ending in .ply or .las, got '") + output + "'");
   if (las && normals) return fail("--normals: LAS stores no normals (write a .ply)");
 
   const double side = std::sqrt(static_cast<double>(count) / kDensity);
@@ -162,14 +162,16 @@ int main(int argc, char** argv) {
     header = las_header(count, colour, offset, lo, hi);
   } else {
     const char* type = has_offset ? "double" : "float";
-    header = "ply\nformat binary_little_endian 1.0\ncomment stipple-make-scan synthetic terrain\nelement vertex " +
-             std::to_string(count) + "\nproperty " + type + " x\nproperty " + type + " y\nproperty " + type + " z\n";
+    header = "ply\nformat binary_little_endian 1.0\ncomment stipple-make-scan synthetic terrain\nelement vertex ";
+    header += std::to_string(count);
+    for (const char* axis : {"x", "y", "z"}) header.append("\nproperty ").append(type).append(" ").append(axis);
+    header += "\n";
     if (normals) header += "property float nx\nproperty float ny\nproperty float nz\n";
     if (colour) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
     header += "end_header\n";
   }
   bool ok = std::fwrite(header.data(), 1, header.size(), f) == header.size();
-  ProgressBar progress("make-scan " + output);
+  ProgressBar progress(std::string("make-scan ") + output);
   std::vector<uint8_t> chunk;
   constexpr uint64_t kChunk = 1 << 16;
   for (uint64_t at = 0; ok && at < count; at += kChunk) {
