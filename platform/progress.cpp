@@ -17,6 +17,7 @@ void ProgressBar::update(double fraction, const std::string& detail) {
   if (!active_) return;
   const auto now = std::chrono::steady_clock::now();
   if (drawn_ && fraction < 1.0 && now - last_ < std::chrono::milliseconds(100)) return;
+  if (!drawn_) start_ = now;
   last_ = now;
   drawn_ = true;
   fraction = std::clamp(fraction, 0.0, 1.0);
@@ -24,8 +25,16 @@ void ProgressBar::update(double fraction, const std::string& detail) {
   const int filled = static_cast<int>(fraction * kWidth + 0.5);
   std::string bar(static_cast<size_t>(filled), '#');
   bar.append(static_cast<size_t>(kWidth - filled), '.');
-  std::fprintf(stderr, "\r\033[K%s [%s] %3d%%  %s", label_.c_str(), bar.c_str(),
-               static_cast<int>(fraction * 100.0 + 0.5), detail.c_str());
+  // The time left, from the pace so far, once there is a pace to go by.
+  char left[32] = "";
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  if (fraction >= 0.02 && fraction < 1.0 && elapsed >= 2.0) {
+    const double rest = elapsed * (1.0 - fraction) / fraction;
+    if (rest < 90) std::snprintf(left, sizeof left, "  ~%.0f s left", rest);
+    else std::snprintf(left, sizeof left, "  ~%.0f min left", rest / 60);
+  }
+  std::fprintf(stderr, "\r\033[K%s [%s] %3d%%  %s%s", label_.c_str(), bar.c_str(),
+               static_cast<int>(fraction * 100.0 + 0.5), detail.c_str(), left);
   std::fflush(stderr);
 }
 

@@ -1,6 +1,7 @@
 // stipple platform — a terminal progress bar for long host work.
 //
-// Draws `label [#####.....]  45%  detail` on stderr, redrawn in place, only
+// Draws `label [#####.....]  45%  detail  ~12 s left` on stderr (the time
+// left from the pace since the first drawing, shown after 2 s), redrawn in place, only
 // when stderr is a terminal (pipes and CI logs stay clean). Redraws are
 // rate-limited to ~10 per second, so callers may report progress per item.
 // Not thread-safe: report from one thread.
@@ -28,7 +29,7 @@ class ProgressBar {
   std::string label_;
   bool active_;
   bool drawn_ = false;
-  std::chrono::steady_clock::time_point last_;
+  std::chrono::steady_clock::time_point last_, start_;  // start_: the first drawing
 };
 
 // Monotonic seconds since an arbitrary origin.

@@ -87,52 +87,69 @@ ColorMoments color_moments(const PointCloud& cloud, const uint32_t* ids, size_t 
   return m;
 }
 
-namespace {
+LogMapFrame log_map_frame(const Vec3& normal_sum, size_t n, const Vec3& fallback_z) {
+  const double len = normal_sum.norm();
+  LogMapFrame f;
+  f.m = (len > 1e-9 * static_cast<double>(n) && std::isfinite(len)) ? Vec3(normal_sum / len) : fallback_z;
+  f.t1 = any_perpendicular(f.m);
+  f.t2 = f.m.cross(f.t1);
+  return f;
+}
 
-template <class Normal>
-void log_map_stats(const Normal& normal, size_t n, const Vec3& fallback_z, Mat3& frame, Vec2& sigma_n) {
-  Vec3 sum = Vec3::Zero();
-  for (size_t i = 0; i < n; ++i) sum += normal(i);
-  const double len = sum.norm();
-  const Vec3 m = (len > 1e-9 * static_cast<double>(n) && std::isfinite(len)) ? Vec3(sum / len) : fallback_z;
-  const Vec3 t1 = any_perpendicular(m);
-  const Vec3 t2 = m.cross(t1);
-  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-  size_t used = 0;
+void accumulate_log_map(const LogMapFrame& f, const Vec3* normals, size_t n, Eigen::Matrix2d& cov, size_t& used) {
   for (size_t i = 0; i < n; ++i) {
-    const Vec3& nv = normal(i);
+    const Vec3& nv = normals[i];
     if (nv.squaredNorm() == 0) continue;
-    const double x = nv.dot(t1), y = nv.dot(t2), z = nv.dot(m);
+    const double x = nv.dot(f.t1), y = nv.dot(f.t2), z = nv.dot(f.m);
     const double r = std::hypot(x, y);
     const double theta = std::atan2(r, z);  // accurate near 0 and pi, unlike acos
     const Vec2 uv = r > 0 ? Vec2(theta * x / r, theta * y / r) : Vec2::Zero();
     cov.noalias() += uv * uv.transpose();
     ++used;
   }
-  if (used > 0) cov /= static_cast<double>(used);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
-  sigma_n = Vec2(std::sqrt(std::max(0.0, eig.eigenvalues()[1])), std::sqrt(std::max(0.0, eig.eigenvalues()[0])));
-  const Eigen::Vector2d major = eig.eigenvectors().col(1);
-  const Vec3 x = (major[0] * t1 + major[1] * t2).normalized();
-  frame.col(0) = x;
-  frame.col(1) = m.cross(x);
-  frame.col(2) = m;
 }
 
-}  // namespace
+NormalSpread finish_log_map(const LogMapFrame& f, Eigen::Matrix2d cov, size_t used) {
+  if (used > 0) cov /= static_cast<double>(used);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  NormalSpread s;
+  s.sigma = Vec2(std::sqrt(std::max(0.0, eig.eigenvalues()[1])), std::sqrt(std::max(0.0, eig.eigenvalues()[0])));
+  const Eigen::Vector2d major = eig.eigenvectors().col(1);
+  const Vec3 x = (major[0] * f.t1 + major[1] * f.t2).normalized();
+  s.frame.col(0) = x;
+  s.frame.col(1) = f.m.cross(x);
+  s.frame.col(2) = f.m;
+  return s;
+}
+
+NormalSpread normal_spread(const Vec3* normals, size_t n, const Vec3& fallback_z) {
+  Vec3 sum = Vec3::Zero();
+  for (size_t i = 0; i < n; ++i) sum += normals[i];
+  const LogMapFrame f = log_map_frame(sum, n, fallback_z);
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  size_t used = 0;
+  accumulate_log_map(f, normals, n, cov, used);
+  return finish_log_map(f, cov, used);
+}
 
 void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3& fallback_z, Mat3& frame,
                   Vec2& sigma_n) {
-  log_map_stats([&](size_t i) -> const Vec3& { return normals[ids[i]]; }, n, fallback_z, frame, sigma_n);
+  std::vector<Vec3> gathered(n);
+  for (size_t i = 0; i < n; ++i) gathered[i] = normals[ids[i]];
+  const NormalSpread s = normal_spread(gathered.data(), n, fallback_z);
+  frame = s.frame;
+  sigma_n = s.sigma;
 }
 
-NodeStats finish_stats(const Vec3* normals, size_t n, const Gaussian3& position, const StatsOptions& o) {
+NodeStats finish_stats(size_t n, const Gaussian3& position, const NormalSpread* normals, const StatsOptions& o) {
   NodeStats s;
   s.count = static_cast<uint32_t>(n);
   Gaussian3& g = s.position;
   g = position;
-  if (normals)
-    log_map_stats([&](size_t i) -> const Vec3& { return normals[i]; }, n, g.frame.col(2), s.normal_frame, s.sigma_n);
+  if (normals) {
+    s.normal_frame = normals->frame;
+    s.sigma_n = normals->sigma;
+  }
   const Vec3 normal = normals ? Vec3(s.normal_frame.col(2)) : Vec3::UnitZ();
 
   const double tiny = std::max(o.sigma_floor, o.vanish_ratio * g.sigma[0]);
@@ -168,10 +185,11 @@ void set_color_stats(NodeStats& s, const ColorMoments& colors, const StatsOption
 }
 
 NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& o) {
-  std::vector<Vec3> normals;
-  if (o.normals && cloud.has_normals())
-    for (size_t i = 0; i < n; ++i) normals.push_back(cloud.normals[ids[i]]);
-  NodeStats s = finish_stats(normals.empty() ? nullptr : normals.data(), n, pca3(cloud.positions.data(), ids, n), o);
+  const Gaussian3 position = pca3(cloud.positions.data(), ids, n);
+  NormalSpread spread;
+  const bool normals = o.normals && cloud.has_normals();
+  if (normals) normal_stats(cloud.normals.data(), ids, n, position.frame.col(2), spread.frame, spread.sigma);
+  NodeStats s = finish_stats(n, position, normals ? &spread : nullptr, o);
   set_color_stats(s, color_moments(cloud, ids, n, o), o);
   return s;
 }

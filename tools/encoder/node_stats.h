@@ -96,10 +96,27 @@ ColorMoments color_moments(const PointCloud& cloud, const uint32_t* ids, size_t 
 void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3& fallback_z, Mat3& frame,
                   Vec2& sigma_n);
 
+// A node's normal frame (column 2 the mean normal) and sigma_n.
+struct NormalSpread {
+  Mat3 frame = Mat3::Identity();
+  Vec2 sigma = Vec2::Zero();
+};
+// Of normals[0..n): normal_stats on contiguous normals.
+NormalSpread normal_spread(const Vec3* normals, size_t n, const Vec3& fallback_z);
+// The same in parts, for sums taken in chunks (tools/encoder/hierarchy.cpp):
+// the tangent frame from the normals' sum, the log map's second moments
+// added up over any range, then the spread.
+struct LogMapFrame {
+  Vec3 m, t1, t2;
+};
+LogMapFrame log_map_frame(const Vec3& normal_sum, size_t n, const Vec3& fallback_z);
+void accumulate_log_map(const LogMapFrame& frame, const Vec3* normals, size_t n, Eigen::Matrix2d& cov, size_t& used);
+NormalSpread finish_log_map(const LogMapFrame& frame, Eigen::Matrix2d cov, size_t used);
+
 // The statistics of a node of n points but its colours: from its positions'
-// PCA and its normals normals[0..n) (nullptr: none), with the degenerate-node
-// rules and the shrink.
-NodeStats finish_stats(const Vec3* normals, size_t n, const Gaussian3& position, const StatsOptions& options);
+// PCA and its normals' spread (nullptr: none), with the degenerate-node rules
+// and the shrink.
+NodeStats finish_stats(size_t n, const Gaussian3& position, const NormalSpread* normals, const StatsOptions& options);
 // Its colours' Gaussian from their moments (nothing when there are none).
 void set_color_stats(NodeStats& stats, const ColorMoments& colors, const StatsOptions& options);
 // All of them from the points: finish_stats(pca3(positions)), then
