@@ -29,7 +29,7 @@ void estimate_normals(PointCloud& cloud, int k, const ScanFrame& frame,
   }
   if (!missing.empty() && n >= 2) {
     const bool from_faces = missing.size() < n;  // some normals came from faces
-    const KdTree tree(p);
+    const KdTree tree(p, threads);
     const size_t kk = std::min<size_t>(static_cast<size_t>(std::clamp(k, 3, 64)), n);
     // Neighbour lists are kept only when orientation must be propagated.
     std::vector<uint32_t> graph;

@@ -4,10 +4,12 @@
 #include <algorithm>
 #include <limits>
 #include <numeric>
+#include <thread>
 
 namespace stipple {
 namespace {
 constexpr uint32_t kBucket = 8;
+constexpr uint32_t kParallelRange = 1 << 16;  // smaller halves are not worth a thread
 }
 
 // A bounded list of the best candidates found so far, sorted by (distance, index).
@@ -31,12 +33,22 @@ struct KdTree::Best {
   }
 };
 
-KdTree::KdTree(const std::vector<Vec3>& points) : points_(points), order_(points.size()), axis_(points.size(), 0) {
+KdTree::KdTree(const std::vector<Vec3>& points, int threads)
+    : points_(points), order_(points.size()), axis_(points.size(), 0) {
   std::iota(order_.begin(), order_.end(), 0u);
+  build(0, static_cast<uint32_t>(points.size()), std::max(1, threads));
+}
+
+// Splits [lo, hi) at its median along its widest axis, then its halves: the
+// two halves are disjoint ranges, so with threads to spare one half goes to
+// a thread of its own. Each range's split depends on its contents alone, so
+// the tree is the same for any thread count.
+void KdTree::build(uint32_t lo0, uint32_t hi0, int threads) {
   struct Range {
     uint32_t lo, hi;
   };
-  std::vector<Range> stack{{0, static_cast<uint32_t>(points.size())}};
+  std::vector<Range> stack{{lo0, hi0}};
+  std::vector<std::thread> helpers;
   while (!stack.empty()) {
     const Range r = stack.back();
     stack.pop_back();
@@ -55,9 +67,16 @@ KdTree::KdTree(const std::vector<Vec3>& points) : points_(points), order_(points
                        return pa < pb || (pa == pb && a < b);
                      });
     axis_[mid] = static_cast<uint8_t>(axis);
-    stack.push_back({r.lo, mid});
+    if (threads > 1 && mid - r.lo >= kParallelRange) {
+      const int given = threads / 2;
+      threads -= given;
+      helpers.emplace_back([this, r, mid, given] { build(r.lo, mid, given); });
+    } else {
+      stack.push_back({r.lo, mid});
+    }
     stack.push_back({mid + 1, r.hi});
   }
+  for (std::thread& t : helpers) t.join();
 }
 
 void KdTree::search(uint32_t lo, uint32_t hi, const Vec3& q, Best& best) const {

@@ -21,7 +21,9 @@ inline constexpr size_t kMaxK = 64;
 
 class KdTree {
  public:
-  explicit KdTree(const std::vector<Vec3>& points);
+  // `threads` build disjoint subtrees at once; the tree is the same for any
+  // count.
+  explicit KdTree(const std::vector<Vec3>& points, int threads = 1);
 
   // Index of the nearest point to `q` and its squared distance.
   uint32_t nearest(const Vec3& q, double* dist2 = nullptr) const;
@@ -43,6 +45,7 @@ class KdTree {
 
  private:
   struct Best;
+  void build(uint32_t lo, uint32_t hi, int threads);
   void search(uint32_t lo, uint32_t hi, const Vec3& q, Best& best) const;
 
   const std::vector<Vec3>& points_;
