@@ -50,10 +50,12 @@ const char kEncodeHelp[] =
     "                        --orient says otherwise)\n"
     "  --up AXIS             the scan's up axis: +x -x +y -y +z -z (stored for\n"
     "                        viewers; --orient up faces it)\n"
-    "  --threads N           worker threads (default 2)\n"
+    "  --threads N           worker threads (default: one per core); the .spg is\n"
+    "                        the same bytes for any count\n"
     "  --every K             keep every K-th point (after normals are derived from\n"
     "                        the full mesh): quick previews and scaling studies\n"
-    "  --json                print the summary as JSON\n"
+    "  --json                print the summary as JSON (with each stage's seconds:\n"
+    "                        read, normals, hierarchy, classes, write)\n"
     "  -q, --quiet           no progress bar\n";
 
 }  // namespace

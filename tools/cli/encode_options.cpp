@@ -1,7 +1,9 @@
 // stipple encode and demo — their shared options and summary.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <thread>
 
 #include "platform/file_io.h"
 #include "platform/progress.h"
@@ -65,6 +67,8 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
   if (args.value("--threads", v)) {
     if (!cli::parse_uint(v, 256, u) || u < 1) return error = "--threads: expected 1..256, got '" + v + "'", false;
     o.tree.threads = static_cast<int>(u);
+  } else {
+    o.tree.threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 256u));  // every core
   }
   if (!parse_orient_options(args, o.orient, error)) return false;
   if (args.value("--up", v) && !spg_parse_axis(v.c_str(), &o.orient.up))
