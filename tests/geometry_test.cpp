@@ -124,6 +124,25 @@ TEST(Pca, NormalSpreadMatchesTheLogMap) {
   EXPECT_LT(line_angle(frame.col(0), Vec3::UnitY()), 1e-9);
 }
 
+// Within 0.1 rad of the mean the log map takes a series instead of atan2:
+// the same spread to the last bits that matter, on both sides of the switch.
+TEST(Pca, NormalSpreadIsExactEitherSideOfTheSeries) {
+  for (const double a : {0.001, 0.05, 0.0999, 0.1001, 0.3}) {
+    PointCloud c;
+    for (int i = 0; i < 64; ++i) {
+      c.positions.push_back(Vec3(i, 0, 0));
+      const double t = (i % 2 ? a : -a);
+      c.normals.push_back(Vec3(std::sin(t) * 0.6, std::sin(t) * 0.8, std::cos(t)));
+    }
+    const auto ids = iota_ids(64);
+    Mat3 frame;
+    Vec2 sigma;
+    normal_stats(c.normals.data(), ids.data(), 64, Vec3::UnitZ(), frame, sigma);
+    EXPECT_NEAR(sigma[0], a, 4e-16 * std::max(1.0, a / 0.1)) << a;
+    EXPECT_LT(sigma[1], 1e-7 * a) << a;  // sqrt of the eigensolver's rounding
+  }
+}
+
 TEST(Pca, CurvatureShrinkFollowsTheFormula) {
   PointCloud c = test::sphere_cloud(400);
   const auto ids = iota_ids(40);  // a cap near the pole
