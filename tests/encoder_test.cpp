@@ -127,6 +127,24 @@ TEST(Encoder, LargeNodesSameBytesAnyThreadCount) {
   EXPECT_EQ(one, test::encode(cloud, o3));
 }
 
+// Taking the scan's positions and normals instead of copying them changes
+// nothing in the file; the cloud is left without them, its colours kept.
+TEST(Encoder, ConsumingTheScanGivesTheSameBytes) {
+  PointCloud cloud = test::sphere_cloud(3000);
+  for (size_t i = 0; i < cloud.size(); ++i) cloud.colors.push_back(Vec3(0.2, 0.5, static_cast<double>(i % 7) / 7.0));
+  const std::vector<uint8_t> copied = test::encode(cloud);
+  EncodeOptions o;
+  o.consume_scan = true;
+  std::vector<uint8_t> consumed;
+  EncodeReport report;
+  std::string error;
+  ASSERT_TRUE(encode_cloud(cloud, o, consumed, report, error)) << error;
+  EXPECT_EQ(consumed, copied);
+  EXPECT_TRUE(cloud.positions.empty());
+  EXPECT_TRUE(cloud.normals.empty());
+  EXPECT_EQ(cloud.colors.size(), 3000u);
+}
+
 TEST(Encoder, RejectsBadOptionsByName) {
   PointCloud c = test::sphere_cloud(100);
   EncodeOptions o;

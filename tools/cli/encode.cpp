@@ -94,6 +94,7 @@ int cmd_encode(int argc, char** argv) {
   cli::warn(cloud.warnings);
   if (every > 1) keep_every(cloud, every, options);
   const double read_seconds = monotonic_seconds() - start;
+  options.consume_scan = true;  // nothing here reads the scan after
   std::vector<uint8_t> spg;
   EncodeReport report;
   if (!encode_cloud(cloud, options, spg, report, error, &progress)) return cli::fail(error);

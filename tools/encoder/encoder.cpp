@@ -111,9 +111,11 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   tree_options.stats.normals = normals;
   tree_options.stats.colors = colors;
   tree_options.stats.sigma_floor = 1e-15 * std::max(diag, 1e-30);
-  const Tree tree = build_tree(cloud, tree_options, [&](double f) {
+  const auto tree_progress = [&](double f) {
     if (progress) progress->update(tree_start + (0.85 - tree_start) * f, "building hierarchy");
-  });
+  };
+  const Tree tree = o.consume_scan ? build_tree_consuming(cloud, tree_options, tree_progress)
+                                   : build_tree(cloud, tree_options, tree_progress);
   report.nodes = tree.nodes.size();
   report.leaves = tree.leaf_count();
   report.depth = tree.depth;
@@ -163,7 +165,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   header.layout = layout;
   header.node_count = static_cast<uint32_t>(n);
   header.leaf_count = static_cast<uint32_t>(report.leaves);
-  header.point_count = static_cast<uint32_t>(cloud.size());
+  header.point_count = static_cast<uint32_t>(report.points);
   header.depth = static_cast<uint16_t>(tree.depth);
   header.view_hint = report.frame.hint;
   for (int a = 0; a < 3; ++a) {
@@ -251,7 +253,7 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
 
   report.bytes = spg.size();
   report.record_bytes = record_bytes;
-  report.bits_per_point = 8.0 * static_cast<double>(spg.size()) / static_cast<double>(cloud.size());
+  report.bits_per_point = 8.0 * static_cast<double>(spg.size()) / static_cast<double>(report.points);
   stage_done(report.seconds.write);
   if (progress) progress->update(1.0, "done");
   return true;
@@ -269,7 +271,9 @@ bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string&
   const auto start = std::chrono::steady_clock::now();
   ProgressBar progress("encode " + path, true);
   EncodeReport report;
-  if (!encode_cloud(cloud, EncodeOptions{}, spg, report, error, &progress)) return error = path + ": " + error, false;
+  EncodeOptions options;
+  options.consume_scan = true;  // the scan is not needed after
+  if (!encode_cloud(cloud, options, spg, report, error, &progress)) return error = path + ": " + error, false;
   progress.finish();
   // The model's name: the scan's, in the current folder (the scan's own may be read-only).
   std::string stem = path.substr(path.find_last_of('/') + 1);

@@ -239,10 +239,15 @@ uint32_t Tree::leaf_count() const {
   return leaves;
 }
 
-Tree build_tree(const PointCloud& cloud, const TreeOptions& o, const std::function<void(double)>& progress) {
+namespace {
+
+// build_tree on `positions` and `normals` (the scan's, moved or copied in;
+// empty normals: none), which it reorders; `cloud` gives the colours.
+Tree build(std::vector<Vec3> positions, std::vector<Vec3> normals, const PointCloud& cloud, const TreeOptions& o,
+           const std::function<void(double)>& progress) {
   Tree tree;
   tree.octree = o.octree;
-  const size_t n = cloud.size();
+  const size_t n = positions.size();
   tree.order.resize(n);
   for (size_t i = 0; i < n; ++i) tree.order[i] = static_cast<uint32_t>(i);
   // Room for the nodes up front: a vector that doubles copies itself, and at
@@ -253,14 +258,11 @@ Tree build_tree(const PointCloud& cloud, const TreeOptions& o, const std::functi
   tree.nodes.push_back(TreeNode{0, static_cast<uint32_t>(n), 0, 0, 0, {}});
   std::vector<Cube> cubes;  // octree only, parallel to nodes
   if (o.octree) {
-    const Box3 box = bounding_box(cloud.positions);
+    const Box3 box = bounding_box(positions);
     cubes.push_back({(box.min + box.max) / 2, (box.max - box.min).maxCoeff() / 2 * (1 + 1e-9) + o.stats.sigma_floor});
   }
-  // The positions in the tree's order, partitioned with `order`: a node's
-  // points are contiguous, so its PCA and 2-means read memory in sequence.
-  std::vector<Vec3> positions = cloud.positions;
-  std::vector<Vec3> normals;  // the same for the normals the statistics read
-  if (o.stats.normals && cloud.has_normals()) normals = cloud.normals;
+  // `positions` and `normals` are partitioned with `order`: a node's points
+  // are contiguous, so its PCA and 2-means read memory in sequence.
   double processed = 0;  // points handled by finished levels
   const double expected_work = static_cast<double>(n) *
       (std::log2(std::max(2.0, static_cast<double>(n) / std::max<uint32_t>(o.leaf_size, 2))) + 2);
@@ -387,6 +389,19 @@ Tree build_tree(const PointCloud& cloud, const TreeOptions& o, const std::functi
     below_begin = begin;
   }
   return tree;
+}
+
+}  // namespace
+
+Tree build_tree(const PointCloud& cloud, const TreeOptions& o, const std::function<void(double)>& progress) {
+  return build(cloud.positions, o.stats.normals ? cloud.normals : std::vector<Vec3>{}, cloud, o, progress);
+}
+
+Tree build_tree_consuming(PointCloud& cloud, const TreeOptions& o, const std::function<void(double)>& progress) {
+  std::vector<Vec3> normals;
+  if (o.stats.normals) normals = std::move(cloud.normals);
+  cloud.normals = {};
+  return build(std::move(cloud.positions), std::move(normals), cloud, o, progress);
 }
 
 void PartitionRatioAccumulator::add_family(double parent_sigma1, const double* counts, const double* sigma1,

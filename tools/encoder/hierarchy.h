@@ -80,6 +80,11 @@ struct Tree {
 // n x (expected depth + 1), with the expected depth log2(n / leaf_size) + 1.
 Tree build_tree(const PointCloud& cloud, const TreeOptions& options,
                 const std::function<void(double)>& progress = {});
+// The same tree, taking the scan's positions and normals instead of copying
+// them: `cloud` is left with none (its colours stay). 48 bytes a point less
+// at the encoder's peak.
+Tree build_tree_consuming(PointCloud& cloud, const TreeOptions& options,
+                          const std::function<void(double)>& progress = {});
 
 // Table II statistics. APR: the average over internal nodes of the largest /
 // smallest child point count. cAPR: the same for sigma1, over the families
