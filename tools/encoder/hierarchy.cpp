@@ -40,7 +40,7 @@ Metric mahalanobis_metric(const Gaussian3& g, double min_sigma) {
 
 // A node's points and their indices reordered together, stably, by label: the
 // ones labelled b go to fill[b], fill[b] + 1, ... (the counts' prefix sums).
-// `normals` may be null (a scan without them).
+// `nrm` may be null (a scan without normals).
 struct Scratch {
   std::vector<uint32_t> ids;
   std::vector<Vec3> points, normals;
