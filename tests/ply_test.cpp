@@ -114,6 +114,20 @@ struct BadCase {
 // A float32 scan 1e7 from the origin: its points collapse onto a lattice of
 // whole units, and most become duplicates. The reader says so (and why);
 // an ordinary scan gets no warning.
+// Repeats are counted exactly, -0 and +0 as one position, on both sides of
+// the size where the keys are sorted in two halves on two threads.
+TEST(Ply, CountsRepeatedPositionsExactly) {
+  for (const size_t n : {size_t{1000}, size_t{1} << 21}) {
+    std::vector<Vec3> points;
+    points.reserve(n);
+    for (size_t i = 0; i < n; ++i) {
+      const double v = static_cast<double>(i / 3);  // each position three times
+      points.push_back(Vec3(v, i % 3 == 1 ? -0.0 : 0.0, 2.5));
+    }
+    EXPECT_EQ(count_duplicate_positions(points), n - (n + 2) / 3) << n;
+  }
+}
+
 TEST(Ply, WarnsWhenPointsCollapseOntoOneValue) {
   std::string text, spread;
   for (int i = 0; i < 2000; ++i) {

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <limits>
 #include <sstream>
+#include <thread>
 
 #include "platform/file_io.h"
 #include "tools/scan/las_io.h"
@@ -650,7 +651,17 @@ size_t count_duplicate_positions(const std::vector<Vec3>& points) {
     const Vec3& p = points[i];
     keys[i] = {mix(mix(mix(bits(p.x())) ^ bits(p.y())) ^ bits(p.z())), static_cast<uint32_t>(i)};
   }
-  std::sort(keys.begin(), keys.end());
+  // Two halves sorted at once, then merged: the same order as one sort (the
+  // pairs are distinct), in about half the time on two cores.
+  const auto middle = keys.begin() + static_cast<std::ptrdiff_t>(keys.size() / 2);
+  if (keys.size() >= (1u << 20)) {
+    std::thread half([&] { std::sort(keys.begin(), middle); });
+    std::sort(middle, keys.end());
+    half.join();
+    std::inplace_merge(keys.begin(), middle, keys.end());
+  } else {
+    std::sort(keys.begin(), keys.end());
+  }
   size_t duplicates = 0;
   for (size_t i = 1; i < keys.size(); ++i)
     duplicates += keys[i].first == keys[i - 1].first && points[keys[i].second] == points[keys[i - 1].second];
