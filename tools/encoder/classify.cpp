@@ -5,31 +5,24 @@
 #include <cmath>
 #include <map>
 #include <random>
-#include <thread>
 
+#include "tools/encoder/parallel.h"
 #include "tools/scan/kdtree.h"
 
 namespace stipple {
 namespace {
 
-// A uniform double in [0, 1) from a 64-bit generator, identical everywhere.
 // Lloyd's sample: this many tuples a class, and at least this many.
 constexpr size_t kLloydPerClass = 16, kLloydAtLeast = 16384;
 
+// A uniform double in [0, 1) from a 64-bit generator, identical everywhere.
 double uniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
 
 void assign_all(const std::vector<Vec3>& points, const std::vector<Vec3>& centers, std::vector<uint16_t>& index,
                 int threads) {
   const KdTree tree(centers);
-  const size_t n = points.size();
-  auto work = [&](size_t lo, size_t hi) {
-    for (size_t i = lo; i < hi; ++i) index[i] = static_cast<uint16_t>(tree.nearest(points[i], uint32_t{index[i]}));
-  };
-  std::vector<std::thread> pool;
-  const size_t parts = static_cast<size_t>(std::max(1, threads));
-  for (size_t t = 1; t < parts; ++t) pool.emplace_back(work, n * t / parts, n * (t + 1) / parts);
-  work(0, n / parts);
-  for (std::thread& t : pool) t.join();
+  parallel_for(points.size(), threads, 1024,
+               [&](size_t i) { index[i] = static_cast<uint16_t>(tree.nearest(points[i], uint32_t{index[i]})); });
 }
 
 }  // namespace

@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <cmath>
 #include <cstring>
-#include <thread>
 
 #include "core/spg_format.h"
 #include "core/spg_writer.h"
@@ -14,6 +13,7 @@
 #include "tools/embedded/options.h"
 #include "tools/encoder/classify.h"
 #include "tools/encoder/normals.h"
+#include "tools/encoder/parallel.h"
 #include "tools/encoder/quantize.h"
 #include "tools/scan/ply_io.h"
 
@@ -202,44 +202,35 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
   const AngleBits fc_bits = frame_bits(layout, Field::kFcTheta, true);
   const size_t record_bytes = static_cast<size_t>(layout.record_bytes());
   std::vector<uint8_t> records(n * record_bytes);
-  // Each record depends on its node alone: the threads take a share each.
-  const auto pack = [&](size_t lo, size_t hi) {
-    for (size_t i = lo; i < hi; ++i) {
-      const NodeStats& s = tree.nodes[i].stats;
-      NodeFields f;
-      for (int a = 0; a < 3; ++a) f.v[a] = quantize_cell(s.position.mean[a] - origin[a], bmin[a], bmax[a], layout.bits[a]);
-      const FrameCode fp = encode_frame(s.position.frame, fp_bits);
-      f[Field::kFpTheta] = fp.theta;
-      f[Field::kFpPhi] = fp.phi;
-      f[Field::kFpPsi] = fp.psi;
-      f[Field::kSigmaP] = cp.index[i];
-      if (normals) {
-        const FrameCode fn = encode_frame(s.normal_frame, fn_bits);
-        f[Field::kFnTheta] = fn.theta;
-        f[Field::kFnPhi] = fn.phi;
-        f[Field::kFnPsi] = fn.psi;
-        f[Field::kSigmaN] = cn.index[i];
-      }
-      if (colors) {
-        f[Field::kColorR] = quantize_unit(s.color.mean[0], layout.width(Field::kColorR));
-        f[Field::kColorG] = quantize_unit(s.color.mean[1], layout.width(Field::kColorG));
-        f[Field::kColorB] = quantize_unit(s.color.mean[2], layout.width(Field::kColorB));
-        const FrameCode fc = encode_frame(s.color.frame, fc_bits);
-        f[Field::kFcTheta] = fc.theta;
-        f[Field::kFcPhi] = fc.phi;
-        f[Field::kFcPsi] = fc.psi;
-        f[Field::kSigmaC] = cc.index[i];
-      }
-      pack_record(layout, f, records.data() + i * record_bytes);
+  // Each record depends on its node alone.
+  parallel_for(n, threads, 1024, [&](size_t i) {
+    const NodeStats& s = tree.nodes[i].stats;
+    NodeFields f;
+    for (int a = 0; a < 3; ++a) f.v[a] = quantize_cell(s.position.mean[a] - origin[a], bmin[a], bmax[a], layout.bits[a]);
+    const FrameCode fp = encode_frame(s.position.frame, fp_bits);
+    f[Field::kFpTheta] = fp.theta;
+    f[Field::kFpPhi] = fp.phi;
+    f[Field::kFpPsi] = fp.psi;
+    f[Field::kSigmaP] = cp.index[i];
+    if (normals) {
+      const FrameCode fn = encode_frame(s.normal_frame, fn_bits);
+      f[Field::kFnTheta] = fn.theta;
+      f[Field::kFnPhi] = fn.phi;
+      f[Field::kFnPsi] = fn.psi;
+      f[Field::kSigmaN] = cn.index[i];
     }
-  };
-  {
-    std::vector<std::thread> pool;
-    const size_t parts = static_cast<size_t>(std::max(1, threads));
-    for (size_t t = 1; t < parts; ++t) pool.emplace_back(pack, n * t / parts, n * (t + 1) / parts);
-    pack(0, n / parts);
-    for (std::thread& t : pool) t.join();
-  }
+    if (colors) {
+      f[Field::kColorR] = quantize_unit(s.color.mean[0], layout.width(Field::kColorR));
+      f[Field::kColorG] = quantize_unit(s.color.mean[1], layout.width(Field::kColorG));
+      f[Field::kColorB] = quantize_unit(s.color.mean[2], layout.width(Field::kColorB));
+      const FrameCode fc = encode_frame(s.color.frame, fc_bits);
+      f[Field::kFcTheta] = fc.theta;
+      f[Field::kFcPhi] = fc.phi;
+      f[Field::kFcPsi] = fc.psi;
+      f[Field::kSigmaC] = cc.index[i];
+    }
+    pack_record(layout, f, records.data() + i * record_bytes);
+  });
   const SpgContent content{header, SpgClassTables{sigma_p.data(), sigma_n.data(), sigma_c.data()}, child_counts.data(),
                            leaf_points.data(), records.data()};
   spg.assign(spg_write_bound(header), 0);

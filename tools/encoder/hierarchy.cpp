@@ -8,22 +8,10 @@
 #include <cmath>
 #include <thread>
 
+#include "tools/encoder/parallel.h"
+
 namespace stipple {
 namespace {
-
-// fn(0) .. fn(count - 1) on `threads` threads, handed out `block` at a time.
-template <class Fn>
-void parallel_for(size_t count, int threads, size_t block, const Fn& fn) {
-  std::atomic<size_t> next{0};
-  auto worker = [&]() {
-    for (size_t lo; (lo = next.fetch_add(block)) < count;)
-      for (size_t k = lo; k < std::min(count, lo + block); ++k) fn(k);
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < std::max(1, threads) && static_cast<size_t>(t) * block < count; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
-}
 
 // Whitening transform of a cluster: m(q) = ||W (q - mean)||.
 struct Metric {
