@@ -96,9 +96,11 @@ bool spg_parse_axis(const char* text, SpgAxis* out) {
   return false;
 }
 
-uint32_t crc32(const uint8_t* data, size_t size) {
+uint32_t crc32(const uint8_t* data, size_t size) { return crc32_extend(0, data, size); }
+
+uint32_t crc32_extend(uint32_t crc, const uint8_t* data, size_t size) {
   const auto& t = kCrcTable.v;
-  uint32_t c = 0xFFFFFFFFu;
+  uint32_t c = crc ^ 0xFFFFFFFFu;
   size_t i = 0;
   for (; i + 4 <= size; i += 4) {
     c ^= uint32_t{data[i]} | uint32_t{data[i + 1]} << 8 | uint32_t{data[i + 2]} << 16 | uint32_t{data[i + 3]} << 24;

@@ -201,7 +201,11 @@ inline uint32_t load_u32le(const uint8_t* p) {
          (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
 }
 
-// CRC-32 (ISO-HDLC, the zlib/PNG polynomial 0xEDB88320), table-free.
+// CRC-32 (ISO-HDLC, the zlib/PNG polynomial 0xEDB88320).
 uint32_t crc32(const uint8_t* data, size_t size);
+// The CRC-32 of a file's bytes so far (`crc`, 0 for none) extended by
+// data[0 .. size): crc32(a + b) == crc32_extend(crc32(a), b), as zlib's
+// crc32() — for files written or checked in pieces.
+uint32_t crc32_extend(uint32_t crc, const uint8_t* data, size_t size);
 
 }  // namespace stipple

@@ -83,35 +83,60 @@ void sync_folder(const std::string& path) {
 
 }  // namespace
 
-bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data, std::string& error) {
+AtomicFileWriter::~AtomicFileWriter() { abort(); }
+
+bool AtomicFileWriter::open(const std::string& path, std::string& error) {
+  abort();
   // A temporary name of this process's own beside the target, renamed over
   // it when complete: two runs writing one output at once each leave a
   // whole file, never a mixture, and a failed write leaves the old one.
   remove_stale_partials(path);
-  const std::string tmp = path + ".partial." + std::to_string(static_cast<long>(getpid()));
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) {
-    error = path + ": " + std::strerror(errno);
-    return false;
-  }
-  bool wrote = data.empty() || std::fwrite(data.data(), 1, data.size(), f) == data.size();
-  int write_errno = wrote ? 0 : errno;
-  if (wrote && (std::fflush(f) != 0 || ::fsync(fileno(f)) != 0)) wrote = false, write_errno = errno;  // on the disk
-  const bool closed = std::fclose(f) == 0;
-  const int close_errno = closed ? 0 : errno;
-  if (!wrote || !closed) {
-    std::remove(tmp.c_str());
-    const int why = write_errno ? write_errno : close_errno;
-    error = path + ": write failed" + (why ? std::string(": ") + std::strerror(why) : std::string());
-    return false;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    error = path + ": " + std::strerror(errno);
-    std::remove(tmp.c_str());
-    return false;
-  }
-  sync_folder(path);
+  path_ = path;
+  tmp_ = path + ".partial." + std::to_string(static_cast<long>(getpid()));
+  file_ = std::fopen(tmp_.c_str(), "wb");
+  if (!file_) return error = path + ": " + std::strerror(errno), false;
+  errno_ = 0;
   return true;
+}
+
+bool AtomicFileWriter::write(const void* data, size_t size) {
+  if (!file_) return false;
+  if (errno_ == 0 && size > 0 && std::fwrite(data, 1, size, file_) != size) errno_ = errno ? errno : EIO;
+  return errno_ == 0;
+}
+
+bool AtomicFileWriter::commit(std::string& error) {
+  if (!file_) return error = path_ + ": not open", false;
+  int why = errno_;
+  if (why == 0 && (std::fflush(file_) != 0 || ::fsync(fileno(file_)) != 0)) why = errno;  // on the disk
+  if (std::fclose(file_) != 0 && why == 0) why = errno ? errno : EIO;
+  file_ = nullptr;
+  if (why != 0) {
+    std::remove(tmp_.c_str());
+    error = path_ + ": write failed: " + std::strerror(why);
+    return false;
+  }
+  if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+    error = path_ + ": " + std::strerror(errno);
+    std::remove(tmp_.c_str());
+    return false;
+  }
+  sync_folder(path_);
+  return true;
+}
+
+void AtomicFileWriter::abort() {
+  if (!file_) return;
+  std::fclose(file_);
+  file_ = nullptr;
+  std::remove(tmp_.c_str());
+}
+
+bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data, std::string& error) {
+  AtomicFileWriter out;
+  if (!out.open(path, error)) return false;
+  out.write(data.data(), data.size());
+  return out.commit(error);
 }
 
 }  // namespace stipple

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -23,5 +24,27 @@ bool read_file(const std::string& path, std::vector<uint8_t>& out, std::string& 
 // "No space left on device") is in the message. Refuses a directory as
 // input ("is a directory").
 bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data, std::string& error);
+
+// The same for a file written in pieces (a large .spg, streamed): open,
+// write any number of times, then commit (flush, fsync, rename) — or
+// abort, which the destructor does for a writer never committed, so an
+// error or an early return leaves no partial file. A failed write is
+// remembered: later writes do nothing and commit reports its reason.
+class AtomicFileWriter {
+ public:
+  AtomicFileWriter() = default;
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+  ~AtomicFileWriter();
+  bool open(const std::string& path, std::string& error);
+  bool write(const void* data, size_t size);  // false once a write has failed
+  bool commit(std::string& error);
+  void abort();
+
+ private:
+  std::string path_, tmp_;
+  std::FILE* file_ = nullptr;
+  int errno_ = 0;
+};
 
 }  // namespace stipple

@@ -9,6 +9,10 @@
 # `stipple truth`, through `stipple image-diff`), then the differences.
 #
 # usage: tools/bench/encoder_quality.sh OLD_STIPPLE NEW_STIPPLE [SCAN...]
+#
+# OLD_ARGS and NEW_ARGS (environment) add encode options to each side: the
+# same program in one partition against eight, say,
+#   NEW_ARGS="--partition-points 100000" tools/bench/encoder_quality.sh S S
 set -euo pipefail
 OLD=$1 NEW=$2
 shift 2
@@ -19,8 +23,10 @@ trap 'rm -rf "$work"' EXIT
 
 # name stipple scan -> "bytes psnr_one psnr_sym cut_nodes picture_psnr"
 row() {
-  local tag=$1 S=$2 scan=$3 out=$work/$1
-  "$S" encode "$scan" -o "$out.spg" -q >/dev/null
+  local tag=$1 S=$2 scan=$3 out=$work/$1 extra
+  if [[ $tag == old ]]; then extra=${OLD_ARGS:-}; else extra=${NEW_ARGS:-}; fi
+  # shellcheck disable=SC2086  # the options split as words
+  "$S" encode "$scan" -o "$out.spg" -q $extra >/dev/null
   "$S" sample "$out.spg" --leaves -o "$out.ply" >/dev/null
   local metrics cut picture
   metrics=$("$S" metrics "$scan" "$out.ply" --json)

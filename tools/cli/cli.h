@@ -49,6 +49,7 @@ bool parse_scan_options(Args& args, ScanOptions& options, std::string& error);  
 
 namespace stipple {
 int cmd_encode(int argc, char** argv);
+int cmd_encode_part(int argc, char** argv);
 int cmd_demo(int argc, char** argv);
 int cmd_info(int argc, char** argv);
 int cmd_sample(int argc, char** argv);

@@ -1,7 +1,12 @@
 // stipple encode — scan -> .spg.
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <string>
+#include <thread>
 
 #include "platform/file_io.h"
 #include "platform/progress.h"
@@ -9,6 +14,8 @@
 #include "tools/cli/encode_options.h"
 #include "tools/cli/render_output.h"
 #include "tools/encoder/encoder.h"
+#include "tools/encoder/merge.h"
+#include "tools/encoder/partition.h"
 #include "tools/encoder/normals.h"
 #include "tools/reference/metrics.h"
 #include "tools/reference/sampler.h"
@@ -52,13 +59,93 @@ const char kEncodeHelp[] =
     "                        viewers; --orient up faces it)\n"
     "  --threads N           worker threads (default: one per core); the .spg is\n"
     "                        the same bytes for any count\n"
+    "  --memory BYTES        the memory the encoder may use (2G, 1500M; default:\n"
+    "                        half of this host's): a scan larger than fits is\n"
+    "                        encoded in partitions, each its own job\n"
+    "  --partition-points N  partitions of at most about N points (instead of\n"
+    "                        what --memory allows)\n"
+    "  --tmp DIR             where partition files go (default: a folder beside\n"
+    "                        MODEL.spg; removed after)\n"
+    "  --plan-only DIR       plan and partition the scan into DIR, run nothing:\n"
+    "                        for a cluster (docs/encoder.md \"On a cluster\")\n"
+    "  --merge DIR           assemble MODEL.spg from DIR once every job has run\n"
+    "                        (stipple encode-part DIR ID); no SCAN\n"
     "  --every K             keep every K-th point (after normals are derived from\n"
     "                        the full mesh): quick previews and scaling studies\n"
     "  --json                print the summary as JSON (with each stage's seconds:\n"
-    "                        read, normals, hierarchy, classes, write)\n"
+    "                        read, normals, hierarchy, classes, write; partitions)\n"
     "  -q, --quiet           no progress bar\n";
 
+const char kEncodePartHelp[] =
+    "usage: stipple encode-part DIR ID [--threads N]\n"
+    "\n"
+    "Runs one job of a plan that stipple encode --plan-only DIR wrote: reads\n"
+    "DIR/part-ID.pts (and its halo), estimates normals where the scan has\n"
+    "none, builds the partition's subtree and writes DIR/part-ID.nodes\n"
+    "(atomically, CRC-32 at its end). Jobs are independent: run them in any\n"
+    "order, on any machine that sees DIR, then stipple encode --merge DIR.\n"
+    "Prints the part's file, nodes and CRC-32.\n"
+    "\n"
+    "options:\n"
+    "  --threads N           worker threads (default: one per core)\n";
+
+// --merge DIR: the .spg from a plan whose jobs have run.
+int merge_plan(const std::string& dir, const std::string& output, int threads, bool quiet, bool json) {
+  const double start = monotonic_seconds();
+  std::string error;
+  PartitionPlan plan;
+  if (!read_plan(dir, plan, error)) return cli::fail("encode --merge: " + error);
+  std::vector<std::unique_ptr<PartNodes>> parts;
+  for (uint32_t i = 0; i < plan.partitions(); ++i) {
+    std::unique_ptr<PartNodes> part = open_part_file(dir, plan, i, error);
+    if (!part) return cli::fail("encode --merge: " + error);
+    parts.push_back(std::move(part));
+  }
+  ProgressBar progress("merge", !quiet);
+  AtomicFileWriter file;
+  if (!file.open(output, error)) return cli::fail("encode --merge: " + error);
+  const ByteSink sink = [&](const uint8_t* data, size_t size, std::string& why) {
+    if (file.write(data, size)) return true;
+    why = output + ": write failed: " + std::strerror(errno);
+    return false;
+  };
+  EncodeReport report;
+  if (!merge_parts(plan, parts, threads, sink, report, error, &progress) || !file.commit(error))
+    return cli::fail("encode --merge: " + error);
+  report.partitions = plan.partitions();
+  progress.finish();
+  const double peak_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
+  if (json) std::printf("%s\n", summary_json(dir, report, monotonic_seconds() - start, peak_mb).c_str());
+  else print_summary(dir, report, monotonic_seconds() - start, peak_mb);
+  return 0;
+}
+
 }  // namespace
+
+int cmd_encode_part(int argc, char** argv) {
+  cli::Args args(argc, argv, 2);
+  if (args.flag("--help") || args.flag("-h")) return std::fputs(kEncodePartHelp, stdout), 0;
+  int threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 256u));
+  std::string v;
+  unsigned long long u = 0;
+  if (args.value("--threads", v)) {
+    if (!cli::parse_uint(v, 256, u) || u < 1) return cli::fail("encode-part: --threads: expected 1..256, got '" + v + "'");
+    threads = static_cast<int>(u);
+  }
+  const std::vector<std::string> pos = args.positionals();
+  if (!args.unknown_option().empty()) return cli::fail("encode-part: " + args.unknown_option_message());
+  if (pos.size() != 2) return cli::fail("encode-part: expected DIR and ID (see stipple encode-part --help)");
+  if (!cli::parse_uint(pos[1], 0xFFFFFFFFull, u)) return cli::fail("encode-part: ID: expected a job number, got '" + pos[1] + "'");
+  std::string error;
+  PartitionPlan plan;
+  if (!read_plan(pos[0], plan, error)) return cli::fail("encode-part: " + error);
+  uint32_t crc = 0;
+  const double start = monotonic_seconds();
+  if (!run_part_file(pos[0], plan, static_cast<uint32_t>(u), threads, error, &crc)) return cli::fail("encode-part: " + error);
+  std::printf("%s: %s points, crc32 %08x, %.2f s\n", part_path(pos[0], static_cast<uint32_t>(u), "nodes").c_str(),
+              cli::with_commas(plan.part_points[u]).c_str(), crc, monotonic_seconds() - start);
+  return 0;
+}
 
 int cmd_encode(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
@@ -78,8 +165,42 @@ int cmd_encode(int argc, char** argv) {
     return cli::fail("encode: --every: expected a positive integer, got '" + every_text + "'");
   ScanOptions scan_options;
   if (std::string e; !cli::parse_scan_options(args, scan_options, e)) return cli::fail("encode: " + e);
+  std::string plan_dir, merge_dir;
+  args.value("--plan-only", plan_dir);
+  args.value("--merge", merge_dir);
   const std::vector<std::string> inputs = args.positionals();
   if (!args.unknown_option().empty()) return cli::fail("encode: " + args.unknown_option_message());
+  if (!merge_dir.empty()) {
+    if (!inputs.empty()) return cli::fail("encode: --merge DIR takes no scan: the plan in DIR names its partitions");
+    if (output.empty()) return cli::fail("encode: -o MODEL.spg is required");
+    if (!cli::check_output_name(output, ".spg", "a .spg model", error)) return cli::fail("encode: " + error);
+    return merge_plan(merge_dir, output, options.tree.threads, quiet, json);
+  }
+  if (!plan_dir.empty()) {
+    if (inputs.size() != 1) return cli::fail("encode: expected one scan file (see stipple encode --help)");
+    PointCloud cloud;
+    if (!read_point_cloud(inputs[0], cloud, error, scan_options)) return cli::fail(error);
+    cli::warn(cloud.warnings);
+    if (every > 1) keep_every(cloud, every, options);
+    std::error_code ec;
+    std::filesystem::create_directories(plan_dir, ec);
+    if (ec) return cli::fail("encode: --plan-only: " + plan_dir + ": " + ec.message());
+    PartitionPlan plan;
+    ProgressBar progress("plan", !quiet);
+    if (!make_plan(cloud, options, plan, error, &progress)) return cli::fail(inputs[0] + ": " + error);
+    if (!route_points(cloud, plan, plan_dir, error, &progress) || !write_plan(plan, plan_dir, error)) {
+      for (uint32_t i = 0; i < plan.partitions(); ++i)
+        for (const char* suffix : {"pts", "halo"}) std::filesystem::remove(part_path(plan_dir, i, suffix), ec);
+      return cli::fail("encode: --plan-only: " + error);
+    }
+    progress.finish();
+    std::printf("%s: %s points in %u partitions, planned in %s\n"
+                "  run each job: stipple encode-part %s ID   (ID 0..%u; %s/jobs.txt lists them)\n"
+                "  then:         stipple encode --merge %s -o MODEL.spg\n",
+                inputs[0].c_str(), cli::with_commas(plan.points).c_str(), plan.partitions(), plan_dir.c_str(),
+                plan_dir.c_str(), plan.partitions() - 1, plan_dir.c_str(), plan_dir.c_str());
+    return 0;
+  }
   if (inputs.size() != 1) return cli::fail("encode: expected one scan file (see stipple encode --help)");
   if (!cli::check_output_name(output, ".spg", "a .spg model", error)) return cli::fail("encode: " + error);
   if (output.empty()) return cli::fail("encode: -o MODEL.spg is required");
@@ -95,13 +216,9 @@ int cmd_encode(int argc, char** argv) {
   if (every > 1) keep_every(cloud, every, options);
   const double read_seconds = monotonic_seconds() - start;
   options.consume_scan = true;  // nothing here reads the scan after
-  std::vector<uint8_t> spg;
   EncodeReport report;
-  if (!encode_cloud(cloud, options, spg, report, error, &progress)) return cli::fail(error);
+  if (!encode_to_file(cloud, options, output, report, error, &progress)) return cli::fail(error);
   report.seconds.read = read_seconds;
-  const double write_start = monotonic_seconds();
-  if (!write_file_atomic(output, spg, error)) return cli::fail(error);
-  report.seconds.write += monotonic_seconds() - write_start;
   progress.finish();
   const double seconds = monotonic_seconds() - start;
   const double peak_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);

@@ -1,5 +1,6 @@
 // stipple encode and demo — their shared options and summary.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -70,6 +71,14 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
   } else {
     o.tree.threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 256u));  // every core
   }
+  if (args.value("--memory", v) && (!parse_bytes(v, o.memory) || o.memory < (uint64_t{64} << 20)))
+    return error = "--memory: expected a size of at least 64M (as 2G, 1500M, 2147483648), got '" + v + "'", false;
+  if (args.value("--partition-points", v)) {
+    if (!cli::parse_uint(v, 0xFFFFFFFFull, u) || u < 1024)
+      return error = "--partition-points: expected 1024..4294967295, got '" + v + "'", false;
+    o.partition_points = u;
+  }
+  args.value("--tmp", o.tmp_dir);
   if (!parse_orient_options(args, o.orient, error)) return false;
   if (args.value("--up", v) && !spg_parse_axis(v.c_str(), &o.orient.up))
     return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
@@ -106,6 +115,21 @@ bool parse_orient_options(cli::Args& args, OrientOptions& o, std::string& error)
   return true;
 }
 
+bool parse_bytes(const std::string& text, uint64_t& bytes) {
+  size_t digits = 0;
+  while (digits < text.size() && std::isdigit(static_cast<unsigned char>(text[digits]))) ++digits;
+  unsigned long long value = 0;
+  if (digits == 0 || digits > 15 || !cli::parse_uint(text.substr(0, digits), 1ull << 50, value)) return false;
+  std::string unit = text.substr(digits);
+  for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  if (unit.size() > 1 && unit.back() == 'B') unit.pop_back();  // 2GB, 2GiB
+  if (unit.size() == 2 && unit[1] == 'I') unit.pop_back();
+  const int shift = unit.empty() ? 0 : unit == "K" ? 10 : unit == "M" ? 20 : unit == "G" ? 30 : unit == "T" ? 40 : -1;
+  if (shift < 0 || value > (uint64_t{1} << (62 - shift))) return false;
+  bytes = uint64_t{value} << shift;
+  return true;
+}
+
 std::string summary_json(const std::string& scan, const EncodeReport& r, double seconds, double peak_mb) {
   cli::Json j;
   j.str("scan", scan)
@@ -113,6 +137,7 @@ std::string summary_json(const std::string& scan, const EncodeReport& r, double 
       .integer("nodes", static_cast<long long>(r.nodes))
       .integer("leaves", static_cast<long long>(r.leaves))
       .integer("depth", r.depth)
+      .integer("partitions", r.partitions)
       .integer("bytes", static_cast<long long>(r.bytes))
       .integer("record_bytes", static_cast<long long>(r.record_bytes))
       .num("bits_per_point", r.bits_per_point)
@@ -152,6 +177,7 @@ void print_summary(const std::string& scan, const EncodeReport& r, double second
   std::printf("  %s; normals %s%s; view: up %s, sensor side %s\n", r.frame.reason.c_str(), r.normals_source.c_str(),
               r.normals_source == "k-NN" ? (std::string(", facing ") + orient_mode_name(r.frame.orient)).c_str() : "",
               spg_axis_name(r.frame.hint.up), spg_axis_name(r.frame.hint.sensor_side));
+  if (r.partitions > 1) std::printf("  in %u partitions (tools/encoder/partition.h)\n", r.partitions);
 }
 
 void keep_every(PointCloud& cloud, unsigned long long k, const EncodeOptions& o) {

@@ -23,6 +23,7 @@ struct Command {
 const Command kCommands[] = {
     {"demo", "encode the bundled scan, render it with the fixed-point client (the main job)", stipple::cmd_demo},
     {"encode", "scan (PLY, PCD, LAS or x y z text) -> .spg", stipple::cmd_encode},
+    {"encode-part", "one job of an encode --plan-only plan (for a cluster)", stipple::cmd_encode_part},
     {"info", "describe a .spg file", stipple::cmd_info},
     {"sample", "generate points from a .spg cut (reference decoder) -> .ply", stipple::cmd_sample},
     {"metrics", "nearest-neighbour error and PSNR between two point sets", stipple::cmd_metrics},

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <memory>
 #include <random>
 
 #include "tools/encoder/parallel.h"
@@ -27,15 +28,12 @@ void assign_all(const std::vector<Vec3>& points, const std::vector<Vec3>& center
 
 }  // namespace
 
-Classification classify_sigmas(const std::vector<Vec3>& tuples, int dims, int max_classes, int max_iterations,
-                               int threads) {
-  Classification out;
-  const size_t n = tuples.size();
-  out.index.assign(n, 0);
-  if (n == 0) return out;
+SigmaClasses::SigmaClasses(const std::vector<Vec3>& sample, int dims, int max_classes, int max_iterations, int threads)
+    : dims_(dims) {
+  const size_t n = sample.size();
+  if (n == 0) return;
   std::vector<Vec3> logs(n, Vec3::Zero());
-  for (size_t i = 0; i < n; ++i)
-    for (int d = 0; d < dims; ++d) logs[i][d] = std::log(tuples[i][d]);
+  for (size_t i = 0; i < n; ++i) logs[i] = log_of(sample[i]);
 
   // Few distinct tuples: classes are exact.
   std::vector<Vec3> distinct = logs;
@@ -45,22 +43,22 @@ Classification classify_sigmas(const std::vector<Vec3>& tuples, int dims, int ma
   std::sort(distinct.begin(), distinct.end(), less);
   distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
   const size_t k = std::min(distinct.size(), static_cast<size_t>(std::max(1, max_classes)));
-  std::vector<Vec3> centers;
+  std::vector<Vec3>& centers = log_centers_;
   if (distinct.size() <= k) {
     centers = distinct;
   } else {
     // k-means++ seeding on a deterministic sample.
     std::mt19937_64 rng(0x5354504701ull);
     const size_t sample_size = std::min(distinct.size(), 4 * k);
-    std::vector<Vec3> sample;
-    sample.reserve(sample_size);
-    for (size_t i = 0; i < sample_size; ++i) sample.push_back(distinct[i * distinct.size() / sample_size]);
+    std::vector<Vec3> seeds;
+    seeds.reserve(sample_size);
+    for (size_t i = 0; i < sample_size; ++i) seeds.push_back(distinct[i * distinct.size() / sample_size]);
     std::vector<double> d2(sample_size, std::numeric_limits<double>::infinity());
-    centers.push_back(sample[static_cast<size_t>(uniform(rng) * static_cast<double>(sample_size))]);
+    centers.push_back(seeds[static_cast<size_t>(uniform(rng) * static_cast<double>(sample_size))]);
     while (centers.size() < k) {
       double total = 0;
       for (size_t i = 0; i < sample_size; ++i) {
-        d2[i] = std::min(d2[i], (sample[i] - centers.back()).squaredNorm());
+        d2[i] = std::min(d2[i], (seeds[i] - centers.back()).squaredNorm());
         total += d2[i];
       }
       if (total <= 0) break;
@@ -73,7 +71,7 @@ Classification classify_sigmas(const std::vector<Vec3>& tuples, int dims, int ma
           break;
         }
       }
-      centers.push_back(sample[pick]);
+      centers.push_back(seeds[pick]);
     }
     // Lloyd iterations on a deterministic sample of the tuples (all of them
     // up to kLloydPerClass a class): the centres need a few dozen members
@@ -102,15 +100,41 @@ Classification classify_sigmas(const std::vector<Vec3>& tuples, int dims, int ma
         if (counts[c]) centers[c] = sums[c] / static_cast<double>(counts[c]);  // an empty class keeps its centre
     }
   }
-  assign_all(logs, centers, out.index, threads);
-  double err = 0;
-  for (size_t i = 0; i < n; ++i) err += (logs[i] - centers[out.index[i]]).squaredNorm();
-  out.rms_log_error = std::sqrt(err / static_cast<double>(n));
-  out.centers.resize(centers.size());
+  centers_.resize(centers.size());
   for (size_t c = 0; c < centers.size(); ++c) {
-    out.centers[c] = Vec3::Zero();
-    for (int d = 0; d < dims; ++d) out.centers[c][d] = std::exp(centers[c][d]);
+    centers_[c] = Vec3::Zero();
+    for (int d = 0; d < dims; ++d) centers_[c][d] = std::exp(centers[c][d]);
   }
+  tree_ = std::make_unique<KdTree>(log_centers_);
+}
+
+Vec3 SigmaClasses::log_of(const Vec3& tuple) const {
+  Vec3 l = Vec3::Zero();
+  for (int d = 0; d < dims_; ++d) l[d] = std::log(tuple[d]);
+  return l;
+}
+
+uint16_t SigmaClasses::assign(const Vec3& tuple, double* log_error2) const {
+  if (!tree_) return 0;  // fitted to nothing
+  const Vec3 l = log_of(tuple);
+  const uint32_t c = tree_->nearest(l, uint32_t{0});
+  if (log_error2) *log_error2 = (l - log_centers_[c]).squaredNorm();
+  return static_cast<uint16_t>(c);
+}
+
+Classification classify_sigmas(const std::vector<Vec3>& tuples, int dims, int max_classes, int max_iterations,
+                               int threads) {
+  Classification out;
+  const size_t n = tuples.size();
+  out.index.assign(n, 0);
+  if (n == 0) return out;
+  const SigmaClasses classes(tuples, dims, max_classes, max_iterations, threads);
+  std::vector<double> err2(n);
+  parallel_for(n, threads, 1024, [&](size_t i) { out.index[i] = classes.assign(tuples[i], &err2[i]); });
+  double err = 0;
+  for (size_t i = 0; i < n; ++i) err += err2[i];
+  out.rms_log_error = std::sqrt(err / static_cast<double>(n));
+  out.centers = classes.centers();
   return out;
 }
 

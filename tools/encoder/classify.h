@@ -12,8 +12,10 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
+#include "tools/scan/kdtree.h"
 #include "tools/scan/point_cloud.h"
 
 namespace stipple {
@@ -22,6 +24,27 @@ struct Classification {
   std::vector<Vec3> centers;   // linear units (exp of the log-space centroid); unused dims 0
   std::vector<uint16_t> index;  // class of each input tuple
   double rms_log_error = 0;    // RMS of ||log(sigma) - log(center)|| over the inputs
+};
+
+// Classes fitted to `sample` (what classify_sigmas does before its
+// assignment), then any tuple assigned to its nearest class, one at a time:
+// the out-of-core encoder fits them to a sample of the nodes and assigns
+// every node while it writes the file. `assign` is thread-safe.
+class SigmaClasses {
+ public:
+  SigmaClasses(const std::vector<Vec3>& sample, int dims, int max_classes, int max_iterations = 20, int threads = 2);
+  SigmaClasses(const SigmaClasses&) = delete;
+  SigmaClasses& operator=(const SigmaClasses&) = delete;
+  const std::vector<Vec3>& centers() const { return centers_; }  // linear units; unused dims 0
+  // The nearest class (ties to the lower index) and, when asked, the
+  // squared log-space distance to it.
+  uint16_t assign(const Vec3& tuple, double* log_error2 = nullptr) const;
+
+ private:
+  Vec3 log_of(const Vec3& tuple) const;
+  int dims_;
+  std::vector<Vec3> log_centers_, centers_;
+  std::unique_ptr<KdTree> tree_;  // of log_centers_
 };
 
 // `tuples`: positive values, `dims` (2 or 3) leading components used.

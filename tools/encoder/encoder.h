@@ -31,7 +31,20 @@ struct EncodeOptions {
   // instead of copying them (48 bytes a point less at the peak); the cloud
   // is left without them. For callers that are done with the scan.
   bool consume_scan = false;
+  // Partitions (tools/encoder/partition.h): a scan of more points than this
+  // is encoded in partitions of at most about this many, each its own job.
+  // 0: from `memory`.
+  uint64_t partition_points = 0;
+  // The memory the encoder may use, in bytes; 0: half of this host's.
+  uint64_t memory = 0;
+  // Where partition files go: "" for a folder beside the output (the
+  // system's temporary folder when there is no output file).
+  std::string tmp_dir;
 };
+
+// The partition size `options` asks for: partition_points, or the memory
+// budget over a job's bytes a point.
+uint64_t partition_points_for(const EncodeOptions& options);
 
 struct EncodeReport {
   uint64_t points = 0, nodes = 0, leaves = 0;
@@ -45,6 +58,7 @@ struct EncodeReport {
   PartitionRatios ratios;
   TreeReport tree;
   ScanFrame frame;  // what analyse_scan decided: normal orientation, view hint
+  uint32_t partitions = 1;  // jobs the scan was encoded in (tools/encoder/partition.h)
   // Wall seconds of each stage: the scan's reading (the caller's), its
   // normals and frame, the hierarchy, the sigma classes, the records and file.
   struct Stages {
@@ -52,10 +66,18 @@ struct EncodeReport {
   } seconds;
 };
 
-// Encodes `cloud` (normals may be added to it). Returns false with a message
-// naming the option at fault for invalid options.
+// Encodes `cloud` (left as it is unless options.consume_scan), in
+// partitions when it has more points than the options allow a job
+// (tools/encoder/partition.h; their files go to a temporary folder, removed
+// after). Returns false with a message naming the option at fault for
+// invalid options.
 bool encode_cloud(PointCloud& cloud, const EncodeOptions& options, std::vector<uint8_t>& spg, EncodeReport& report,
                   std::string& error, ProgressBar* progress = nullptr);
+// The same written to `path` as it is made, never whole in memory; a
+// failure leaves no file (the partitions' folder goes beside it, unless
+// options.tmp_dir).
+bool encode_to_file(PointCloud& cloud, const EncodeOptions& options, const std::string& path, EncodeReport& report,
+                    std::string& error, ProgressBar* progress = nullptr);
 
 // A model for the programs that draw (render, the viewers): a .spg file's
 // bytes as they are, or — as pcl_viewer opens a scan — any scan

@@ -397,24 +397,33 @@ void PartitionRatioAccumulator::add_family(double parent_sigma1, const double* c
   if (children == 0) return;
   const auto [cmin, cmax] = std::minmax_element(counts, counts + children);
   const auto [smin, smax] = std::minmax_element(sigma1, sigma1 + children);
-  apr_sum_ += *cmax / *cmin;
-  ++families_;
+  apr_sum += *cmax / *cmin;
+  ++families;
   if (*smin >= 1e-6 * parent_sigma1) {
-    capr_sum_ += *smax / *smin;
-    ++capr_families_;
+    capr_sum += *smax / *smin;
+    ++capr_families;
   }
+}
+
+void PartitionRatioAccumulator::add(const PartitionRatioAccumulator& o) {
+  apr_sum += o.apr_sum;
+  capr_sum += o.capr_sum;
+  families += o.families;
+  capr_families += o.capr_families;
 }
 
 PartitionRatios PartitionRatioAccumulator::result() const {
   PartitionRatios r;
-  r.families = families_;
-  r.capr_excluded = families_ - capr_families_;
-  if (families_) r.apr = apr_sum_ / static_cast<double>(families_);
-  if (capr_families_) r.capr = capr_sum_ / static_cast<double>(capr_families_);
+  r.families = families;
+  r.capr_excluded = families - capr_families;
+  if (families) r.apr = apr_sum / static_cast<double>(families);
+  if (capr_families) r.capr = capr_sum / static_cast<double>(capr_families);
   return r;
 }
 
-PartitionRatios partition_ratios(const Tree& tree) {
+PartitionRatios partition_ratios(const Tree& tree) { return partition_ratio_sums(tree).result(); }
+
+PartitionRatioAccumulator partition_ratio_sums(const Tree& tree) {
   PartitionRatioAccumulator acc;
   double counts[8], sigma1[8];
   for (const TreeNode& node : tree.nodes) {
@@ -424,7 +433,7 @@ PartitionRatios partition_ratios(const Tree& tree) {
     }
     acc.add_family(node.stats.position.sigma[0], counts, sigma1, node.child_count);
   }
-  return acc.result();
+  return acc;
 }
 
 }  // namespace stipple

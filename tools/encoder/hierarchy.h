@@ -64,6 +64,13 @@ struct TreeReport {
   uint64_t unbalanced = 0;         // still out of the band after the fallback
   uint64_t failed_splits = 0;      // one side empty: became a leaf
   uint64_t two_means_iterations = 0;
+  void add(const TreeReport& o) {
+    splits += o.splits;
+    euclidean_fallbacks += o.euclidean_fallbacks;
+    unbalanced += o.unbalanced;
+    failed_splits += o.failed_splits;
+    two_means_iterations += o.two_means_iterations;
+  }
 };
 
 struct Tree {
@@ -96,17 +103,19 @@ struct PartitionRatios {
   uint64_t families = 0, capr_excluded = 0;
 };
 
-class PartitionRatioAccumulator {
- public:
+// Sums over families, so a tree built in parts adds up its parts' (the
+// fields are plain for the part files that carry them).
+struct PartitionRatioAccumulator {
   // One internal node: its sigma1 and its children's point counts and sigma1s.
   void add_family(double parent_sigma1, const double* counts, const double* sigma1, size_t children);
+  void add(const PartitionRatioAccumulator& other);
   PartitionRatios result() const;
 
- private:
-  double apr_sum_ = 0, capr_sum_ = 0;
-  uint64_t families_ = 0, capr_families_ = 0;
+  double apr_sum = 0, capr_sum = 0;
+  uint64_t families = 0, capr_families = 0;
 };
 
+PartitionRatioAccumulator partition_ratio_sums(const Tree& tree);
 PartitionRatios partition_ratios(const Tree& tree);
 
 }  // namespace stipple

@@ -87,6 +87,7 @@ void estimate_normals(PointCloud& cloud, int k, const ScanFrame& frame,
       Vec3 centroid = Vec3::Zero();
       for (const Vec3& q : p) centroid += q;
       centroid /= static_cast<double>(n);
+      if (frame.has_centre) centroid = frame.centre;
       std::vector<uint8_t> done(n, 0);
       std::vector<uint32_t> by_distance(n);
       std::vector<double> d2(n);

@@ -61,6 +61,10 @@ struct ScanFrame {
   OrientMode orient = OrientMode::kOutward;  // never kAuto
   Vec3 viewpoint = Vec3::Zero();             // kSensor: where the normals face
   Vec3 up = Vec3::UnitZ();                   // kUp: the direction they face
+  // kOutward: each component's seed faces away from this point instead of
+  // the points' own centroid (a partition's job: the whole scan's centroid).
+  bool has_centre = false;
+  Vec3 centre = Vec3::Zero();
   SpgViewHint hint;                          // for the file's header
   double visible_share = 0;                  // rule 3's measure (0 when not measured)
   double spacing_slope = 0;                  // rule 3's sampling measure (0 when not measured; NaN: no spread)
