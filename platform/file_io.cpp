@@ -2,11 +2,14 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <algorithm>
 #include <filesystem>
 
 namespace stipple {
@@ -82,6 +85,45 @@ void sync_folder(const std::string& path) {
 }
 
 }  // namespace
+
+MappedFile::~MappedFile() {
+  if (data_) munmap(const_cast<uint8_t*>(data_), size_);
+}
+
+bool MappedFile::open(const std::string& path, std::string& error) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) return error = path + ": is a directory, not a file", false;
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) return error = path + ": " + std::strerror(errno), false;
+  struct stat st;
+  if (fstat(fd, &st) != 0) {
+    error = path + ": " + std::strerror(errno);
+    ::close(fd);
+    return false;
+  }
+  size_ = static_cast<size_t>(st.st_size);
+  if (size_ > 0) {
+    void* p = mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd, 0);
+    if (p == MAP_FAILED) {
+      error = path + ": " + std::strerror(errno);
+      ::close(fd);
+      size_ = 0;
+      return false;
+    }
+    madvise(p, size_, MADV_SEQUENTIAL);
+    data_ = static_cast<const uint8_t*>(p);
+  }
+  ::close(fd);
+  return true;
+}
+
+void MappedFile::release_before(size_t offset) {
+  const size_t page = static_cast<size_t>(sysconf(_SC_PAGESIZE));
+  const size_t end = std::min(offset, size_) / page * page;
+  if (!data_ || end <= released_ + (size_t{8} << 20)) return;  // in steps of 8 MB at least
+  madvise(const_cast<uint8_t*>(data_) + released_, end - released_, MADV_DONTNEED);
+  released_ = end;
+}
 
 AtomicFileWriter::~AtomicFileWriter() { abort(); }
 

@@ -25,6 +25,27 @@ bool read_file(const std::string& path, std::vector<uint8_t>& out, std::string& 
 // input ("is a directory").
 bool write_file_atomic(const std::string& path, const std::vector<uint8_t>& data, std::string& error);
 
+// A file mapped read-only into memory, for reading a file larger than
+// memory front to back: release_before(offset) gives the pages before
+// `offset` back (they are read again from the file if touched), so the
+// pages a reader holds stay those it is reading. An empty file maps to no
+// bytes. The error names the file.
+class MappedFile {
+ public:
+  MappedFile() = default;
+  MappedFile(const MappedFile&) = delete;
+  MappedFile& operator=(const MappedFile&) = delete;
+  ~MappedFile();
+  bool open(const std::string& path, std::string& error);
+  const uint8_t* data() const { return data_; }
+  size_t size() const { return size_; }
+  void release_before(size_t offset);
+
+ private:
+  const uint8_t* data_ = nullptr;
+  size_t size_ = 0, released_ = 0;
+};
+
 // The same for a file written in pieces (a large .spg, streamed): open,
 // write any number of times, then commit (flush, fsync, rename) — or
 // abort, which the destructor does for a writer never committed, so an

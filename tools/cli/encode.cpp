@@ -178,17 +178,17 @@ int cmd_encode(int argc, char** argv) {
   }
   if (!plan_dir.empty()) {
     if (inputs.size() != 1) return cli::fail("encode: expected one scan file (see stipple encode --help)");
-    PointCloud cloud;
-    if (!read_point_cloud(inputs[0], cloud, error, scan_options)) return cli::fail(error);
-    cli::warn(cloud.warnings);
-    if (every > 1) keep_every(cloud, every, options);
+    if (every > 1) return cli::fail("encode: --every previews a scan; --plan-only plans all of it");
     std::error_code ec;
     std::filesystem::create_directories(plan_dir, ec);
     if (ec) return cli::fail("encode: --plan-only: " + plan_dir + ": " + ec.message());
     PartitionPlan plan;
     ProgressBar progress("plan", !quiet);
-    if (!make_plan(cloud, options, plan, error, &progress)) return cli::fail(inputs[0] + ": " + error);
-    if (!route_points(cloud, plan, plan_dir, error, &progress) || !write_plan(plan, plan_dir, error)) {
+    const auto warn = [&](const std::vector<std::string>& w) {
+      if (!w.empty()) progress.finish();
+      cli::warn(w);
+    };
+    if (!plan_scan_file(inputs[0], scan_options, options, plan_dir, plan, error, &progress, warn)) {
       for (uint32_t i = 0; i < plan.partitions(); ++i)
         for (const char* suffix : {"pts", "halo"}) std::filesystem::remove(part_path(plan_dir, i, suffix), ec);
       return cli::fail("encode: --plan-only: " + error);
@@ -209,16 +209,23 @@ int cmd_encode(int argc, char** argv) {
   const double start = monotonic_seconds();
   ProgressBar progress("encode", !quiet);
   progress.update(0.0, "reading");
-  PointCloud cloud;
-  if (!read_point_cloud(inputs[0], cloud, error, scan_options)) return cli::fail(error);
-  if (!cloud.warnings.empty()) progress.finish();  // the warnings get lines of their own
-  cli::warn(cloud.warnings);
-  if (every > 1) keep_every(cloud, every, options);
-  const double read_seconds = monotonic_seconds() - start;
-  options.consume_scan = true;  // nothing here reads the scan after
+  const auto warn = [&](const std::vector<std::string>& w) {
+    if (!w.empty()) progress.finish();  // the warnings get lines of their own
+    cli::warn(w);
+  };
   EncodeReport report;
-  if (!encode_to_file(cloud, options, output, report, error, &progress)) return cli::fail(error);
-  report.seconds.read = read_seconds;
+  if (every > 1) {  // a preview: the scan read whole, then thinned
+    PointCloud cloud;
+    if (!read_point_cloud(inputs[0], cloud, error, scan_options)) return cli::fail(error);
+    warn(cloud.warnings);
+    keep_every(cloud, every, options);
+    const double read_seconds = monotonic_seconds() - start;
+    options.consume_scan = true;  // nothing here reads the scan after
+    if (!encode_to_file(cloud, options, output, report, error, &progress)) return cli::fail(error);
+    report.seconds.read = read_seconds;
+  } else if (!encode_scan_file(inputs[0], scan_options, options, output, report, error, &progress, warn)) {
+    return cli::fail(error);
+  }
   progress.finish();
   const double seconds = monotonic_seconds() - start;
   const double peak_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);

@@ -161,6 +161,8 @@ std::string summary_json(const std::string& scan, const EncodeReport& r, double 
       .integer("euclidean_fallbacks", static_cast<long long>(r.tree.euclidean_fallbacks))
       .integer("unbalanced_splits", static_cast<long long>(r.tree.unbalanced))
       .num("read_seconds", r.seconds.read)
+      .num("plan_seconds", r.seconds.plan)
+      .num("route_seconds", r.seconds.route)
       .num("normals_seconds", r.seconds.normals)
       .num("hierarchy_seconds", r.seconds.hierarchy)
       .num("classes_seconds", r.seconds.classes)

@@ -18,19 +18,27 @@
 #include "tools/embedded/options.h"
 #include "tools/encoder/merge.h"
 #include "tools/encoder/normals.h"
+#include "tools/encoder/partition.h"
 #include "tools/scan/ply_io.h"
 
 namespace stipple {
 Vec3 stored_origin(const std::vector<Vec3>& points, int version) {
-  if (version < 2 || points.empty()) return Vec3::Zero();
-  const Box3 box = bounding_box(points);
+  if (points.empty()) return Vec3::Zero();
+  return stored_origin(bounding_box(points), version);
+}
+
+void stored_bounding_box(const std::vector<Vec3>& points, const Vec3& origin, float min[3], float max[3]) {
+  stored_bounding_box(bounding_box(points), origin, min, max);
+}
+
+Vec3 stored_origin(const Box3& box, int version) {
+  if (version < 2) return Vec3::Zero();
   const double extent = (box.max - box.min).maxCoeff();
   const double far = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff());
   return far > 1024 * extent ? Vec3((box.min + box.max) / 2) : Vec3::Zero();
 }
 
-void stored_bounding_box(const std::vector<Vec3>& points, const Vec3& origin, float min[3], float max[3]) {
-  const Box3 box = bounding_box(points);
+void stored_bounding_box(const Box3& box, const Vec3& origin, float min[3], float max[3]) {
   for (int a = 0; a < 3; ++a) {
     const double l = box.min[a] - origin[a], h = box.max[a] - origin[a];
     float lo = static_cast<float>(l), hi = static_cast<float>(h);
@@ -84,31 +92,157 @@ class TempFolder {
   std::string path_;
 };
 
+// Where the points come from: a scan in memory, or a file read a chunk at a
+// time (twice: the plan's pass, then the partitions').
+class ScanSource {
+ public:
+  virtual ~ScanSource() = default;
+  virtual bool plan(const EncodeOptions& o, PartitionPlan& plan, std::string& error, ProgressBar* progress) = 0;
+  // A plan of one partition: the whole scan, in memory.
+  virtual PointCloud* load(const PartitionPlan& plan, std::string& error, ProgressBar* progress) = 0;
+  // More: every point into its partition's file.
+  virtual bool route(PartitionPlan& plan, const std::string& dir, std::string& error, ProgressBar* progress) = 0;
+};
+
+class MemorySource final : public ScanSource {
+ public:
+  MemorySource(PointCloud& cloud, bool consume) : scan_(&cloud) {
+    if (!consume) {
+      copy_ = cloud;
+      scan_ = &copy_;
+    }
+  }
+  bool plan(const EncodeOptions& o, PartitionPlan& plan, std::string& error, ProgressBar* progress) override {
+    return make_plan(*scan_, o, plan, error, progress);
+  }
+  PointCloud* load(const PartitionPlan&, std::string&, ProgressBar*) override { return scan_; }
+  bool route(PartitionPlan& plan, const std::string& dir, std::string& error, ProgressBar* progress) override {
+    if (!route_points(*scan_, plan, dir, error, progress)) return false;
+    *scan_ = PointCloud{};  // the points are in the partitions now
+    return true;
+  }
+
+ private:
+  PointCloud* scan_;
+  PointCloud copy_;
+};
+
+// A PLY, LAS or PCD file, memory-mapped and read in chunks: no more of the
+// scan is in memory than a chunk (or one partition).
+class FileSource final : public ScanSource {
+ public:
+  FileSource(std::string path, ScanOptions options, const std::function<void(const std::vector<std::string>&)>& warn)
+      : path_(std::move(path)), options_(std::move(options)), warn_(warn) {}
+  bool plan(const EncodeOptions& o, PartitionPlan& plan, std::string& error, ProgressBar* progress) override {
+    if (!check_encode_options(o, error)) return false;
+    ScanStream stream;
+    bool first = true;
+    stream.deliver = [&](PointCloud& chunk, uint64_t, uint64_t bytes, std::string&) {
+      if (first) {
+        facts_.normals = chunk.has_normals();
+        facts_.colors = chunk.has_colors();
+        first = false;
+      }
+      sampler_.add(chunk);
+      if (progress) progress->update(0.1 * static_cast<double>(bytes) / static_cast<double>(size_), "planning");
+      return true;
+    };
+    size_ = std::max<uint64_t>(1, std::filesystem::file_size(path_));
+    PointCloud rest;
+    if (!stream_point_cloud(path_, stream, rest, error, options_)) return false;
+    if (stream.triangles > 0 && o.normals && !facts_.normals) {
+      // A mesh without normals: its faces give them, and need it whole.
+      if (!read_point_cloud(path_, whole_, error, options_)) return false;
+      warn_(whole_.warnings);
+      memory_ = std::make_unique<MemorySource>(whole_, true);
+      return memory_->plan(o, plan, error, progress) || (error = path_ + ": " + error, false);
+    }
+    warn_(rest.warnings);
+    divisor_ = stream.color_divisor;
+    facts_.colors = facts_.colors && divisor_ != 0;
+    facts_.normals_source = !o.normals ? "none" : facts_.normals ? "file" : "k-NN";
+    facts_.has_viewpoint = rest.has_viewpoint;
+    facts_.viewpoint = rest.viewpoint;
+    facts_.count_duplicates = true;
+    if (!finish_plan(sampler_, facts_, o, plan, error)) return error = path_ + ": " + error, false;
+    box_ = sampler_.box;
+    sampler_ = PlanSampler{};
+    return true;
+  }
+  PointCloud* load(const PartitionPlan& plan, std::string& error, ProgressBar* progress) override {
+    if (memory_) return memory_->load(plan, error, progress);
+    whole_ = PointCloud{};
+    const bool normals = plan.normals && !plan.estimate;
+    if (!pass([&](PointCloud& chunk, std::string&) {
+          whole_.positions.insert(whole_.positions.end(), chunk.positions.begin(), chunk.positions.end());
+          if (normals) whole_.normals.insert(whole_.normals.end(), chunk.normals.begin(), chunk.normals.end());
+          if (plan.colors) whole_.colors.insert(whole_.colors.end(), chunk.colors.begin(), chunk.colors.end());
+          return true;
+        }, "reading", progress, error))
+      return nullptr;
+    return &whole_;
+  }
+  bool route(PartitionPlan& plan, const std::string& dir, std::string& error, ProgressBar* progress) override {
+    if (memory_) return memory_->route(plan, dir, error, progress);
+    PartitionRouter router(plan, dir);
+    return pass([&](PointCloud& chunk, std::string& why) { return router.add(chunk, why); }, "routing points to partitions",
+                progress, error) &&
+           router.finish(error);
+  }
+  const Box3& box() const { return box_; }
+  bool streamed() const { return !memory_; }
+
+ private:
+  // The second pass: every chunk, its colours scaled as the reader said.
+  bool pass(const std::function<bool(PointCloud&, std::string&)>& fn, const char* phase, ProgressBar* progress,
+            std::string& error) {
+    ScanStream stream;
+    stream.deliver = [&](PointCloud& chunk, uint64_t, uint64_t bytes, std::string& why) {
+      if (divisor_ == 0) chunk.colors.clear();
+      else if (divisor_ != 1)
+        for (Vec3& c : chunk.colors) c /= divisor_;
+      if (progress) progress->update(0.1 + 0.2 * static_cast<double>(bytes) / static_cast<double>(size_), phase);
+      return fn(chunk, why);
+    };
+    PointCloud rest;
+    return stream_point_cloud(path_, stream, rest, error, options_);
+  }
+
+  std::string path_;
+  ScanOptions options_;
+  std::function<void(const std::vector<std::string>&)> warn_;
+  PlanSampler sampler_;
+  ScanFacts facts_;
+  Box3 box_;
+  double divisor_ = 1;
+  uint64_t size_ = 1;
+  PointCloud whole_;
+  std::unique_ptr<MemorySource> memory_;  // a mesh whose faces give the normals
+};
+
 // The encoder's one path (tools/encoder/partition.h): plan, jobs, merge.
-bool encode_through(PointCloud& cloud, const EncodeOptions& o, const std::string& output, const ByteSink& sink,
+bool encode_through(ScanSource& source, const EncodeOptions& o, const std::string& output, const ByteSink& sink,
                     EncodeReport& report, std::string& error, ProgressBar* progress) {
   report = EncodeReport{};
   const double start = monotonic_seconds();
-  PointCloud copy;
-  PointCloud* scan = &cloud;
-  if (!o.consume_scan) {
-    copy = cloud;
-    scan = &copy;
-  }
   PartitionPlan plan;
-  if (!make_plan(*scan, o, plan, error, progress)) return false;
+  if (!source.plan(o, plan, error, progress)) return false;
+  report.seconds.plan = monotonic_seconds() - start;
   const int threads = o.tree.threads;
   std::vector<std::unique_ptr<PartNodes>> parts;
   TempFolder folder;
   if (plan.partitions() == 1) {
-    const double plan_seconds = monotonic_seconds() - start;
+    const double load_start = monotonic_seconds();
+    PointCloud* scan = source.load(plan, error, progress);
+    if (!scan) return false;
+    report.seconds.route = monotonic_seconds() - load_start;
     const double tree_start = plan.estimate ? 0.3 : 0.02;
     parts.push_back(run_part(*scan, scan->size(), plan, 0, threads, [&](double f) {
       if (!progress) return;
       if (plan.estimate && f < 0.3) progress->update(f, "estimating normals");
       else progress->update(tree_start + (0.85 - tree_start) * (plan.estimate ? (f - 0.3) / 0.7 : f), "building hierarchy");
     }));
-    report.seconds.normals = plan_seconds + parts[0]->summary().normals_seconds;
+    report.seconds.normals = parts[0]->summary().normals_seconds;
     report.seconds.hierarchy = parts[0]->summary().tree_seconds;
   } else {
     std::string base = o.tmp_dir;
@@ -118,9 +252,9 @@ bool encode_through(PointCloud& cloud, const EncodeOptions& o, const std::string
                              : std::filesystem::temp_directory_path().string();
     }
     if (!folder.create(base, error)) return false;
-    if (!route_points(*scan, plan, folder.path(), error, progress)) return false;
-    *scan = PointCloud{};  // the points are in the partitions now
-    report.seconds.normals = monotonic_seconds() - start;
+    const double route_start = monotonic_seconds();
+    if (!source.route(plan, folder.path(), error, progress)) return false;
+    report.seconds.route = monotonic_seconds() - route_start;
     const double jobs_start = monotonic_seconds();
     uint64_t done = 0;
     for (uint32_t i = 0; i < plan.partitions(); ++i) {
@@ -137,12 +271,26 @@ bool encode_through(PointCloud& cloud, const EncodeOptions& o, const std::string
   }
   const EncodeReport::Stages seconds = report.seconds;
   if (!merge_parts(plan, parts, threads, sink, report, error, progress)) return false;
+  report.seconds.plan = seconds.plan;
+  report.seconds.route = seconds.route;
   report.seconds.normals = seconds.normals;
   report.seconds.hierarchy = seconds.hierarchy;
   report.partitions = plan.partitions();
   if (progress) progress->update(1.0, "done");
   return true;
 }
+
+// A .spg file written as it is made.
+struct FileSink {
+  AtomicFileWriter file;
+  ByteSink sink(const std::string& path) {
+    return [this, path](const uint8_t* data, size_t size, std::string& why) {
+      if (file.write(data, size)) return true;
+      why = path + ": write failed: " + std::strerror(errno);
+      return false;
+    };
+  }
+};
 
 }  // namespace
 
@@ -153,7 +301,8 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
     spg.insert(spg.end(), data, data + size);
     return true;
   };
-  if (!encode_through(cloud, o, "", sink, report, error, progress)) return false;
+  MemorySource source(cloud, o.consume_scan);
+  if (!encode_through(source, o, "", sink, report, error, progress)) return false;
   // The reader's checks on the bytes written: never a file it refuses.
   SpgView view;
   if (const SpgResult r = spg_parse(spg.data(), spg.size(), &view); !r.ok())
@@ -163,17 +312,54 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
 
 bool encode_to_file(PointCloud& cloud, const EncodeOptions& o, const std::string& path, EncodeReport& report,
                     std::string& error, ProgressBar* progress) {
-  AtomicFileWriter file;
-  if (!file.open(path, error)) return false;
-  const ByteSink sink = [&file, &path](const uint8_t* data, size_t size, std::string& why) {
-    if (file.write(data, size)) return true;
-    why = path + ": write failed: " + std::strerror(errno);
-    return false;
-  };
-  if (!encode_through(cloud, o, path, sink, report, error, progress)) return false;
+  FileSink out;
+  if (!out.file.open(path, error)) return false;
+  MemorySource source(cloud, o.consume_scan);
+  if (!encode_through(source, o, path, out.sink(path), report, error, progress)) return false;
   const double start = monotonic_seconds();
-  if (!file.commit(error)) return false;
+  if (!out.file.commit(error)) return false;
   report.seconds.write += monotonic_seconds() - start;
+  return true;
+}
+
+bool plan_scan_file(const std::string& scan, const ScanOptions& scan_options, const EncodeOptions& o,
+                    const std::string& dir, PartitionPlan& plan, std::string& error, ProgressBar* progress,
+                    const std::function<void(const std::vector<std::string>&)>& warn) {
+  PointCloud cloud;
+  std::unique_ptr<ScanSource> source;
+  if (scan_streams(scan)) {
+    source = std::make_unique<FileSource>(scan, scan_options, warn);
+  } else {
+    if (!read_point_cloud(scan, cloud, error, scan_options)) return false;
+    warn(cloud.warnings);
+    source = std::make_unique<MemorySource>(cloud, true);
+  }
+  return source->plan(o, plan, error, progress) && source->route(plan, dir, error, progress) &&
+         write_plan(plan, dir, error);
+}
+
+bool encode_scan_file(const std::string& scan, const ScanOptions& scan_options, const EncodeOptions& o,
+                      const std::string& path, EncodeReport& report, std::string& error, ProgressBar* progress,
+                      const std::function<void(const std::vector<std::string>&)>& warn) {
+  const double start = monotonic_seconds();
+  if (!scan_streams(scan)) {
+    PointCloud cloud;
+    if (!read_point_cloud(scan, cloud, error, scan_options)) return false;
+    warn(cloud.warnings);
+    EncodeOptions consume = o;
+    consume.consume_scan = true;
+    const double read = monotonic_seconds() - start;
+    if (!encode_to_file(cloud, consume, path, report, error, progress)) return false;
+    report.seconds.read = read;
+    return true;
+  }
+  FileSink out;
+  if (!out.file.open(path, error)) return false;
+  FileSource source(scan, scan_options, warn);
+  if (!encode_through(source, o, path, out.sink(path), report, error, progress)) return false;
+  if (!out.file.commit(error)) return false;
+  if (source.streamed())
+    if (std::string w = duplicate_warning(scan, report.duplicates, report.points, source.box()); !w.empty()) warn({w});
   return true;
 }
 

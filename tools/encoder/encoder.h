@@ -11,6 +11,7 @@
 #include "platform/progress.h"
 #include "tools/encoder/hierarchy.h"
 #include "tools/encoder/orientation.h"
+#include "tools/scan/ply_io.h"
 
 namespace stipple {
 
@@ -59,10 +60,13 @@ struct EncodeReport {
   TreeReport tree;
   ScanFrame frame;  // what analyse_scan decided: normal orientation, view hint
   uint32_t partitions = 1;  // jobs the scan was encoded in (tools/encoder/partition.h)
+  uint64_t duplicates = 0;  // repeated positions the jobs counted (a scan read in chunks)
   // Wall seconds of each stage: the scan's reading (the caller's), its
   // normals and frame, the hierarchy, the sigma classes, the records and file.
+  // The plan's pass (a scan read in chunks: its first reading), the
+  // partitions' (routing, or loading one partition), then the jobs.
   struct Stages {
-    double read = 0, normals = 0, hierarchy = 0, classes = 0, write = 0;
+    double read = 0, plan = 0, route = 0, normals = 0, hierarchy = 0, classes = 0, write = 0;
   } seconds;
 };
 
@@ -78,6 +82,24 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& options, std::vector<u
 // options.tmp_dir).
 bool encode_to_file(PointCloud& cloud, const EncodeOptions& options, const std::string& path, EncodeReport& report,
                     std::string& error, ProgressBar* progress = nullptr);
+
+// A scan file to a .spg file. PLY, LAS and PCD are read a chunk at a time,
+// twice (the plan's pass, then the partitions'), so no more than a
+// partition is in memory whatever the scan's size; text and OBJ scans, and
+// meshes whose faces give the normals, are read whole. `warn` receives the
+// reader's warnings once it has read the scan (and, for a scan read in
+// chunks, the repeated positions' at the end). Errors name the file.
+bool encode_scan_file(const std::string& scan, const ScanOptions& scan_options, const EncodeOptions& options,
+                      const std::string& path, EncodeReport& report, std::string& error, ProgressBar* progress,
+                      const std::function<void(const std::vector<std::string>&)>& warn);
+
+// The same as far as the partitions: the plan and the partitions' files in
+// `dir` (plan.bin, jobs.txt, part-N.pts), for jobs run elsewhere
+// (`stipple encode-part`, tools/cluster/).
+struct PartitionPlan;
+bool plan_scan_file(const std::string& scan, const ScanOptions& scan_options, const EncodeOptions& options,
+                    const std::string& dir, PartitionPlan& plan, std::string& error, ProgressBar* progress,
+                    const std::function<void(const std::vector<std::string>&)>& warn);
 
 // A model for the programs that draw (render, the viewers): a .spg file's
 // bytes as they are, or — as pcl_viewer opens a scan — any scan
@@ -105,5 +127,8 @@ Vec3 stored_origin(const std::vector<Vec3>& points, int version);
 // The bounding box as stored: float32, relative to `origin`, rounded
 // outwards so it contains every point.
 void stored_bounding_box(const std::vector<Vec3>& points, const Vec3& origin, float min[3], float max[3]);
+// The same from the points' bounding box.
+Vec3 stored_origin(const Box3& box, int version);
+void stored_bounding_box(const Box3& box, const Vec3& origin, float min[3], float max[3]);
 
 }  // namespace stipple

@@ -173,6 +173,7 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
   for (const auto& p : parts) {
     ratios.add(p->summary().ratios);
     report.tree.add(p->summary().report);
+    report.duplicates += p->summary().duplicates;
   }
   report.ratios = ratios.result();
 

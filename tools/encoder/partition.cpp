@@ -232,8 +232,7 @@ std::string part_path(const std::string& dir, uint32_t part, const char* suffix)
   return (std::filesystem::path(dir) / name).string();
 }
 
-bool make_plan(PointCloud& cloud, const EncodeOptions& o, PartitionPlan& plan, std::string& error,
-               ProgressBar* progress) {
+bool check_encode_options(const EncodeOptions& o, std::string& error) {
   if (o.classes_p < 0 || o.classes_p > 4096) return error = "--classes: sigma_p classes must be 1..4096", false;
   if (o.classes_n < 0 || o.classes_n > 4096) return error = "--classes: sigma_n classes must be 1..4096", false;
   if (o.classes_c < 0 || o.classes_c > 64) return error = "--classes: sigma_c classes must be 1..64", false;
@@ -241,56 +240,96 @@ bool make_plan(PointCloud& cloud, const EncodeOptions& o, PartitionPlan& plan, s
     return error = "--format-version: expected " + std::to_string(kSpgOldestVersion) + " or " + std::to_string(kSpgVersion), false;
   if (o.tree.leaf_size < 2) return error = "--leaf-size must be at least 2", false;
   if (!(o.tree.balance >= 0 && o.tree.balance <= 0.5)) return error = "--balance must be in [0, 0.5]", false;
-  if (cloud.size() == 0) return error = "the scan has no points", false;
-  if (cloud.size() > 0xFFFFFFFFu)
-    return error = "the scan has " + std::to_string(cloud.size()) + " points; a .spg counts them in 32 bits (at most 4,294,967,295)", false;
-  if (std::string what = beyond_float_range(cloud.positions); !what.empty()) return error = "the scan's " + what, false;
+  return true;
+}
 
+void PlanSampler::add(const PointCloud& chunk) {
+  const size_t n = chunk.positions.size();
+  if (count == 0 && n > 0) box.min = box.max = chunk.positions[0];
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3& p = chunk.positions[i];
+    box.min = box.min.cwiseMin(p);
+    box.max = box.max.cwiseMax(p);
+    const uint64_t hash = mix64(count + i);
+    if (hash > threshold) continue;
+    positions.push_back(p);
+    if (chunk.has_normals()) normals.push_back(chunk.normals[i]);
+    hashes.push_back(hash);
+  }
+  count += n;
+  // Over capacity: halve the threshold and keep the points still under it
+  // (the sample is then those of the whole scan under the final threshold,
+  // however it was read).
+  while (positions.size() > kSampleSize) {
+    threshold >>= 1;
+    size_t kept = 0;
+    for (size_t i = 0; i < positions.size(); ++i) {
+      if (hashes[i] > threshold) continue;
+      positions[kept] = positions[i];
+      if (!normals.empty()) normals[kept] = normals[i];
+      hashes[kept++] = hashes[i];
+    }
+    positions.resize(kept);
+    if (!normals.empty()) normals.resize(kept);
+    hashes.resize(kept);
+  }
+}
+
+bool make_plan(PointCloud& cloud, const EncodeOptions& o, PartitionPlan& plan, std::string& error,
+               ProgressBar* progress) {
+  if (!check_encode_options(o, error)) return false;
+  if (cloud.size() == 0) return error = "the scan has no points", false;
+  if (std::string what = beyond_float_range(cloud.positions); !what.empty()) return error = "the scan's " + what, false;
+  const std::string source = !o.normals ? "none" : cloud.has_normals() ? "file" : !cloud.triangles.empty() ? "faces" : "k-NN";
+  // Faces give their normals first: they need the whole mesh.
+  if (o.normals && !cloud.has_normals() && !cloud.triangles.empty()) {
+    const auto normals_progress = [&](double f, const char* phase) {
+      if (progress) progress->update(0.3 * f, phase);
+    };
+    estimate_normals(cloud, o.normal_neighbours, ScanFrame{}, normals_progress, o.tree.threads);
+  }
+  if (!o.normals) cloud.normals.clear();
+  PlanSampler sampler;
+  sampler.add(cloud);
+  ScanFacts facts;
+  facts.normals = cloud.has_normals();
+  facts.colors = cloud.has_colors();
+  facts.normals_source = source;
+  facts.has_viewpoint = cloud.has_viewpoint;
+  facts.viewpoint = cloud.viewpoint;
+  return finish_plan(sampler, facts, o, plan, error);
+}
+
+bool finish_plan(PlanSampler& sampler, const ScanFacts& facts, const EncodeOptions& o, PartitionPlan& plan,
+                 std::string& error) {
+  const uint64_t n = sampler.count;
+  if (n == 0) return error = "the scan has no points", false;
+  if (n > 0xFFFFFFFFu)
+    return error = "the scan has " + std::to_string(n) + " points; a .spg counts them in 32 bits (at most 4,294,967,295)", false;
   plan = PartitionPlan{};
-  const uint64_t n = cloud.size();
   plan.points = n;
   plan.version = o.format_version;
   plan.normals = o.normals;
-  plan.colors = o.colors && cloud.has_colors();
+  plan.colors = o.colors && facts.colors;
+  plan.estimate = o.normals && !facts.normals;
+  plan.count_duplicates = facts.count_duplicates;
   plan.normal_neighbours = o.normal_neighbours;
   plan.classes[0] = o.classes_p;
   plan.classes[1] = o.classes_n;
   plan.classes[2] = o.classes_c;
-  plan.normals_source = !o.normals ? "none" : cloud.has_normals() ? "file" : !cloud.triangles.empty() ? "faces" : "k-NN";
-  const auto normals_progress = [&](double f, const char* phase) {
-    if (progress) progress->update(0.3 * f, phase);
-  };
-  // Faces give their normals first: they need the whole mesh.
-  if (o.normals && !cloud.has_normals() && !cloud.triangles.empty())
-    estimate_normals(cloud, o.normal_neighbours, ScanFrame{}, normals_progress, o.tree.threads);
-  if (!o.normals) cloud.normals.clear();
-  plan.estimate = o.normals && !cloud.has_normals();
-
+  plan.normals_source = facts.normals_source;
   const uint64_t limit = partition_points_for(o);
-  // The sample: every point of a scan that fits it, else points chosen by a
-  // hash of their index (the same whichever way the scan is read).
-  std::vector<Vec3> sample, sample_normals;
-  const std::vector<Vec3>* positions = &cloud.positions;
-  const std::vector<Vec3>* normals = cloud.has_normals() ? &cloud.normals : nullptr;
-  if (n > kSampleSize) {
-    const uint64_t threshold = static_cast<uint64_t>(std::ldexp(static_cast<double>(kSampleSize) / static_cast<double>(n), 64));
-    for (uint64_t i = 0; i < n; ++i)
-      if (mix64(i) < threshold) {
-        sample.push_back(cloud.positions[i]);
-        if (normals) sample_normals.push_back(cloud.normals[i]);
-      }
-    positions = &sample;
-    if (normals) normals = &sample_normals;
-  }
+  const std::vector<Vec3>& positions = sampler.positions;
+  const std::vector<Vec3>* normals = facts.normals && o.normals ? &sampler.normals : nullptr;
   OrientOptions orient = o.orient;
-  if (cloud.has_viewpoint && !orient.has_viewpoint) {  // the file's sensor position, unless an option gives one
+  if (facts.has_viewpoint && !orient.has_viewpoint) {  // the file's sensor position, unless an option gives one
     orient.has_viewpoint = true;
-    orient.viewpoint = cloud.viewpoint;
+    orient.viewpoint = facts.viewpoint;
   }
-  plan.frame = analyse_scan(*positions, orient, normals);
+  plan.frame = analyse_scan(positions, orient, normals);
 
-  plan.origin = stored_origin(cloud.positions, plan.version);
-  stored_bounding_box(cloud.positions, plan.origin, plan.bmin, plan.bmax);
+  plan.origin = stored_origin(sampler.box, plan.version);
+  stored_bounding_box(sampler.box, plan.origin, plan.bmin, plan.bmax);
   double diag = 0;
   for (int a = 0; a < 3; ++a) diag += (double(plan.bmax[a]) - plan.bmin[a]) * (double(plan.bmax[a]) - plan.bmin[a]);
   diag = std::sqrt(diag);
@@ -305,10 +344,10 @@ bool make_plan(PointCloud& cloud, const EncodeOptions& o, PartitionPlan& plan, s
   std::vector<std::vector<uint32_t>> ids(1);
   if (n > limit) {
     if (o.tree.octree) return error = "--octree builds in one partition: give it --memory for the whole scan", false;
-    ids[0].resize(positions->size());
+    ids[0].resize(positions.size());
     for (size_t i = 0; i < ids[0].size(); ++i) ids[0][i] = static_cast<uint32_t>(i);
   }
-  const double scale = static_cast<double>(n) / static_cast<double>(std::max<size_t>(positions->size(), 1));
+  const double scale = static_cast<double>(n) / static_cast<double>(std::max<size_t>(positions.size(), 1));
   uint32_t parts = 0;
   for (size_t t = 0; t < plan.top.size(); ++t) {
     std::vector<uint32_t> mine = std::move(ids[t]);
@@ -316,7 +355,7 @@ bool make_plan(PointCloud& cloud, const EncodeOptions& o, PartitionPlan& plan, s
     Vec3 normal;
     double offset = 0;
     if (static_cast<double>(mine.size()) * scale > static_cast<double>(limit) && plan.top[t].depth < 60 &&
-        split_plane(*positions, mine, normal, offset, left)) {
+        split_plane(positions, mine, normal, offset, left)) {
       plan.top[t].normal = normal;
       plan.top[t].offset = offset;
       plan.top[t].first_child = static_cast<uint32_t>(plan.top.size());
@@ -339,12 +378,12 @@ bool make_plan(PointCloud& cloud, const EncodeOptions& o, PartitionPlan& plan, s
   plan.part_halo.assign(parts, 0);
   if (parts == 1) plan.part_points[0] = n;
   if (parts > 1 && plan.estimate) {
-    plan.halo = halo_distance(*positions, n, o.normal_neighbours);
+    plan.halo = halo_distance(positions, n, o.normal_neighbours);
     // Outward normals: every job seeds its components facing away from the
     // whole scan's centre, not its own.
     plan.frame.has_centre = true;
-    for (const Vec3& p : *positions) plan.frame.centre += p;
-    plan.frame.centre /= static_cast<double>(positions->size());
+    for (const Vec3& p : positions) plan.frame.centre += p;
+    plan.frame.centre /= static_cast<double>(positions.size());
   }
   return true;
 }
@@ -354,7 +393,7 @@ bool write_plan(const PartitionPlan& p, const std::string& dir, std::string& err
   out.bytes.assign(kPlanMagic, kPlanMagic + 8);
   out.put(p.points);
   out.put(static_cast<int32_t>(p.version));
-  out.put(static_cast<uint8_t>(p.normals | p.colors << 1 | p.estimate << 2));
+  out.put(static_cast<uint8_t>(p.normals | p.colors << 1 | p.estimate << 2 | p.count_duplicates << 3));
   out.put(static_cast<int32_t>(p.normal_neighbours));
   out.str(p.normals_source);
   for (int c = 0; c < 3; ++c) out.put(static_cast<int32_t>(p.classes[c]));
@@ -428,6 +467,7 @@ bool read_plan(const std::string& dir, PartitionPlan& p, std::string& error) {
   p.normals = flags & 1;
   p.colors = flags & 2;
   p.estimate = flags & 4;
+  p.count_duplicates = flags & 8;
   p.normal_neighbours = in.get<int32_t>();
   p.normals_source = in.str();
   for (int c = 0; c < 3; ++c) p.classes[c] = in.get<int32_t>();
@@ -498,92 +538,101 @@ bool read_plan(const std::string& dir, PartitionPlan& p, std::string& error) {
   return true;
 }
 
-namespace {
-
-// Appends points to partition files through a buffer each, opening a file
+// Appends points to a partition's file through a buffer, opening the file
 // only to flush (thousands of partitions would pass the open-file limit).
-class PartWriter {
- public:
-  PartWriter(std::string path, size_t point_bytes) : path_(std::move(path)), point_bytes_(point_bytes) {}
+struct PartitionRouter::Writer {
+  std::string path;
+  std::vector<uint8_t> buffer;
+  uint64_t count = 0;
+  bool created = false;
   void add(const PointCloud& cloud, size_t i, bool normals, bool colors) {
     const auto put = [&](const Vec3& v) {
       const auto* b = reinterpret_cast<const uint8_t*>(v.data());
-      buffer_.insert(buffer_.end(), b, b + 24);
+      buffer.insert(buffer.end(), b, b + 24);
     };
     put(cloud.positions[i]);
     if (normals) put(cloud.normals[i]);
     if (colors) put(cloud.colors[i]);
-    ++count_;
+    ++count;
   }
-  bool full() const { return buffer_.size() >= (size_t{1} << 16); }
+  bool full() const { return buffer.size() >= (size_t{1} << 16); }
   bool flush(std::string& error) {
-    if (buffer_.empty() && created_) return true;
-    std::FILE* f = std::fopen(path_.c_str(), created_ ? "ab" : "wb");
-    if (!f) return error = path_ + ": " + errno_text(), false;
-    created_ = true;
-    const bool wrote = buffer_.empty() || std::fwrite(buffer_.data(), 1, buffer_.size(), f) == buffer_.size();
+    if (buffer.empty() && created) return true;
+    std::FILE* f = std::fopen(path.c_str(), created ? "ab" : "wb");
+    if (!f) return error = path + ": " + errno_text(), false;
+    created = true;
+    const bool wrote = buffer.empty() || std::fwrite(buffer.data(), 1, buffer.size(), f) == buffer.size();
     const int why = wrote ? 0 : errno;
     const bool closed = std::fclose(f) == 0;
     if (!wrote || !closed)
-      return error = path_ + ": write failed: " + std::strerror(why ? why : errno ? errno : EIO), false;
-    buffer_.clear();
+      return error = path + ": write failed: " + std::strerror(why ? why : errno ? errno : EIO), false;
+    buffer.clear();
     return true;
   }
-  uint64_t count() const { return count_; }
-
- private:
-  std::string path_;
-  size_t point_bytes_;
-  std::vector<uint8_t> buffer_;
-  uint64_t count_ = 0;
-  bool created_ = false;
 };
 
-}  // namespace
-
-bool route_points(const PointCloud& cloud, PartitionPlan& plan, const std::string& dir, std::string& error,
-                  ProgressBar* progress) {
-  const uint32_t parts = plan.partitions();
-  const size_t bytes = partition_point_bytes(plan);
-  const bool normals = plan.normals && !plan.estimate, colors = plan.colors;
-  std::vector<PartWriter> own, halo;
-  for (uint32_t i = 0; i < parts; ++i) {
-    own.emplace_back(part_path(dir, i, "pts"), bytes);
-    halo.emplace_back(part_path(dir, i, "halo"), bytes);
+PartitionRouter::PartitionRouter(PartitionPlan& plan, const std::string& dir) : plan_(plan) {
+  for (uint32_t i = 0; i < plan.partitions(); ++i) {
+    own_.push_back(Writer{part_path(dir, i, "pts"), {}, 0, false});
+    halo_.push_back(Writer{part_path(dir, i, "halo"), {}, 0, false});
   }
-  std::vector<uint32_t> stack;
-  const size_t n = cloud.size();
-  for (size_t i = 0; i < n; ++i) {
+}
+
+PartitionRouter::~PartitionRouter() = default;
+
+bool PartitionRouter::add(const PointCloud& cloud, std::string& error) {
+  const bool normals = plan_.normals && !plan_.estimate, colors = plan_.colors;
+  if ((normals && cloud.normals.size() != cloud.size()) || (colors && cloud.colors.size() != cloud.size()))
+    return error = "the scan's chunk lacks the normals or colours its plan has", false;
+  for (size_t i = 0; i < cloud.size(); ++i) {
     const Vec3& p = cloud.positions[i];
-    const uint32_t home = plan.route(p);
-    own[home].add(cloud, i, normals, colors);
-    if (own[home].full() && !own[home].flush(error)) return false;
-    if (plan.halo > 0) {
+    const uint32_t home = plan_.route(p);
+    own_[home].add(cloud, i, normals, colors);
+    if (own_[home].full() && !own_[home].flush(error)) return false;
+    if (plan_.halo > 0) {
       // Every partition within `halo` of the point across some plane.
-      stack.assign(1, 0);
-      while (!stack.empty()) {
-        const TopNode& t = plan.top[stack.back()];
-        stack.pop_back();
+      stack_.assign(1, 0);
+      while (!stack_.empty()) {
+        const TopNode& t = plan_.top[stack_.back()];
+        stack_.pop_back();
         if (t.leaf()) {
           if (t.part != home) {
-            halo[t.part].add(cloud, i, normals, colors);
-            if (halo[t.part].full() && !halo[t.part].flush(error)) return false;
+            halo_[t.part].add(cloud, i, normals, colors);
+            if (halo_[t.part].full() && !halo_[t.part].flush(error)) return false;
           }
           continue;
         }
         const double s = t.normal.dot(p) - t.offset;
-        if (s > -plan.halo) stack.push_back(t.first_child + 1);
-        if (s <= plan.halo) stack.push_back(t.first_child);
+        if (s > -plan_.halo) stack_.push_back(t.first_child + 1);
+        if (s <= plan_.halo) stack_.push_back(t.first_child);
       }
     }
-    if (progress && (i & 0xFFFFF) == 0) progress->update(0.3 * static_cast<double>(i) / static_cast<double>(n), "routing points to partitions");
-  }
-  for (uint32_t i = 0; i < parts; ++i) {
-    if (!own[i].flush(error) || !halo[i].flush(error)) return false;
-    plan.part_points[i] = own[i].count();
-    plan.part_halo[i] = halo[i].count();
   }
   return true;
+}
+
+bool PartitionRouter::finish(std::string& error) {
+  for (uint32_t i = 0; i < plan_.partitions(); ++i) {
+    if (!own_[i].flush(error) || !halo_[i].flush(error)) return false;
+    plan_.part_points[i] = own_[i].count;
+    plan_.part_halo[i] = halo_[i].count;
+  }
+  return true;
+}
+
+bool route_points(const PointCloud& cloud, PartitionPlan& plan, const std::string& dir, std::string& error,
+                  ProgressBar* progress) {
+  PartitionRouter router(plan, dir);
+  PointCloud chunk;
+  for (size_t at = 0; at < cloud.size(); at += kScanChunk) {
+    const size_t end = std::min(cloud.size(), at + kScanChunk);
+    chunk.positions.assign(cloud.positions.begin() + static_cast<std::ptrdiff_t>(at), cloud.positions.begin() + static_cast<std::ptrdiff_t>(end));
+    if (cloud.has_normals()) chunk.normals.assign(cloud.normals.begin() + static_cast<std::ptrdiff_t>(at), cloud.normals.begin() + static_cast<std::ptrdiff_t>(end));
+    if (cloud.has_colors()) chunk.colors.assign(cloud.colors.begin() + static_cast<std::ptrdiff_t>(at), cloud.colors.begin() + static_cast<std::ptrdiff_t>(end));
+    if (!router.add(chunk, error)) return false;
+    if (progress) progress->update(0.3 * static_cast<double>(end) / static_cast<double>(cloud.size()), "routing points to partitions");
+  }
+  return router.finish(error);
 }
 
 void merge_moments(uint64_t& count, Vec3& mean, Mat3& m2, uint64_t other_count, const Vec3& other_mean,
@@ -651,6 +700,9 @@ std::unique_ptr<PartNodes> run_part(PointCloud& cloud, size_t own, const Partiti
   PartSummary s;
   s.normals_seconds = monotonic_seconds() - start;
   s.points = own;
+  // Equal positions always share a partition, so the parts' counts add up
+  // to the scan's.
+  if (plan.count_duplicates) s.duplicates = count_duplicate_positions(cloud.positions);
   Mat3 m2 = Mat3::Zero();
   {
     const Gaussian3 g = pca3(cloud.positions.data(), own);  // the mean, centred
@@ -692,7 +744,7 @@ namespace {
 
 // The node file: magic, header, the child counts (u8), the point counts
 // (u32), the statistics (41 doubles) of every node, then CRC-32.
-size_t nodes_header_bytes(size_t levels) { return 8 + 4 + 8 * 3 + 4 + 8 * levels + 8 * (3 + 9 + 3 + 1 + 3 + 9) + 5 * 8 + 2 * 8 + 2 * 8; }
+size_t nodes_header_bytes(size_t levels) { return 8 + 4 + 8 * 3 + 4 + 8 * levels + 8 * (3 + 9 + 3 + 1 + 3 + 9) + 5 * 8 + 2 * 8 + 2 * 8 + 8; }
 
 bool read_points_file(const std::string& path, uint64_t expected, const PartitionPlan& plan, PointCloud& cloud,
                       std::string& error) {
@@ -796,6 +848,7 @@ bool run_part_file(const std::string& dir, const PartitionPlan& plan, uint32_t p
   out.put(s.ratios.capr_sum);
   out.put(s.ratios.families);
   out.put(s.ratios.capr_families);
+  out.put(s.duplicates);
   const std::string path = part_path(dir, part, "nodes");
   AtomicFileWriter file;
   if (!file.open(path, error)) return false;
@@ -873,6 +926,7 @@ std::unique_ptr<PartNodes> open_part_file(const std::string& dir, const Partitio
   s.ratios.capr_sum = in.get<double>();
   s.ratios.families = in.get<uint64_t>();
   s.ratios.capr_families = in.get<uint64_t>();
+  s.duplicates = in.get<uint64_t>();
   f->header_ = nodes_header_bytes(s.level_begin.size());
   if (!in.ok() || size != f->header_ + s.nodes * (1 + 4 + 8 * kStatsDoubles) + 4)
     return bad("its size does not match its node count (" + std::to_string(s.nodes) + ")");

@@ -52,6 +52,7 @@ struct PartitionPlan {
   bool normals = true;         // the file stores normals
   bool colors = false;         // ... and colours
   bool estimate = false;       // jobs estimate normals (k-NN) with a halo
+  bool count_duplicates = false;  // jobs count repeated positions (the scan was read in chunks)
   int normal_neighbours = 12;
   std::string normals_source;  // "file", "faces", "k-NN", "none"
   int classes[3] = {0, 0, 0};  // options: 0 automatic
@@ -71,9 +72,42 @@ struct PartitionPlan {
 // and colour where the plan has them (doubles).
 size_t partition_point_bytes(const PartitionPlan& plan);
 
-// The plan for `cloud` (validated as encode_cloud validates). Normals from
-// faces are computed here (they need the whole mesh); k-NN normals are left
-// to the jobs. `partition_points` 0 means from `options.memory`.
+// The encode options' own checks (class counts, version, leaf size, balance).
+bool check_encode_options(const EncodeOptions& options, std::string& error);
+
+// The plan's pass over the scan, a chunk at a time in file order: the
+// count, the bounds, and a deterministic sample of at most 2^20 points —
+// every point of a smaller scan, else those whose index hashes under a
+// threshold halved whenever the sample overflows (so the sample depends on
+// the scan alone, not on how it was read).
+struct PlanSampler {
+  uint64_t count = 0;
+  Box3 box;
+  std::vector<Vec3> positions, normals;  // the sample (normals where the scan has them)
+  void add(const PointCloud& chunk);
+
+ private:
+  std::vector<uint64_t> hashes;
+  uint64_t threshold = ~uint64_t{0};
+};
+
+// What the plan needs to know of the scan besides its points.
+struct ScanFacts {
+  bool normals = false, colors = false;  // the file has them
+  std::string normals_source;            // "file", "faces", "k-NN", "none"
+  bool has_viewpoint = false;
+  Vec3 viewpoint = Vec3::Zero();
+  bool count_duplicates = false;  // jobs count repeated positions (a reader in chunks could not)
+};
+
+// The plan from the sampler's pass: frame, box, top tree, halo.
+// `partition_points` 0 means from `options.memory`.
+bool finish_plan(PlanSampler& sampler, const ScanFacts& facts, const EncodeOptions& options, PartitionPlan& plan,
+                 std::string& error);
+
+// The plan for a scan in memory (validated as encode_cloud validates).
+// Normals from faces are computed here (they need the whole mesh); k-NN
+// normals are left to the jobs.
 bool make_plan(PointCloud& cloud, const EncodeOptions& options, PartitionPlan& plan, std::string& error,
                ProgressBar* progress = nullptr);
 
@@ -81,8 +115,24 @@ bool make_plan(PointCloud& cloud, const EncodeOptions& options, PartitionPlan& p
 bool write_plan(const PartitionPlan& plan, const std::string& dir, std::string& error);
 bool read_plan(const std::string& dir, PartitionPlan& plan, std::string& error);
 
-// Sends every point of `cloud` to its partition's file in `dir` (and its
-// halos); fills plan.part_points and part_halo.
+// Sends points to their partitions' files in `dir` (and their halos), a
+// chunk at a time in file order; finish() flushes and fills
+// plan.part_points and part_halo.
+class PartitionRouter {
+ public:
+  PartitionRouter(PartitionPlan& plan, const std::string& dir);
+  ~PartitionRouter();
+  bool add(const PointCloud& chunk, std::string& error);
+  bool finish(std::string& error);
+
+ private:
+  struct Writer;
+  PartitionPlan& plan_;
+  std::vector<Writer> own_, halo_;
+  std::vector<uint32_t> stack_;
+};
+
+// All of `cloud` through a router.
 bool route_points(const PointCloud& cloud, PartitionPlan& plan, const std::string& dir, std::string& error,
                   ProgressBar* progress = nullptr);
 
@@ -102,6 +152,7 @@ struct PartSummary {
   NodeStats root;
   TreeReport report;
   PartitionRatioAccumulator ratios;
+  uint64_t duplicates = 0;  // repeated positions, when the plan counts them
   double normals_seconds = 0, tree_seconds = 0;  // a job run in this process (not in the file)
 };
 

@@ -31,7 +31,8 @@ constexpr uint16_t kRgbAt[11] = {0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30};
 
 bool looks_like_las(const uint8_t* data, size_t size) { return size >= 4 && std::memcmp(data, "LASF", 4) == 0; }
 
-bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error) {
+bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error,
+               ScanStream* stream) {
   cloud = PointCloud{};
   const auto fail = [&](const std::string& what) { return error = name + ": " + what, false; };
   if (!looks_like_las(data, size)) return fail("not a LAS file (no LASF signature)");
@@ -78,8 +79,9 @@ bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointC
     if (!std::isfinite(shift[a])) return fail("header byte " + std::to_string(kOffset + 8 * a) + ": offset " + "xyz"[a] + " is not finite");
   }
   const size_t rgb_at = kRgbAt[format_byte];
-  cloud.positions.reserve(count);
-  if (rgb_at) cloud.colors.reserve(count);
+  const uint64_t room = stream ? std::min<uint64_t>(count, kScanChunk) : count;
+  cloud.positions.reserve(room);
+  if (rgb_at) cloud.colors.reserve(room);
   uint16_t brightest = 0;
   for (uint64_t i = 0; i < count; ++i) {
     const uint8_t* p = data + offset + i * record;
@@ -93,13 +95,17 @@ bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointC
       brightest = std::max({brightest, r, g, b});
       cloud.colors.emplace_back(r, g, b);
     }
+    if (stream && !stream->flush(cloud, offset + (i + 1) * record, false, error)) return false;
   }
   if (rgb_at && brightest == 0) {
     cloud.colors.clear();
+    if (stream) stream->color_divisor = 0;
     cloud.warnings.push_back(name + ": every RGB value is 0: read without colour");
   } else if (rgb_at) {
     const bool eight_bit = brightest <= 255;
-    for (Vec3& c : cloud.colors) c /= eight_bit ? 255.0 : 65535.0;
+    if (stream) stream->color_divisor = eight_bit ? 255.0 : 65535.0;
+    else
+      for (Vec3& c : cloud.colors) c /= eight_bit ? 255.0 : 65535.0;
     if (eight_bit)
       cloud.warnings.push_back(name + ": every RGB value is 255 or less: read as 8-bit colour (LAS stores 16 bits a channel)");
   }

@@ -27,6 +27,9 @@ namespace stipple {
 
 bool looks_like_las(const uint8_t* data, size_t size);
 
-bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error);
+// `stream`: the points go there a chunk at a time (tools/scan/point_cloud.h),
+// their colours unscaled (its color_divisor says how at the end).
+bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error,
+               ScanStream* stream = nullptr);
 
 }  // namespace stipple

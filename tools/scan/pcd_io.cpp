@@ -92,7 +92,8 @@ bool looks_like_pcd(const uint8_t* data, size_t size) {
   return starts("VERSION ") || starts("VERSION\t") || starts("FIELDS ") || starts("FIELDS\t");
 }
 
-bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error) {
+bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error,
+               ScanStream* stream) {
   cloud = PointCloud{};
   Header h;
   size_t pos = 0;
@@ -214,9 +215,10 @@ bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointC
       return fail("byte " + std::to_string(pos + 8) + ": the LZF block is corrupt");
   }
   const uint64_t n = h.points;
-  cloud.positions.reserve(n);
-  if (normals) cloud.normals.reserve(n);
-  if (irgb >= 0) cloud.colors.reserve(n);
+  const uint64_t room = stream ? std::min<uint64_t>(n, kScanChunk) : n;
+  cloud.positions.reserve(room);
+  if (normals) cloud.normals.reserve(room);
+  if (irgb >= 0) cloud.colors.reserve(room);
   std::vector<const uint8_t*> at(h.fields.size());
   size_t values_per_point = 0;  // ascii: a line's words
   for (const Field& f : h.fields) values_per_point += f.count;
@@ -284,8 +286,14 @@ bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointC
       cloud.normals.push_back(std::isfinite(len) && len > 0 ? Vec3(nrm / len) : Vec3::Zero());
     }
     if (irgb >= 0) cloud.colors.push_back(col);
+    // Bytes read: the text's position, or the records' (a compressed file's
+    // block is read whole).
+    const uint64_t read = h.data == "ascii" ? static_cast<uint64_t>(reinterpret_cast<const uint8_t*>(text) - data)
+                          : h.data == "binary" ? static_cast<uint64_t>(records - data) + (i + 1) * h.record
+                                               : size;
+    if (stream && !stream->flush(cloud, read, false, error)) return false;
   }
-  if (cloud.positions.empty())
+  if (cloud.positions.empty() && !(stream && stream->delivered > 0))
     return fail(dropped > 0 ? "every one of its " + std::to_string(dropped) + " points has a NaN coordinate" : "no points");
   if (dropped > 0)
     cloud.warnings.push_back(name + ": " + std::to_string(dropped) + " of " + std::to_string(n) +

@@ -29,6 +29,8 @@ namespace stipple {
 // line first).
 bool looks_like_pcd(const uint8_t* data, size_t size);
 
-bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error);
+// `stream`: the points go there a chunk at a time (tools/scan/point_cloud.h).
+bool parse_pcd(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error,
+               ScanStream* stream = nullptr);
 
 }  // namespace stipple

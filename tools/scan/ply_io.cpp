@@ -170,7 +170,7 @@ std::string word_of(double v) {
 }
 
 bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
-               std::string& error) {
+               std::string& error, ScanStream* stream) {
   // Header: text lines up to and including "end_header".
   std::vector<Element> elements;
   Format format = Format::kAscii;
@@ -321,9 +321,10 @@ bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointC
   }
 
   cloud = PointCloud{};
-  cloud.positions.reserve(vertex->count);
-  if (has_normals) cloud.normals.reserve(vertex->count);
-  if (has_colors) cloud.colors.reserve(vertex->count);
+  const uint64_t room = stream ? std::min<uint64_t>(vertex->count, kScanChunk) : vertex->count;
+  cloud.positions.reserve(room);
+  if (has_normals) cloud.normals.reserve(room);
+  if (has_colors) cloud.colors.reserve(room);
 
   Input in(data, size, pos, format);
   std::vector<double> values;
@@ -375,7 +376,10 @@ bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointC
             face.push_back(static_cast<uint32_t>(v));
           }
         }
-        for (size_t k = 2; k < face.size(); ++k) cloud.triangles.push_back({face[0], face[k - 1], face[k]});
+        for (size_t k = 2; k < face.size(); ++k) {
+          if (stream) ++stream->triangles;
+          else cloud.triangles.push_back({face[0], face[k - 1], face[k]});
+        }
       }
       if (!is_vertex) continue;
       const Vec3 p(values[ix], values[iy], values[iz]);
@@ -404,6 +408,7 @@ bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointC
         }
         cloud.colors.push_back(c.cwiseMax(0.0).cwiseMin(1.0));
       }
+      if (stream && !stream->flush(cloud, in.pos(), false, error)) return false;
     }
   }
   if (format != Format::kAscii && in.remaining() != 0) {
@@ -411,7 +416,7 @@ bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointC
             " unexpected bytes after the last element (counts disagree with the file size)";
     return false;
   }
-  if (cloud.positions.empty()) {
+  if (cloud.positions.empty() && !(stream && stream->delivered > 0)) {
     error = name + ": no vertices";
     return false;
   }
@@ -621,12 +626,38 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
 
 }  // namespace
 
-std::string beyond_float_range(const std::vector<Vec3>& points) {
+std::string beyond_float_range(const std::vector<Vec3>& points, uint64_t first) {
   for (size_t i = 0; i < points.size(); ++i)
     for (int a = 0; a < 3; ++a)
       if (!(std::abs(points[i][a]) <= kMaxCoordinate))
-        return "point " + std::to_string(i) + " (counting from 0): " + beyond_float(a, points[i][a]);
+        return "point " + std::to_string(first + i) + " (counting from 0): " + beyond_float(a, points[i][a]);
   return {};
+}
+
+bool ScanStream::flush(PointCloud& cloud, uint64_t bytes_read, bool last, std::string& error) {
+  if (cloud.positions.size() < kScanChunk && !(last && !cloud.positions.empty())) return true;
+  if (!deliver(cloud, delivered, bytes_read, error)) return false;
+  delivered += cloud.positions.size();
+  cloud.positions.clear();
+  cloud.normals.clear();
+  cloud.colors.clear();
+  return true;
+}
+
+std::string duplicate_warning(const std::string& name, uint64_t duplicates, uint64_t points, const Box3& box) {
+  // Many points on one value: float32 coordinates far from the origin round
+  // onto a coarse lattice (at 1e7, steps of 1), and the scan collapses.
+  if (duplicates < 100 || duplicates * 100 < points) return {};
+  const double far = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff());
+  char text[256];
+  std::snprintf(text, sizeof text, "%s: %llu of %llu points (%.1f %%) repeat another point's position exactly%s",
+                name.c_str(), static_cast<unsigned long long>(duplicates), static_cast<unsigned long long>(points),
+                100.0 * static_cast<double>(duplicates) / static_cast<double>(points),
+                (box.diagonal() > 0 && far > 1e5 * box.diagonal()) || (box.diagonal() == 0 && far >= 1e5)
+                    ? "; the coordinates are far from the origin for their extent: float32 values there round onto a "
+                      "coarse lattice (subtract an offset before storing them as float)"
+                    : "");
+  return text;
 }
 
 size_t count_duplicate_positions(const std::vector<Vec3>& points) {
@@ -700,13 +731,17 @@ bool parse_text_columns(const std::string& spec, TextColumns& columns, std::stri
   return true;
 }
 
-bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
-                       std::string& error, const ScanOptions& options) {
+namespace {
+
+enum class ScanFormat { kPly, kLas, kPcd, kObj, kText };
+
+// What parse_point_cloud and stream_point_cloud do before a reader: the
+// file's signature told, its quirks mended (said in `note`), the refusals.
+bool open_scan(const std::string& name, const uint8_t*& data, size_t& size, const ScanOptions& options,
+               std::vector<uint8_t>& fixed, std::string& note, ScanFormat& format, std::string& error) {
   // A UTF-8 byte-order mark before a PLY header, or the magic in capitals
   // ("PLY", which PLY does not allow but some writers produce): read it as
   // PLY, and say so.
-  std::vector<uint8_t> fixed;
-  std::string note;
   if (size >= 3 && std::memcmp(data, "\xEF\xBB\xBF", 3) == 0 && size >= 6 &&
       (std::memcmp(data + 3, "ply", 3) == 0 || std::memcmp(data + 3, "PLY", 3) == 0)) {
     data += 3;
@@ -727,25 +762,35 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
     error = e57_refusal(name);
     return false;
   }
-  enum class Format { kPly, kLas, kPcd, kObj, kText };
-  const Format format = size >= 3 && std::memcmp(data, "ply", 3) == 0 ? Format::kPly
-                        : looks_like_las(data, size)                    ? Format::kLas
-                        : looks_like_pcd(data, size)                    ? Format::kPcd
-                        : looks_like_obj(data, size)                    ? Format::kObj
-                                                                        : Format::kText;
-  if (format != Format::kText && !options.columns.fields.empty()) {
+  format = size >= 3 && std::memcmp(data, "ply", 3) == 0 ? ScanFormat::kPly
+           : looks_like_las(data, size)                    ? ScanFormat::kLas
+           : looks_like_pcd(data, size)                    ? ScanFormat::kPcd
+           : looks_like_obj(data, size)                    ? ScanFormat::kObj
+                                                           : ScanFormat::kText;
+  if (format != ScanFormat::kText && !options.columns.fields.empty()) {
     error = name + ": --columns names a text scan's columns, but this is " +
-            (format == Format::kPly ? "PLY" : format == Format::kLas ? "LAS" : format == Format::kPcd ? "PCD" : "OBJ") +
-            ", whose " + (format == Format::kObj ? "'v' lines are" : "header names") + " them";
+            (format == ScanFormat::kPly ? "PLY" : format == ScanFormat::kLas ? "LAS" : format == ScanFormat::kPcd ? "PCD" : "OBJ") +
+            ", whose " + (format == ScanFormat::kObj ? "'v' lines are" : "header names") + " them";
     return false;
   }
+  return true;
+}
+
+}  // namespace
+
+bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
+                       std::string& error, const ScanOptions& options) {
+  std::vector<uint8_t> fixed;
+  std::string note;
+  ScanFormat format;
+  if (!open_scan(name, data, size, options, fixed, note, format, error)) return false;
   bool ok = false;
   switch (format) {
-    case Format::kPly: ok = parse_ply(name, data, size, cloud, error); break;
-    case Format::kLas: ok = parse_las(name, data, size, cloud, error); break;
-    case Format::kPcd: ok = parse_pcd(name, data, size, cloud, error); break;
-    case Format::kObj: ok = parse_obj(name, data, size, cloud, error); break;
-    case Format::kText: {
+    case ScanFormat::kPly: ok = parse_ply(name, data, size, cloud, error, nullptr); break;
+    case ScanFormat::kLas: ok = parse_las(name, data, size, cloud, error); break;
+    case ScanFormat::kPcd: ok = parse_pcd(name, data, size, cloud, error); break;
+    case ScanFormat::kObj: ok = parse_obj(name, data, size, cloud, error); break;
+    case ScanFormat::kText: {
       TextPlan plan;
       cloud = PointCloud{};
       ok = plan_text(name, data, size, options.columns, plan, cloud, error) &&
@@ -756,22 +801,60 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
   if (!ok) return false;
   if (std::string what = beyond_float_range(cloud.positions); !what.empty()) return error = name + ": " + what, false;
   if (!note.empty()) cloud.warnings.insert(cloud.warnings.begin(), name + ": " + note);
-  // Many points on one value: float32 coordinates far from the origin round
-  // onto a coarse lattice (at 1e7, steps of 1), and the scan collapses.
   const size_t duplicates = count_duplicate_positions(cloud.positions);
-  if (duplicates >= 100 && duplicates * 100 >= cloud.size()) {
-    const Box3 box = bounding_box(cloud.positions);
-    const double far = std::max(box.min.cwiseAbs().maxCoeff(), box.max.cwiseAbs().maxCoeff());
-    char text[256];
-    std::snprintf(text, sizeof text,
-                  "%s: %zu of %zu points (%.1f %%) repeat another point's position exactly%s", name.c_str(),
-                  duplicates, cloud.size(), 100.0 * static_cast<double>(duplicates) / static_cast<double>(cloud.size()),
-                  (box.diagonal() > 0 && far > 1e5 * box.diagonal()) || (box.diagonal() == 0 && far >= 1e5)
-                      ? "; the coordinates are far from the origin for their extent: float32 values there round onto a "
-                        "coarse lattice (subtract an offset before storing them as float)"
-                      : "");
-    cloud.warnings.push_back(text);
+  if (std::string w = duplicate_warning(name, duplicates, cloud.size(), bounding_box(cloud.positions)); !w.empty())
+    cloud.warnings.push_back(w);
+  return true;
+}
+
+bool scan_streams(const std::string& path) {
+  MappedFile file;
+  std::string error;
+  if (!file.open(path, error)) return false;
+  const uint8_t* data = file.data();
+  size_t size = file.size();
+  std::vector<uint8_t> fixed;
+  std::string note;
+  ScanFormat format;
+  return open_scan(path, data, size, ScanOptions{}, fixed, note, format, error) &&
+         (format == ScanFormat::kPly || format == ScanFormat::kLas || format == ScanFormat::kPcd);
+}
+
+bool stream_point_cloud(const std::string& path, ScanStream& stream, PointCloud& rest, std::string& error,
+                        const ScanOptions& options) {
+  MappedFile file;
+  if (!file.open(path, error)) return false;
+  const uint8_t* data = file.data();
+  size_t size = file.size();
+  std::vector<uint8_t> fixed;
+  std::string note;
+  ScanFormat format;
+  if (!open_scan(path, data, size, options, fixed, note, format, error)) return false;
+  if (format != ScanFormat::kPly && format != ScanFormat::kLas && format != ScanFormat::kPcd)
+    return error = path + ": a text or OBJ scan is read whole, not in chunks (read_point_cloud)", false;
+  // Each chunk checked as parse_point_cloud checks the whole; the file's
+  // pages behind the reader are given back (a scan larger than memory).
+  ScanStream inner;
+  inner.deliver = [&](PointCloud& chunk, uint64_t first, uint64_t bytes_read, std::string& why) {
+    if (std::string what = beyond_float_range(chunk.positions, first); !what.empty()) return why = path + ": " + what, false;
+    if (!stream.deliver(chunk, first, bytes_read, why)) return false;
+    if (fixed.empty()) file.release_before(static_cast<size_t>(bytes_read) + static_cast<size_t>(data - file.data()));
+    return true;
+  };
+  rest = PointCloud{};
+  bool ok = false;
+  uint64_t end = size;
+  switch (format) {
+    case ScanFormat::kPly: ok = parse_ply(path, data, size, rest, error, &inner); break;
+    case ScanFormat::kLas: ok = parse_las(path, data, size, rest, error, &inner); break;
+    case ScanFormat::kPcd: ok = parse_pcd(path, data, size, rest, error, &inner); break;
+    default: break;
   }
+  if (!ok || !inner.flush(rest, end, true, error)) return false;
+  stream.delivered = inner.delivered;
+  stream.triangles = inner.triangles;
+  stream.color_divisor = inner.color_divisor;
+  if (!note.empty()) rest.warnings.insert(rest.warnings.begin(), path + ": " + note);
   return true;
 }
 

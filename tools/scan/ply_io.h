@@ -58,12 +58,27 @@ bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& e
 bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
                        std::string& error, const ScanOptions& options = {});
 
+// The same a chunk at a time, for a scan larger than memory: PLY, LAS and
+// PCD files (scan_streams says which), memory-mapped, each chunk validated
+// as read_point_cloud validates the whole (the same messages, the points
+// counted from the file's start). `rest` ends with the reader's warnings
+// and the file's viewpoint, and no points. The whole-file checks a stream
+// cannot make are the caller's: repeated positions (duplicate_warning), a
+// mesh's faces (stream.triangles), LAS colours (stream.color_divisor).
+bool scan_streams(const std::string& path);
+bool stream_point_cloud(const std::string& path, ScanStream& stream, PointCloud& rest, std::string& error,
+                        const ScanOptions& options = {});
+
+// "<name>: N of M points (P %) repeat another point's position exactly[; far
+// from the origin ...]" where N is at least 1 % of M and 100; "" otherwise.
+std::string duplicate_warning(const std::string& name, uint64_t duplicates, uint64_t points, const Box3& box);
+
 // The largest coordinate magnitude a scan may have: float32's largest value,
 // since a .spg stores its box in float32 (docs/format.md §1). Readers refuse a
 // scan with one beyond it, naming the point, the axis and the value.
 inline constexpr double kMaxCoordinate = 3.4028234663852886e38;
 // "" when every coordinate is within ±kMaxCoordinate; else what is not.
-std::string beyond_float_range(const std::vector<Vec3>& points);
+std::string beyond_float_range(const std::vector<Vec3>& points, uint64_t first = 0);  // points counted from `first`
 
 // Points whose position equals an earlier point's (exact comparison).
 size_t count_duplicate_positions(const std::vector<Vec3>& points);

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,26 @@ struct PointCloud {
   size_t size() const { return positions.size(); }
   bool has_normals() const { return !normals.empty(); }
   bool has_colors() const { return !colors.empty(); }
+};
+
+// A scan read a chunk at a time (the encoder in partitions reads a scan of
+// any size so): the reader hands `deliver` its points whenever it holds
+// kScanChunk of them, and the rest at the end, with the index of the chunk's
+// first point and the bytes of the file read so far. The callee may take
+// the chunk's vectors; the reader clears them after. What only the whole
+// file tells comes at the end, in the fields below.
+inline constexpr size_t kScanChunk = size_t{1} << 16;
+struct ScanStream {
+  std::function<bool(PointCloud& chunk, uint64_t first, uint64_t bytes_read, std::string& error)> deliver;
+  uint64_t delivered = 0;     // points handed over so far
+  uint64_t triangles = 0;     // faces the file has (not kept: a mesh's normals need the whole mesh)
+  // Colours the reader delivers unscaled, to be divided by this once the
+  // whole file is read (LAS: 255 for an 8-bit writer's, else 65535); 1 for
+  // colours already in [0, 1]. 0: the file's colours are all zero, read
+  // without colour.
+  double color_divisor = 1;
+  // Hands over what `cloud` holds (when it holds kScanChunk, or `last`).
+  bool flush(PointCloud& cloud, uint64_t bytes_read, bool last, std::string& error);
 };
 
 // Axis-aligned bounding box of a set of points.
