@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -17,6 +18,7 @@
 #include "tools/encoder/merge.h"
 #include "tools/encoder/normals.h"
 #include "tools/encoder/partition.h"
+#include "tools/scan/ply_io.h"
 
 namespace stipple {
 namespace {
@@ -324,6 +326,135 @@ TEST(Partition, TheMemoryBudgetSetsThePartitionSize) {
   EXPECT_EQ(partition_points_for(o), (uint64_t{1} << 30) / 200);
   o.partition_points = 5000;
   EXPECT_EQ(partition_points_for(o), 5000u);
+}
+
+// A LAS 1.2 file of point format 2 (RGB): positions at 1 mm, 8-bit colours
+// stored in 16 bits (as many writers do).
+void write_las(const std::string& path, const PointCloud& cloud) {
+  std::vector<uint8_t> out(227, 0);
+  std::memcpy(out.data(), "LASF", 4);
+  out[24] = 1;
+  out[25] = 2;
+  const uint16_t header = 227, record = 26;
+  std::memcpy(&out[94], &header, 2);
+  const uint32_t offset = 227, count = static_cast<uint32_t>(cloud.size());
+  std::memcpy(&out[96], &offset, 4);
+  out[104] = 2;
+  std::memcpy(&out[105], &record, 2);
+  std::memcpy(&out[107], &count, 4);
+  const double scale[3] = {0.001, 0.001, 0.001}, shift[3] = {500000, 5000000, 100};
+  std::memcpy(&out[131], scale, 24);
+  std::memcpy(&out[155], shift, 24);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    uint8_t r[26] = {};
+    for (int a = 0; a < 3; ++a) {
+      const int32_t v = static_cast<int32_t>(std::lround(cloud.positions[i][a] * 1000));
+      std::memcpy(r + 4 * a, &v, 4);
+    }
+    for (int c = 0; c < 3; ++c) {
+      const uint16_t v = static_cast<uint16_t>((i * (c + 3)) % 256);
+      std::memcpy(r + 20 + 2 * c, &v, 2);
+    }
+    out.insert(out.end(), r, r + 26);
+  }
+  std::string error;
+  ASSERT_TRUE(write_file_atomic(path, out, error)) << error;
+}
+
+// A PLY (double positions, normals, colours) and a LAS of 150,000 points:
+// three chunks and a bit.
+std::vector<std::string> big_scans(const std::string& dir) {
+  PointCloud c = terrain(150000);
+  for (size_t i = 0; i < c.size(); ++i) {
+    c.normals.push_back(Vec3(0.1, 0.2, 1).normalized());
+    c.colors.push_back(Vec3(static_cast<double>(i % 256) / 255, 0.5, 1.0));
+  }
+  std::string error;
+  const std::string ply = dir + "/big.ply", las = dir + "/big.las";
+  EXPECT_TRUE(write_ply(ply, c, error)) << error;
+  write_las(las, c);
+  return {ply, las};
+}
+
+TEST(ScanStream, ChunksAreTheWholeReadInPieces) {
+  for (const std::string& path : big_scans(folder("chunks"))) {
+    PointCloud whole, rest, joined;
+    std::string error;
+    ASSERT_TRUE(read_point_cloud(path, whole, error)) << error;
+    ScanStream stream;
+    std::vector<uint64_t> firsts;
+    uint64_t last_bytes = 0;
+    stream.deliver = [&](PointCloud& chunk, uint64_t first, uint64_t bytes, std::string&) {
+      EXPECT_LE(chunk.size(), kScanChunk);
+      EXPECT_EQ(first, joined.size());
+      EXPECT_GT(bytes, last_bytes);
+      last_bytes = bytes;
+      firsts.push_back(first);
+      joined.positions.insert(joined.positions.end(), chunk.positions.begin(), chunk.positions.end());
+      joined.normals.insert(joined.normals.end(), chunk.normals.begin(), chunk.normals.end());
+      joined.colors.insert(joined.colors.end(), chunk.colors.begin(), chunk.colors.end());
+      return true;
+    };
+    ASSERT_TRUE(stream_point_cloud(path, stream, rest, error)) << error;
+    EXPECT_EQ(firsts.size(), 3u) << path;  // 65,536 + 65,536 + 18,928
+    EXPECT_EQ(stream.delivered, whole.size());
+    EXPECT_EQ(joined.positions, whole.positions) << path;
+    EXPECT_EQ(joined.normals, whole.normals) << path;
+    // LAS colours come unscaled, then the divisor the whole file decides
+    // (8-bit here); PLY's are scaled already.
+    EXPECT_EQ(stream.color_divisor, path.ends_with(".las") ? 255.0 : 1.0) << path;
+    for (Vec3& c : joined.colors) c /= stream.color_divisor;
+    EXPECT_EQ(joined.colors, whole.colors) << path;
+    EXPECT_EQ(rest.warnings, whole.warnings) << path;
+  }
+}
+
+TEST(ScanStream, AFaultInALaterChunkGetsTheWholeReadsMessage) {
+  const std::vector<std::string> scans = big_scans(folder("faults_stream"));
+  std::string error;
+  // Cut in the middle of the second chunk; a coordinate past float32's
+  // range at point 100,000.
+  std::vector<uint8_t> bytes;
+  ASSERT_TRUE(read_file(scans[0], bytes, error));
+  const std::string cut = scans[0] + ".cut.ply", wide = scans[0] + ".wide.ply";
+  std::vector<uint8_t> part(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(bytes.size() / 2));
+  ASSERT_TRUE(write_file_atomic(cut, part, error));
+  PointCloud c, rest;
+  ASSERT_TRUE(read_point_cloud(scans[0], c, error)) << error;
+  c.positions[100000].x() = 1e39;
+  ASSERT_TRUE(write_ply(wide, c, error)) << error;
+  for (const std::string& path : {cut, wide}) {
+    std::string whole_error, stream_error;
+    EXPECT_FALSE(read_point_cloud(path, c, whole_error));
+    ScanStream stream;
+    stream.deliver = [](PointCloud&, uint64_t, uint64_t, std::string&) { return true; };
+    EXPECT_FALSE(stream_point_cloud(path, stream, rest, stream_error));
+    EXPECT_EQ(stream_error, whole_error);
+    EXPECT_NE(stream_error.find(path), std::string::npos) << stream_error;
+  }
+}
+
+TEST(Partition, AScanReadInChunksGivesTheBytesOfOneReadWhole) {
+  const std::string dir = folder("streamed");
+  for (const std::string& path : big_scans(dir))
+    for (const uint64_t partition : {uint64_t{0}, uint64_t{30000}}) {
+      EncodeOptions o;
+      o.partition_points = partition;
+      PointCloud cloud;
+      std::string error;
+      ASSERT_TRUE(read_point_cloud(path, cloud, error)) << error;
+      const std::vector<uint8_t> whole = test::encode(cloud, o);
+      EncodeReport report;
+      std::vector<std::string> warnings;
+      ASSERT_TRUE(encode_scan_file(path, ScanOptions{}, o, dir + "/streamed.spg", report, error, nullptr,
+                                   [&](const std::vector<std::string>& w) { warnings.insert(warnings.end(), w.begin(), w.end()); }))
+          << error;
+      EXPECT_EQ(report.partitions > 1, partition > 0);
+      std::vector<uint8_t> streamed;
+      ASSERT_TRUE(read_file(dir + "/streamed.spg", streamed, error));
+      EXPECT_EQ(streamed, whole) << path << " in partitions of " << partition;
+      EXPECT_EQ(warnings, cloud.warnings);
+    }
 }
 
 }  // namespace

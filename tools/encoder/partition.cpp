@@ -748,28 +748,33 @@ size_t nodes_header_bytes(size_t levels) { return 8 + 4 + 8 * 3 + 4 + 8 * levels
 
 bool read_points_file(const std::string& path, uint64_t expected, const PartitionPlan& plan, PointCloud& cloud,
                       std::string& error) {
-  std::vector<uint8_t> bytes;
+  MappedFile file;
   const size_t stride = partition_point_bytes(plan);
-  if (!read_file(path, bytes, error, expected * stride)) return false;
-  if (bytes.size() != expected * stride)
-    return error = path + ": " + std::to_string(bytes.size()) + " bytes where the plan has " + std::to_string(expected) +
+  if (!file.open(path, error)) return false;
+  if (file.size() != expected * stride)
+    return error = path + ": " + std::to_string(file.size()) + " bytes where the plan has " + std::to_string(expected) +
                    " points of " + std::to_string(stride) + " (" + std::to_string(expected * stride) +
                    " bytes): cut short, or from another plan", false;
   const bool normals = plan.normals && !plan.estimate;
-  for (size_t at = 0; at < bytes.size(); at += stride) {
+  cloud.positions.reserve(cloud.positions.size() + expected);
+  if (normals) cloud.normals.reserve(cloud.normals.size() + expected);
+  if (plan.colors) cloud.colors.reserve(cloud.colors.size() + expected);
+  const uint8_t* bytes = file.data();
+  for (size_t at = 0; at < file.size(); at += stride) {
     Vec3 v;
-    std::memcpy(v.data(), bytes.data() + at, 24);
+    std::memcpy(v.data(), bytes + at, 24);
     cloud.positions.push_back(v);
     size_t o = 24;
     if (normals) {
-      std::memcpy(v.data(), bytes.data() + at + o, 24);
+      std::memcpy(v.data(), bytes + at + o, 24);
       cloud.normals.push_back(v);
       o += 24;
     }
     if (plan.colors) {
-      std::memcpy(v.data(), bytes.data() + at + o, 24);
+      std::memcpy(v.data(), bytes + at + o, 24);
       cloud.colors.push_back(v);
     }
+    file.release_before(at);
   }
   return true;
 }
