@@ -323,7 +323,7 @@ TEST(Partition, TheMemoryBudgetSetsThePartitionSize) {
   EXPECT_GE(partition_points_for(EncodeOptions{}), uint64_t{1} << 16);
   EncodeOptions o;
   o.memory = uint64_t{1} << 30;
-  EXPECT_EQ(partition_points_for(o), (uint64_t{1} << 30) / 200);
+  EXPECT_EQ(partition_points_for(o), (uint64_t{1} << 30) / 256);
   o.partition_points = 5000;
   EXPECT_EQ(partition_points_for(o), 5000u);
 }
@@ -373,7 +373,20 @@ std::vector<std::string> big_scans(const std::string& dir) {
   const std::string ply = dir + "/big.ply", las = dir + "/big.las";
   EXPECT_TRUE(write_ply(ply, c, error)) << error;
   write_las(las, c);
-  return {ply, las};
+  // Text whose columns 4-6 only the whole file tells apart (colours here,
+  // normals there), and an ascii PCD.
+  std::ofstream rgb(dir + "/big_rgb.txt"), nrm(dir + "/big_normals.xyz"), pcd(dir + "/big.pcd");
+  pcd << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH " << c.size()
+      << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << c.size() << "\nDATA ascii\n";
+  char line[160];
+  for (size_t i = 0; i < c.size(); ++i) {
+    const Vec3& p = c.positions[i];
+    std::snprintf(line, sizeof line, "%.4f %.4f %.4f", p.x(), p.y(), p.z());
+    rgb << line << " " << i % 256 << " 128 7\n";
+    nrm << line << " 0.1 0.2 0.97\n";
+    pcd << line << "\n";
+  }
+  return {ply, las, dir + "/big_rgb.txt", dir + "/big_normals.xyz", dir + "/big.pcd"};
 }
 
 TEST(ScanStream, ChunksAreTheWholeReadInPieces) {
@@ -399,13 +412,20 @@ TEST(ScanStream, ChunksAreTheWholeReadInPieces) {
     EXPECT_EQ(firsts.size(), 3u) << path;  // 65,536 + 65,536 + 18,928
     EXPECT_EQ(stream.delivered, whole.size());
     EXPECT_EQ(joined.positions, whole.positions) << path;
-    EXPECT_EQ(joined.normals, whole.normals) << path;
+    EXPECT_EQ(rest.warnings, whole.warnings) << path;
+    if (stream.text_columns.empty()) {
+      EXPECT_EQ(joined.normals, whole.normals) << path;
+    }
     // LAS colours come unscaled, then the divisor the whole file decides
     // (8-bit here); PLY's are scaled already.
     EXPECT_EQ(stream.color_divisor, path.ends_with(".las") ? 255.0 : 1.0) << path;
     for (Vec3& c : joined.colors) c /= stream.color_divisor;
+    if (path.ends_with(".txt") || path.ends_with(".xyz")) {
+      // Columns 4-6 come only once the whole file has told them apart.
+      EXPECT_EQ(stream.text_columns, path.ends_with(".txt") ? "x,y,z,r,g,b" : "x,y,z,nx,ny,nz");
+      continue;
+    }
     EXPECT_EQ(joined.colors, whole.colors) << path;
-    EXPECT_EQ(rest.warnings, whole.warnings) << path;
   }
 }
 
@@ -438,6 +458,7 @@ TEST(Partition, AScanReadInChunksGivesTheBytesOfOneReadWhole) {
   const std::string dir = folder("streamed");
   for (const std::string& path : big_scans(dir))
     for (const uint64_t partition : {uint64_t{0}, uint64_t{30000}}) {
+      if (partition == 0 && !path.ends_with(".ply") && !path.ends_with(".las")) continue;  // (the time a test may take)
       EncodeOptions o;
       o.partition_points = partition;
       PointCloud cloud;

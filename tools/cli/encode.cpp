@@ -64,6 +64,8 @@ const char kEncodeHelp[] =
     "                        encoded in partitions, each its own job\n"
     "  --partition-points N  partitions of at most about N points (instead of\n"
     "                        what --memory allows)\n"
+    "  --class-sample N      fit the sigma classes to N nodes' tuples (default\n"
+    "                        2097152; every node's in a smaller tree)\n"
     "  --tmp DIR             where partition files go (default: a folder beside\n"
     "                        MODEL.spg; removed after)\n"
     "  --plan-only DIR       plan and partition the scan into DIR, run nothing:\n"

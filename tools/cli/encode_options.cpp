@@ -79,6 +79,11 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
     o.partition_points = u;
   }
   args.value("--tmp", o.tmp_dir);
+  if (args.value("--class-sample", v)) {
+    if (!cli::parse_uint(v, 1ull << 32, u) || u < 4096)
+      return error = "--class-sample: expected 4096..4294967296 nodes, got '" + v + "'", false;
+    o.class_sample = u;
+  }
   if (!parse_orient_options(args, o.orient, error)) return false;
   if (args.value("--up", v) && !spg_parse_axis(v.c_str(), &o.orient.up))
     return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;

@@ -150,6 +150,18 @@ class FileSource final : public ScanSource {
     size_ = std::max<uint64_t>(1, std::filesystem::file_size(path_));
     PointCloud rest;
     if (!stream_point_cloud(path_, stream, rest, error, options_)) return false;
+    if (!stream.text_columns.empty()) {
+      // Columns 4-6 of a text scan, told apart by the whole file: read it
+      // again with them named (its warnings are the first reading's).
+      if (!parse_text_columns(stream.text_columns, options_.columns, error)) return false;
+      const std::vector<std::string> warnings = rest.warnings;
+      sampler_ = PlanSampler{};
+      first = true;
+      stream.delivered = 0;
+      stream.text_columns.clear();
+      if (!stream_point_cloud(path_, stream, rest, error, options_)) return false;
+      rest.warnings = warnings;
+    }
     if (stream.triangles > 0 && o.normals && !facts_.normals) {
       // A mesh without normals: its faces give them, and need it whole.
       if (!read_point_cloud(path_, whole_, error, options_)) return false;

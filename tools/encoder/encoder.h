@@ -38,6 +38,10 @@ struct EncodeOptions {
   uint64_t partition_points = 0;
   // The memory the encoder may use, in bytes; 0: half of this host's.
   uint64_t memory = 0;
+  // The sigma classes are fitted to every node's tuples up to this many
+  // nodes, to a hashed sample of this many above (docs/encoder.md
+  // "Partitions" measures the trade).
+  uint64_t class_sample = uint64_t{1} << 21;
   // Where partition files go: "" for a folder beside the output (the
   // system's temporary folder when there is no output file).
   std::string tmp_dir;

@@ -16,9 +16,6 @@
 namespace stipple {
 namespace {
 
-// Every node's tuples feed the classes up to this many nodes; a sample of
-// this many above it.
-constexpr uint64_t kClassSample = uint64_t{1} << 21;
 // Nodes read and packed at a time.
 constexpr uint64_t kBlock = uint64_t{1} << 16;
 
@@ -221,11 +218,12 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
   // Classes: every node's tuples, or a hashed sample's.
   if (progress) progress->update(0.85, "classifying sigmas");
   std::vector<Vec3> sp, sn, sc;
-  const uint64_t threshold = nodes <= kClassSample ? ~uint64_t{0}
-      : static_cast<uint64_t>(std::ldexp(static_cast<double>(kClassSample) / static_cast<double>(nodes), 64));
+  const uint64_t class_sample = std::max<uint64_t>(plan.class_sample, 1);
+  const uint64_t threshold = nodes <= class_sample ? ~uint64_t{0}
+      : static_cast<uint64_t>(std::ldexp(static_cast<double>(class_sample) / static_cast<double>(nodes), 64));
   if (!walk(true, [&](uint64_t at, uint64_t count) {
         for (uint64_t i = 0; i < count; ++i) {
-          if (nodes > kClassSample && mix64(at + i) >= threshold) continue;
+          if (nodes > class_sample && mix64(at + i) >= threshold) continue;
           sp.push_back(stats[i].position.sigma);
           if (normals) sn.push_back(Vec3(stats[i].sigma_n[0], stats[i].sigma_n[1], 0));
           if (colors) sc.push_back(stats[i].color.sigma);

@@ -23,7 +23,7 @@ namespace {
 
 // Bytes a job holds a point at its peak, for the partition size a memory
 // budget allows (measured: docs/encoder.md "Partitions").
-constexpr uint64_t kJobBytesPerPoint = 200;
+constexpr uint64_t kJobBytesPerPoint = 256;
 // The plan's sample: at most this many points (all of a smaller scan).
 constexpr uint64_t kSampleSize = uint64_t{1} << 20;
 // More partitions than this is a memory budget too small for the scan.
@@ -317,6 +317,7 @@ bool finish_plan(PlanSampler& sampler, const ScanFacts& facts, const EncodeOptio
   plan.classes[0] = o.classes_p;
   plan.classes[1] = o.classes_n;
   plan.classes[2] = o.classes_c;
+  plan.class_sample = o.class_sample;
   plan.normals_source = facts.normals_source;
   const uint64_t limit = partition_points_for(o);
   const std::vector<Vec3>& positions = sampler.positions;
@@ -397,6 +398,7 @@ bool write_plan(const PartitionPlan& p, const std::string& dir, std::string& err
   out.put(static_cast<int32_t>(p.normal_neighbours));
   out.str(p.normals_source);
   for (int c = 0; c < 3; ++c) out.put(static_cast<int32_t>(p.classes[c]));
+  out.put(p.class_sample);
   const ScanFrame& f = p.frame;
   out.put(static_cast<uint8_t>(f.kind));
   out.put(static_cast<uint8_t>(f.orient));
@@ -471,6 +473,7 @@ bool read_plan(const std::string& dir, PartitionPlan& p, std::string& error) {
   p.normal_neighbours = in.get<int32_t>();
   p.normals_source = in.str();
   for (int c = 0; c < 3; ++c) p.classes[c] = in.get<int32_t>();
+  p.class_sample = in.get<uint64_t>();
   ScanFrame& f = p.frame;
   f.kind = static_cast<ScanKind>(in.get<uint8_t>());
   f.orient = static_cast<OrientMode>(in.get<uint8_t>());
@@ -613,7 +616,7 @@ bool PartitionRouter::add(const PointCloud& cloud, std::string& error) {
 
 bool PartitionRouter::finish(std::string& error) {
   for (uint32_t i = 0; i < plan_.partitions(); ++i) {
-    if (!own_[i].flush(error) || !halo_[i].flush(error)) return false;
+    if (!own_[i].flush(error) || (halo_[i].count > 0 && !halo_[i].flush(error))) return false;
     plan_.part_points[i] = own_[i].count;
     plan_.part_halo[i] = halo_[i].count;
   }

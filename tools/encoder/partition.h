@@ -56,6 +56,7 @@ struct PartitionPlan {
   int normal_neighbours = 12;
   std::string normals_source;  // "file", "faces", "k-NN", "none"
   int classes[3] = {0, 0, 0};  // options: 0 automatic
+  uint64_t class_sample = uint64_t{1} << 21;  // EncodeOptions::class_sample
   ScanFrame frame;
   TreeOptions tree;            // stats: sigma floor, normals, colours set for the scan
   Vec3 origin = Vec3::Zero();

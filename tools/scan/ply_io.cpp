@@ -428,7 +428,7 @@ bool parse_ply(const std::string& name, const uint8_t* data, size_t size, PointC
 // told by its first data line: three or more whitespace- or ';'-separated
 // words, none with a '.', at least one with a single ','.
 bool parse_text(const std::string& name, const uint8_t* data, size_t size, const TextPlan& plan, PointCloud& cloud,
-                std::string& error) {
+                std::string& error, ScanStream* stream) {
   const TextColumns& layout = plan.columns;
   // Where each field sits in a row, when the user named the columns.
   int at[10];
@@ -453,7 +453,8 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
   bool decimal_comma = false, decided = false;
   size_t columns = 0;
   std::vector<double> row, extra;  // extra: columns 4-6 of a 6-column file, decided at the end
-  std::vector<int> extra_lines;
+  // What decides them, as they come (a scan read in chunks keeps no extras).
+  bool integers = true, above_one = false, unit = true;
   // PTS: the last count line, the count it gave and the points since.
   int count_line = 0;
   uint64_t count_said = 0, count_seen = 0;
@@ -566,6 +567,7 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
         }
         cloud.colors.push_back(c / 255.0);
       }
+      if (stream && !stream->flush(cloud, pos, false, error)) return false;
       continue;
     }
     if (columns == 0) {
@@ -582,34 +584,40 @@ bool parse_text(const std::string& name, const uint8_t* data, size_t size, const
       return false;
     }
     cloud.positions.emplace_back(row[0], row[1], row[2]);
-    if (columns == 6 || columns == 7) extra.insert(extra.end(), row.begin() + 3, row.begin() + 6);
+    if (columns == 6 || columns == 7) {
+      for (size_t k = 3; k < 6; ++k) {
+        const double v = row[k];
+        integers = integers && v >= 0 && v <= 255 && v == std::floor(v);
+        above_one = above_one || v > 1;
+        unit = unit && std::abs(v) <= 1.0 + 1e-6;
+      }
+      if (!stream) extra.insert(extra.end(), row.begin() + 3, row.begin() + 6);
+    }
     if (columns == 9) {
       Vec3 n(row[3], row[4], row[5]);
       const double len = n.norm();
       cloud.normals.push_back(len > 0 ? Vec3(n / len) : Vec3::Zero());
       cloud.colors.push_back((Vec3(row[6], row[7], row[8]) / 255.0).cwiseMax(0.0).cwiseMin(1.0));
     }
+    if (stream && !stream->flush(cloud, pos, false, error)) return false;
   }
   check_count();
-  if (cloud.positions.empty()) {
+  if (cloud.positions.empty() && !(stream && stream->delivered > 0)) {
     error = name + ": no points";
     return false;
   }
   if (columns == 6 || columns == 7) {
     // x y z and three more: colour when every one is an integer in 0..255
     // and some exceeds 1 (or there are seven columns: r g b a), normals
-    // otherwise. Said, since it is a guess.
-    bool integers = true, above_one = false, unit = true;
-    for (double v : extra) {
-      integers = integers && v >= 0 && v <= 255 && v == std::floor(v);
-      above_one = above_one || v > 1;
-      unit = unit && std::abs(v) <= 1.0 + 1e-6;
-    }
+    // otherwise. Said, since it is a guess. A scan read in chunks was
+    // delivered without them: it is read again with the columns named.
     if (columns == 7 && !integers) {
       error = name + ": 7 columns are read as x y z r g b a, but columns 4-7 are not integers 0..255";
       return false;
     }
-    if (columns == 7 || (integers && above_one)) {
+    const bool colors = columns == 7 || (integers && above_one);
+    if (stream) stream->text_columns = colors ? (columns == 7 ? "x,y,z,r,g,b,-" : "x,y,z,r,g,b") : "x,y,z,nx,ny,nz";
+    if (colors) {
       for (size_t i = 0; i < extra.size(); i += 3) cloud.colors.emplace_back(extra[i] / 255, extra[i + 1] / 255, extra[i + 2] / 255);
       cloud.warnings.push_back(name + ": columns 4-6 read as r g b (integers 0..255); normals would be unit vectors");
     } else {
@@ -794,7 +802,7 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
       TextPlan plan;
       cloud = PointCloud{};
       ok = plan_text(name, data, size, options.columns, plan, cloud, error) &&
-           parse_text(name, data, size, plan, cloud, error);
+           parse_text(name, data, size, plan, cloud, error, nullptr);
       break;
     }
   }
@@ -816,8 +824,7 @@ bool scan_streams(const std::string& path) {
   std::vector<uint8_t> fixed;
   std::string note;
   ScanFormat format;
-  return open_scan(path, data, size, ScanOptions{}, fixed, note, format, error) &&
-         (format == ScanFormat::kPly || format == ScanFormat::kLas || format == ScanFormat::kPcd);
+  return open_scan(path, data, size, ScanOptions{}, fixed, note, format, error) && format != ScanFormat::kObj;
 }
 
 bool stream_point_cloud(const std::string& path, ScanStream& stream, PointCloud& rest, std::string& error,
@@ -830,8 +837,7 @@ bool stream_point_cloud(const std::string& path, ScanStream& stream, PointCloud&
   std::string note;
   ScanFormat format;
   if (!open_scan(path, data, size, options, fixed, note, format, error)) return false;
-  if (format != ScanFormat::kPly && format != ScanFormat::kLas && format != ScanFormat::kPcd)
-    return error = path + ": a text or OBJ scan is read whole, not in chunks (read_point_cloud)", false;
+  if (format == ScanFormat::kObj) return error = path + ": an OBJ scan is read whole, not in chunks (read_point_cloud)", false;
   // Each chunk checked as parse_point_cloud checks the whole; the file's
   // pages behind the reader are given back (a scan larger than memory).
   ScanStream inner;
@@ -848,12 +854,19 @@ bool stream_point_cloud(const std::string& path, ScanStream& stream, PointCloud&
     case ScanFormat::kPly: ok = parse_ply(path, data, size, rest, error, &inner); break;
     case ScanFormat::kLas: ok = parse_las(path, data, size, rest, error, &inner); break;
     case ScanFormat::kPcd: ok = parse_pcd(path, data, size, rest, error, &inner); break;
-    default: break;
+    case ScanFormat::kText: {
+      TextPlan plan;
+      ok = plan_text(path, data, size, options.columns, plan, rest, error) &&
+           parse_text(path, data, size, plan, rest, error, &inner);
+      break;
+    }
+    case ScanFormat::kObj: break;
   }
   if (!ok || !inner.flush(rest, end, true, error)) return false;
   stream.delivered = inner.delivered;
   stream.triangles = inner.triangles;
   stream.color_divisor = inner.color_divisor;
+  stream.text_columns = inner.text_columns;
   if (!note.empty()) rest.warnings.insert(rest.warnings.begin(), path + ": " + note);
   return true;
 }

@@ -45,6 +45,10 @@ struct ScanStream {
   // colours already in [0, 1]. 0: the file's colours are all zero, read
   // without colour.
   double color_divisor = 1;
+  // A text scan whose columns 4-6 only the whole file tells apart (normals
+  // or r g b): delivered without them, and this names the columns
+  // ("x,y,z,r,g,b", as --columns takes them) to read it again with.
+  std::string text_columns;
   // Hands over what `cloud` holds (when it holds kScanChunk, or `last`).
   bool flush(PointCloud& cloud, uint64_t bytes_read, bool last, std::string& error);
 };
