@@ -11,6 +11,7 @@
 # usage: tools/bench/encoder_scale.sh [SIZES...]   (default: 1e6 1e7)
 #   STIPPLE=build/release/tools/stipple MAKE_SCAN=build/release/tools/stipple-make-scan
 #   THREADS=2 RUNS=3 SHARED=../shared/data TMP=/tmp
+#   ENCODE_ARGS="--memory 2G"   more encode options (a memory budget: partitions)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 S=${STIPPLE:-build/release/tools/stipple}
@@ -28,7 +29,7 @@ measure() {
   local name=$1 scan=$2
   local runs=()
   for ((r = 0; r < RUNS; ++r)); do
-    /usr/bin/time -f '%U %S %M' -o "$work/time" "$S" encode "$scan" -o "$work/out.spg" --json -q --threads "$THREADS" >"$work/json"
+    /usr/bin/time -f '%U %S %M' -o "$work/time" "$S" encode "$scan" -o "$work/out.spg" --json -q --threads "$THREADS" ${ENCODE_ARGS:-} >"$work/json"
     read -r user sys rss <"$work/time"
     runs+=("$(python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d["cpu"]=float(sys.argv[2])+float(sys.argv[3]); d["rss_mb"]=int(sys.argv[4])/1024; print(json.dumps(d))' "$work/json" "$user" "$sys" "$rss")")
   done
@@ -71,15 +72,16 @@ python3 - "$results" "$THREADS" <<'PY'
 import json, math, sys
 rows = [json.loads(l) for l in open(sys.argv[1])]
 for d in rows:  # an older stipple reports no stages
-    for k in ("read", "normals", "hierarchy", "classes", "write"):
+    for k in ("read", "plan", "route", "normals", "hierarchy", "classes", "write"):
         d.setdefault(k + "_seconds", float("nan"))
-print(f"| scan | points | wall s | CPU s | M pt/s wall | M pt/s per CPU-s | peak RSS MB | read | normals | hierarchy | classes | write | Draco s | stipple / Draco |")
-print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    d.setdefault("partitions", 1)
+print(f"| scan | points | parts | wall s | CPU s | M pt/s wall | M pt/s per CPU-s | peak RSS MB | read | plan | route | normals | hierarchy | classes | write | Draco s | stipple / Draco |")
+print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 for d in rows:
     n, wall, cpu = d["points"], d["seconds"], d["cpu"]
     draco = d["draco_seconds"]
-    print(f"| {d['name']} | {n:,} | {wall:.2f} | {cpu:.2f} | {n / wall / 1e6:.2f} | {n / cpu / 1e6:.2f} | {d['rss_mb']:.0f} | "
-          f"{d['read_seconds']:.2f} | {d['normals_seconds']:.2f} | {d['hierarchy_seconds']:.2f} | {d['classes_seconds']:.2f} | "
+    print(f"| {d['name']} | {n:,} | {d['partitions']} | {wall:.2f} | {cpu:.2f} | {n / wall / 1e6:.2f} | {n / cpu / 1e6:.2f} | {d['rss_mb']:.0f} | "
+          f"{d['read_seconds']:.2f} | {d['plan_seconds']:.2f} | {d['route_seconds']:.2f} | {d['normals_seconds']:.2f} | {d['hierarchy_seconds']:.2f} | {d['classes_seconds']:.2f} | "
           f"{d['write_seconds']:.2f} | {'' if draco is None else f'{draco:.2f}'} | {'' if draco is None else f'{wall / draco:.1f}'} |")
 for kind in ("normals (PLY)", "bare, colour (LAS)"):
     pts = [(d["points"], d["seconds"]) for d in rows if d["name"].endswith(kind)]

@@ -274,6 +274,11 @@ bool encode_through(ScanSource& source, const EncodeOptions& o, const std::strin
         progress->update(0.3 + 0.55 * static_cast<double>(done) / static_cast<double>(plan.points),
                          ("partition " + std::to_string(i + 1) + " of " + std::to_string(plan.partitions())).c_str());
       if (!run_part_file(folder.path(), plan, i, threads, error)) return false;
+      // Its points are done with: the disk holds a partition's points or
+      // its nodes, not both, for each partition.
+      std::error_code ec;
+      std::filesystem::remove(part_path(folder.path(), i, "pts"), ec);
+      std::filesystem::remove(part_path(folder.path(), i, "halo"), ec);
       std::unique_ptr<PartNodes> part = open_part_file(folder.path(), plan, i, error);
       if (!part) return false;
       parts.push_back(std::move(part));
