@@ -816,15 +816,11 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
 }
 
 bool scan_streams(const std::string& path) {
+  // Every format but OBJ; a file that cannot be read or is refused gets the
+  // same message either way.
   MappedFile file;
   std::string error;
-  if (!file.open(path, error)) return false;
-  const uint8_t* data = file.data();
-  size_t size = file.size();
-  std::vector<uint8_t> fixed;
-  std::string note;
-  ScanFormat format;
-  return open_scan(path, data, size, ScanOptions{}, fixed, note, format, error) && format != ScanFormat::kObj;
+  return file.open(path, error) && !looks_like_obj(file.data(), file.size());
 }
 
 bool stream_point_cloud(const std::string& path, ScanStream& stream, PointCloud& rest, std::string& error,

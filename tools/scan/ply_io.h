@@ -58,13 +58,14 @@ bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& e
 bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud,
                        std::string& error, const ScanOptions& options = {});
 
-// The same a chunk at a time, for a scan larger than memory: PLY, LAS and
-// PCD files (scan_streams says which), memory-mapped, each chunk validated
+// The same a chunk at a time, for a scan larger than memory: every format
+// but OBJ (scan_streams says which), memory-mapped, each chunk validated
 // as read_point_cloud validates the whole (the same messages, the points
 // counted from the file's start). `rest` ends with the reader's warnings
 // and the file's viewpoint, and no points. The whole-file checks a stream
 // cannot make are the caller's: repeated positions (duplicate_warning), a
-// mesh's faces (stream.triangles), LAS colours (stream.color_divisor).
+// mesh's faces (stream.triangles), LAS colours (stream.color_divisor), a
+// text scan's columns 4-6 (stream.text_columns).
 bool scan_streams(const std::string& path);
 bool stream_point_cloud(const std::string& path, ScanStream& stream, PointCloud& rest, std::string& error,
                         const ScanOptions& options = {});
