@@ -319,6 +319,22 @@ TEST(Partition, TheTemporaryFolderGoesAwayOnSuccessAndOnFailure) {
   EXPECT_EQ(entries, 0u);
 }
 
+TEST(Partition, ACountPast32BitsIsRefusedBeforeAnyJob) {
+  // What a reader's pass over 2^32 points leaves (the sample is all it keeps).
+  PlanSampler sampler;
+  sampler.add(terrain(1000));
+  sampler.count = uint64_t{1} << 32;
+  PartitionPlan plan;
+  std::string error;
+  EXPECT_FALSE(finish_plan(sampler, ScanFacts{}, EncodeOptions{}, plan, error));
+  EXPECT_EQ(error, "the scan has 4294967296 points; a .spg counts them in 32 bits (at most 4,294,967,295)");
+  sampler.count = 0xFFFFFFFFu;  // the most a .spg holds: planned
+  EncodeOptions o;
+  o.partition_points = uint64_t{1} << 28;
+  EXPECT_TRUE(finish_plan(sampler, ScanFacts{}, o, plan, error)) << error;
+  EXPECT_GT(plan.partitions(), 8u);
+}
+
 TEST(Partition, TheMemoryBudgetSetsThePartitionSize) {
   EXPECT_GE(partition_points_for(EncodeOptions{}), uint64_t{1} << 16);
   EncodeOptions o;

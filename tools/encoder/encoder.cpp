@@ -185,6 +185,9 @@ class FileSource final : public ScanSource {
     if (memory_) return memory_->load(plan, error, progress);
     whole_ = PointCloud{};
     const bool normals = plan.normals && !plan.estimate;
+    whole_.positions.reserve(plan.points);
+    if (normals) whole_.normals.reserve(plan.points);
+    if (plan.colors) whole_.colors.reserve(plan.points);
     if (!pass([&](PointCloud& chunk, std::string&) {
           whole_.positions.insert(whole_.positions.end(), chunk.positions.begin(), chunk.positions.end());
           if (normals) whole_.normals.insert(whole_.normals.end(), chunk.normals.begin(), chunk.normals.end());
