@@ -118,7 +118,7 @@ bool MappedFile::open(const std::string& path, std::string& error) {
 }
 
 void MappedFile::release_before(size_t offset) {
-  const size_t page = static_cast<size_t>(sysconf(_SC_PAGESIZE));
+  static const size_t page = static_cast<size_t>(sysconf(_SC_PAGESIZE));  // readers call this for every point
   const size_t end = std::min(offset, size_) / page * page;
   if (!data_ || end <= released_ + (size_t{8} << 20)) return;  // in steps of 8 MB at least
   madvise(const_cast<uint8_t*>(data_) + released_, end - released_, MADV_DONTNEED);

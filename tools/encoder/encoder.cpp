@@ -147,7 +147,9 @@ class FileSource final : public ScanSource {
       if (progress) progress->update(0.1 * static_cast<double>(bytes) / static_cast<double>(size_), "planning");
       return true;
     };
-    size_ = std::max<uint64_t>(1, std::filesystem::file_size(path_));
+    std::error_code ec;  // a file gone since: the reader below says so
+    const uint64_t bytes = std::filesystem::file_size(path_, ec);
+    size_ = ec ? 1 : std::max<uint64_t>(1, bytes);
     PointCloud rest;
     if (!stream_point_cloud(path_, stream, rest, error, options_)) return false;
     if (!stream.text_columns.empty()) {
