@@ -360,15 +360,15 @@ Tree build(std::vector<Vec3> positions, std::vector<Vec3> normals, const PointCl
   // Colours from the leaves up, one level at a time: a leaf's moments from
   // its points, a parent's its children's added in order.
   if (!o.stats.colors || !cloud.has_colors()) return tree;
-  std::vector<ColorMoments> below, current;
+  std::vector<Moments> below, current;
   size_t below_begin = tree.nodes.size();
   for (size_t level = level_starts.size(); level-- > 0;) {
     const size_t begin = level_starts[level];
     const size_t end = level + 1 < level_starts.size() ? level_starts[level + 1] : tree.nodes.size();
-    current.assign(end - begin, ColorMoments{});
+    current.assign(end - begin, Moments{});
     parallel_for(end - begin, o.threads, 64, [&](size_t k) {
       TreeNode& node = tree.nodes[begin + k];
-      ColorMoments& m = current[k];
+      Moments& m = current[k];
       if (node.leaf()) m = color_moments(cloud, tree.order.data() + node.begin, node.count(), o.stats);
       for (uint32_t c = 0; c < node.child_count; ++c) m.add(below[node.first_child + c - below_begin]);
       set_color_stats(node.stats, m, o.stats);

@@ -131,37 +131,35 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
   double stage_start = monotonic_seconds();
 
   // The top nodes, from the partitions up.
-  struct Moments {
-    uint64_t count = 0;
-    Vec3 mean = Vec3::Zero();
-    Mat3 m2 = Mat3::Zero();
+  struct TopMoments {
+    Moments position;
     Vec3 normal_sum = Vec3::Zero();
-    ColorMoments color;
+    Moments color;
   };
   const size_t top_count = plan.top.size();
-  std::vector<Moments> moments(top_count);
+  std::vector<TopMoments> moments(top_count);
   std::vector<NodeStats> top_stats(top_count);
   PartitionRatioAccumulator ratios;
   for (size_t t = top_count; t-- > 0;) {
     const TopNode& node = plan.top[t];
-    Moments& m = moments[t];
+    TopMoments& m = moments[t];
     if (node.leaf()) {
       const PartSummary& s = parts[node.part]->summary();
-      m = Moments{s.points, s.mean, s.m2, s.normal_sum, s.color};
+      m = TopMoments{s.position, s.normal_sum, s.color};
       top_stats[t] = s.root;
       continue;
     }
     const uint32_t c = node.first_child;
     for (uint32_t k = c; k < c + 2; ++k) {
-      merge_moments(m.count, m.mean, m.m2, moments[k].count, moments[k].mean, moments[k].m2);
+      m.position.add(moments[k].position);
       m.normal_sum += moments[k].normal_sum;
       m.color.add(moments[k].color);
     }
-    const Gaussian3 g = gaussian_from_covariance(m.mean, m.m2 / static_cast<double>(m.count));
+    const Gaussian3 g = gaussian_from_covariance(m.position.mean, m.position.m2 / m.position.count);
     NormalSpread spread;
-    const double counts[2] = {static_cast<double>(moments[c].count), static_cast<double>(moments[c + 1].count)};
+    const double counts[2] = {moments[c].position.count, moments[c + 1].position.count};
     if (normals) spread = combine_normal_spreads(&top_stats[c], counts, 2, m.normal_sum, g.frame.col(2));
-    top_stats[t] = finish_stats(m.count, g, normals ? &spread : nullptr, so);
+    top_stats[t] = finish_stats(static_cast<size_t>(m.position.count), g, normals ? &spread : nullptr, so);
     set_color_stats(top_stats[t], m.color, so);
     const double sigma1[2] = {top_stats[c].position.sigma[0], top_stats[c + 1].position.sigma[0]};
     ratios.add_family(top_stats[t].position.sigma[0], counts, sigma1, 2);
@@ -195,7 +193,7 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
   const auto read = [&](const Segment& seg, uint64_t begin, uint64_t count, bool want_stats) {
     if (seg.top) {
       child_counts[0] = 2;
-      points[0] = static_cast<uint32_t>(moments[seg.id].count);
+      points[0] = static_cast<uint32_t>(moments[seg.id].position.count);
       if (want_stats) stats[0] = top_stats[seg.id];
       return true;
     }

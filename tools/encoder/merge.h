@@ -3,8 +3,8 @@
 // the sigma classes from a sample of the nodes, and the .spg written
 // breadth-first, a piece at a time.
 //
-// Upper nodes: positions and colours exactly (counts, means and centred sums
-// of outer products, Chan et al.'s pairwise update). Normals: the mean from
+// Upper nodes: positions and colours exactly (Moments: counts, means and
+// centred sums of outer products, Chan et al.'s pairwise update). Normals: the mean from
 // the children's summed normals; the spread from the children's, each turned
 // into the parent's tangent plane and offset by the log map of its mean —
 // the second moment of the mixture — then scaled so its trace is the bound

@@ -63,7 +63,7 @@ Gaussian3 pca3(const Vec3* values, size_t n) {
 }
 
 
-void ColorMoments::add(const ColorMoments& o) {
+void Moments::add(const Moments& o) {
   if (o.count == 0) return;
   if (count == 0) {
     *this = o;
@@ -78,8 +78,16 @@ void ColorMoments::add(const ColorMoments& o) {
   count = n;
 }
 
-ColorMoments color_moments(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& o) {
-  ColorMoments m;
+Moments moments_of(const Vec3* values, size_t n) {
+  Moments m;
+  if (n == 0) return m;
+  m.count = static_cast<double>(n);
+  centred_moments([&](size_t i) -> const Vec3& { return values[i]; }, n, m.mean, m.m2);
+  return m;
+}
+
+Moments color_moments(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& o) {
+  Moments m;
   if (o.colors && cloud.has_colors() && n > 0) {
     m.count = static_cast<double>(n);
     centred_moments([&](size_t i) -> const Vec3& { return cloud.colors[ids[i]]; }, n, m.mean, m.m2);
@@ -192,7 +200,7 @@ NodeStats finish_stats(size_t n, const Gaussian3& position, const NormalSpread* 
   return s;
 }
 
-void set_color_stats(NodeStats& s, const ColorMoments& colors, const StatsOptions& o) {
+void set_color_stats(NodeStats& s, const Moments& colors, const StatsOptions& o) {
   if (colors.count == 0) return;
   s.color = gaussian_from_covariance(colors.mean, colors.m2 / colors.count);
   for (int k = 0; k < 3; ++k) s.color.sigma[k] = std::max(s.color.sigma[k], o.spread_floor);

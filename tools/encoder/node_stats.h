@@ -80,16 +80,19 @@ Gaussian3 pca3(const Vec3* values, size_t n);
 // The same from a mean and covariance.
 Gaussian3 gaussian_from_covariance(const Vec3& mean, const Mat3& cov);
 
-// A node's colours as count, mean and centred sum of outer products; a
-// parent's is its children's added in order (`add`), so the hierarchy
-// computes them from the leaves up.
-struct ColorMoments {
-  double count = 0;  // 0: no colours (none in the scan, or not wanted)
+// Values as count, mean and centred sum of outer products; a parent's are
+// its children's added in order (`add`, exact): the hierarchy's colours from
+// the leaves up, the partitions' upper nodes (tools/encoder/merge.h).
+struct Moments {
+  double count = 0;  // 0: none (no colours in the scan, or not wanted)
   Vec3 mean = Vec3::Zero();
   Mat3 m2 = Mat3::Zero();
-  void add(const ColorMoments& other);
+  void add(const Moments& other);
 };
-ColorMoments color_moments(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& options);
+// Of values[0..n), in pca3's two passes.
+Moments moments_of(const Vec3* values, size_t n);
+// A node's colours (none when the scan has none or the options want none).
+Moments color_moments(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& options);
 
 // Mean-normal frame and sigma_n of `normals[ids[0..n)]`. `fallback_z` is used
 // when the normals cancel out (or are all zero).
@@ -118,7 +121,7 @@ NormalSpread finish_log_map(const LogMapFrame& frame, Eigen::Matrix2d cov, size_
 // and the shrink.
 NodeStats finish_stats(size_t n, const Gaussian3& position, const NormalSpread* normals, const StatsOptions& options);
 // Its colours' Gaussian from their moments (nothing when there are none).
-void set_color_stats(NodeStats& stats, const ColorMoments& colors, const StatsOptions& options);
+void set_color_stats(NodeStats& stats, const Moments& colors, const StatsOptions& options);
 // All of them from the points: finish_stats(pca3(positions)), then
 // set_color_stats(color_moments).
 NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, const StatsOptions& options);

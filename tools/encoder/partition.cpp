@@ -638,22 +638,6 @@ bool route_points(const PointCloud& cloud, PartitionPlan& plan, const std::strin
   return router.finish(error);
 }
 
-void merge_moments(uint64_t& count, Vec3& mean, Mat3& m2, uint64_t other_count, const Vec3& other_mean,
-                   const Mat3& other_m2) {
-  if (other_count == 0) return;
-  if (count == 0) {
-    count = other_count;
-    mean = other_mean;
-    m2 = other_m2;
-    return;
-  }
-  const double a = static_cast<double>(count), b = static_cast<double>(other_count), total = a + b;
-  const Vec3 delta = other_mean - mean;
-  mean += delta * (b / total);
-  m2 += other_m2 + delta * delta.transpose() * (a * b / total);
-  count += other_count;
-}
-
 namespace {
 
 class MemoryPart final : public PartNodes {
@@ -706,22 +690,9 @@ std::unique_ptr<PartNodes> run_part(PointCloud& cloud, size_t own, const Partiti
   // Equal positions always share a partition, so the parts' counts add up
   // to the scan's.
   if (plan.count_duplicates) s.duplicates = count_duplicate_positions(cloud.positions);
-  Mat3 m2 = Mat3::Zero();
-  {
-    const Gaussian3 g = pca3(cloud.positions.data(), own);  // the mean, centred
-    s.mean = g.mean;
-    for (const Vec3& p : cloud.positions) {
-      const Vec3 d = p - s.mean;
-      m2.noalias() += d * d.transpose();
-    }
-    s.m2 = m2;
-  }
+  s.position = moments_of(cloud.positions.data(), own);
   for (const Vec3& v : cloud.normals) s.normal_sum += v;
-  if (plan.colors) {
-    std::vector<uint32_t> ids(own);
-    for (size_t i = 0; i < own; ++i) ids[i] = static_cast<uint32_t>(i);
-    s.color = color_moments(cloud, ids.data(), own, plan.tree.stats);
-  }
+  if (plan.colors && cloud.has_colors()) s.color = moments_of(cloud.colors.data(), own);
   TreeOptions options = plan.tree;
   options.threads = threads;
   options.max_depth = std::max(0, plan.tree.max_depth - top_depth);
@@ -843,8 +814,8 @@ bool run_part_file(const std::string& dir, const PartitionPlan& plan, uint32_t p
   out.put(s.points);
   out.put(static_cast<int32_t>(s.depth));
   for (const uint64_t b : s.level_begin) out.put(b);
-  out.vec(s.mean);
-  out.mat(s.m2);
+  out.vec(s.position.mean);
+  out.mat(s.position.m2);
   out.vec(s.normal_sum);
   out.put(s.color.count);
   out.vec(s.color.mean);
@@ -921,8 +892,9 @@ std::unique_ptr<PartNodes> open_part_file(const std::string& dir, const Partitio
     return bad("its header does not match the plan (" + std::to_string(plan.part_points[part]) + " points)");
   s.level_begin.resize(static_cast<size_t>(s.depth) + 2);
   for (uint64_t& b : s.level_begin) b = in.get<uint64_t>();
-  s.mean = in.vec();
-  s.m2 = in.mat();
+  s.position.count = static_cast<double>(s.points);
+  s.position.mean = in.vec();
+  s.position.m2 = in.mat();
   s.normal_sum = in.vec();
   s.color.count = in.get<double>();
   s.color.mean = in.vec();

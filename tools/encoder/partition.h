@@ -144,12 +144,10 @@ struct PartSummary {
   uint64_t nodes = 0, leaves = 0, points = 0;
   int depth = 0;                      // of its subtree, its root 0
   std::vector<uint64_t> level_begin;  // nodes of local level d: [level_begin[d], level_begin[d + 1])
-  // The root's moments: positions (count, mean, centred sum of outer
-  // products), the normals' sum, the colours' moments.
-  Vec3 mean = Vec3::Zero();
-  Mat3 m2 = Mat3::Zero();
+  // The root's moments: positions', the normals' sum, colours'.
+  Moments position;
   Vec3 normal_sum = Vec3::Zero();
-  ColorMoments color;
+  Moments color;
   NodeStats root;
   TreeReport report;
   PartitionRatioAccumulator ratios;
@@ -192,10 +190,5 @@ bool run_part_file(const std::string& dir, const PartitionPlan& plan, uint32_t p
 // Opens part-N.nodes, checking its size, header and CRC-32 against the plan.
 std::unique_ptr<PartNodes> open_part_file(const std::string& dir, const PartitionPlan& plan, uint32_t part,
                                           std::string& error);
-
-// Streaming PCA helpers shared with the merge: a node's moments combined
-// from its children's (Chan et al.'s pairwise update).
-void merge_moments(uint64_t& count, Vec3& mean, Mat3& m2, uint64_t other_count, const Vec3& other_mean,
-                   const Mat3& other_m2);
 
 }  // namespace stipple
