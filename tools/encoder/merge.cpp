@@ -19,13 +19,6 @@ namespace {
 // Nodes read and packed at a time.
 constexpr uint64_t kBlock = uint64_t{1} << 16;
 
-uint64_t mix64(uint64_t x) {  // SplitMix64's finalizer
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
 uint32_t f32_bits(float f) {
   uint32_t bits;
   std::memcpy(&bits, &f, 4);

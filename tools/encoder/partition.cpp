@@ -32,13 +32,6 @@ constexpr char kPlanMagic[8] = {'S', 'P', 'G', 'P', 'L', 'A', 'N', '1'};
 constexpr char kNodesMagic[8] = {'S', 'P', 'G', 'N', 'O', 'D', 'E', '1'};
 constexpr size_t kStatsDoubles = 41;
 
-uint64_t mix64(uint64_t x) {  // SplitMix64's finalizer
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
 // Little binary records: plain values in the host's (little-endian) order.
 class Out {
  public:

@@ -35,6 +35,16 @@
 
 namespace stipple {
 
+// The hash that picks the plan's sample points and the classes' sample
+// nodes by index (SplitMix64's finalizer): the same samples however the
+// scan is read or the jobs are run.
+inline uint64_t mix64(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
 // A top-tree node: internal (two children, a plane) or a partition.
 struct TopNode {
   uint32_t parent = 0;       // the root's is itself
