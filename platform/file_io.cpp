@@ -147,6 +147,10 @@ bool AtomicFileWriter::write(const void* data, size_t size) {
   return errno_ == 0;
 }
 
+std::string AtomicFileWriter::failure() const {
+  return path_ + ": write failed: " + std::strerror(errno_ ? errno_ : EIO);
+}
+
 bool AtomicFileWriter::commit(std::string& error) {
   if (!file_) return error = path_ + ": not open", false;
   int why = errno_;

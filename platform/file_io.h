@@ -59,6 +59,7 @@ class AtomicFileWriter {
   ~AtomicFileWriter();
   bool open(const std::string& path, std::string& error);
   bool write(const void* data, size_t size);  // false once a write has failed
+  std::string failure() const;                // "<path>: write failed: <reason>" after a failed write
   bool commit(std::string& error);
   void abort();
 

@@ -1,9 +1,7 @@
 // stipple encode — scan -> .spg.
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <string>
 #include <thread>
@@ -106,13 +104,8 @@ int merge_plan(const std::string& dir, const std::string& output, int threads, b
   ProgressBar progress("merge", !quiet);
   AtomicFileWriter file;
   if (!file.open(output, error)) return cli::fail("encode --merge: " + error);
-  const ByteSink sink = [&](const uint8_t* data, size_t size, std::string& why) {
-    if (file.write(data, size)) return true;
-    why = output + ": write failed: " + std::strerror(errno);
-    return false;
-  };
   EncodeReport report;
-  if (!merge_parts(plan, parts, threads, sink, report, error, &progress) || !file.commit(error))
+  if (!merge_parts(plan, parts, threads, sink_into(file), report, error, &progress) || !file.commit(error))
     return cli::fail("encode --merge: " + error);
   report.partitions = plan.partitions();
   progress.finish();

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cmath>
@@ -302,18 +301,6 @@ bool encode_through(ScanSource& source, const EncodeOptions& o, const std::strin
   return true;
 }
 
-// A .spg file written as it is made.
-struct FileSink {
-  AtomicFileWriter file;
-  ByteSink sink(const std::string& path) {
-    return [this, path](const uint8_t* data, size_t size, std::string& why) {
-      if (file.write(data, size)) return true;
-      why = path + ": write failed: " + std::strerror(errno);
-      return false;
-    };
-  }
-};
-
 }  // namespace
 
 bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t>& spg, EncodeReport& report,
@@ -334,12 +321,12 @@ bool encode_cloud(PointCloud& cloud, const EncodeOptions& o, std::vector<uint8_t
 
 bool encode_to_file(PointCloud& cloud, const EncodeOptions& o, const std::string& path, EncodeReport& report,
                     std::string& error, ProgressBar* progress) {
-  FileSink out;
-  if (!out.file.open(path, error)) return false;
+  AtomicFileWriter file;
+  if (!file.open(path, error)) return false;
   MemorySource source(cloud, o.consume_scan);
-  if (!encode_through(source, o, path, out.sink(path), report, error, progress)) return false;
+  if (!encode_through(source, o, path, sink_into(file), report, error, progress)) return false;
   const double start = monotonic_seconds();
-  if (!out.file.commit(error)) return false;
+  if (!file.commit(error)) return false;
   report.seconds.write += monotonic_seconds() - start;
   return true;
 }
@@ -375,11 +362,11 @@ bool encode_scan_file(const std::string& scan, const ScanOptions& scan_options, 
     report.seconds.read = read;
     return true;
   }
-  FileSink out;
-  if (!out.file.open(path, error)) return false;
+  AtomicFileWriter file;
+  if (!file.open(path, error)) return false;
   FileSource source(scan, scan_options, warn);
-  if (!encode_through(source, o, path, out.sink(path), report, error, progress)) return false;
-  if (!out.file.commit(error)) return false;
+  if (!encode_through(source, o, path, sink_into(file), report, error, progress)) return false;
+  if (!file.commit(error)) return false;
   if (source.streamed())
     if (std::string w = duplicate_warning(scan, report.duplicates, report.points, source.box()); !w.empty()) warn({w});
   return true;

@@ -9,6 +9,7 @@
 
 #include "core/spg_format.h"
 #include "core/spg_writer.h"
+#include "platform/file_io.h"
 #include "tools/encoder/classify.h"
 #include "tools/encoder/parallel.h"
 #include "tools/encoder/quantize.h"
@@ -86,6 +87,14 @@ class Output {
 };
 
 }  // namespace
+
+ByteSink sink_into(AtomicFileWriter& file) {
+  return [&file](const uint8_t* data, size_t size, std::string& error) {
+    if (file.write(data, size)) return true;
+    error = file.failure();
+    return false;
+  };
+}
 
 NormalSpread combine_normal_spreads(const NodeStats* children, const double* counts, size_t n, const Vec3& normal_sum,
                                     const Vec3& fallback_z) {

@@ -31,6 +31,11 @@ namespace stipple {
 // says why: "write failed ...").
 using ByteSink = std::function<bool(const uint8_t* data, size_t size, std::string& error)>;
 
+class AtomicFileWriter;
+// The sink into a file being written (platform/file_io.h), its failure the
+// file's ("<path>: write failed: No space left on device").
+ByteSink sink_into(AtomicFileWriter& file);
+
 bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNodes>>& parts, int threads,
                  const ByteSink& sink, EncodeReport& report, std::string& error, ProgressBar* progress = nullptr);
 
