@@ -1,10 +1,8 @@
 // stipple encode — scan -> .spg.
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
-#include <thread>
 
 #include "platform/file_io.h"
 #include "platform/progress.h"
@@ -120,13 +118,9 @@ int merge_plan(const std::string& dir, const std::string& output, int threads, b
 int cmd_encode_part(int argc, char** argv) {
   cli::Args args(argc, argv, 2);
   if (args.flag("--help") || args.flag("-h")) return std::fputs(kEncodePartHelp, stdout), 0;
-  int threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 256u));
-  std::string v;
+  int threads = 1;
   unsigned long long u = 0;
-  if (args.value("--threads", v)) {
-    if (!cli::parse_uint(v, 256, u) || u < 1) return cli::fail("encode-part: --threads: expected 1..256, got '" + v + "'");
-    threads = static_cast<int>(u);
-  }
+  if (std::string e; !parse_threads(args, threads, e)) return cli::fail("encode-part: " + e);
   const std::vector<std::string> pos = args.positionals();
   if (!args.unknown_option().empty()) return cli::fail("encode-part: " + args.unknown_option_message());
   if (pos.size() != 2) return cli::fail("encode-part: expected DIR and ID (see stipple encode-part --help)");

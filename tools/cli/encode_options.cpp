@@ -65,12 +65,7 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
     if (!cli::parse_uint(v, 64, u) || u < 3) return error = "--neighbours: expected 3..64, got '" + v + "'", false;
     o.normal_neighbours = static_cast<int>(u);
   }
-  if (args.value("--threads", v)) {
-    if (!cli::parse_uint(v, 256, u) || u < 1) return error = "--threads: expected 1..256, got '" + v + "'", false;
-    o.tree.threads = static_cast<int>(u);
-  } else {
-    o.tree.threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 256u));  // every core
-  }
+  if (!parse_threads(args, o.tree.threads, error)) return false;
   if (args.value("--memory", v) && (!parse_bytes(v, o.memory) || o.memory < (uint64_t{64} << 20)))
     return error = "--memory: expected a size of at least 64M (as 2G, 1500M, 2147483648), got '" + v + "'", false;
   if (args.value("--partition-points", v)) {
@@ -117,6 +112,18 @@ bool parse_orient_options(cli::Args& args, OrientOptions& o, std::string& error)
     o.has_viewpoint = true;
     o.viewpoint = Vec3(xyz[0], xyz[1], xyz[2]);
   }
+  return true;
+}
+
+bool parse_threads(cli::Args& args, int& threads, std::string& error) {
+  std::string v;
+  unsigned long long u = 0;
+  if (!args.value("--threads", v)) {
+    threads = static_cast<int>(std::clamp(std::thread::hardware_concurrency(), 1u, 256u));  // every core
+    return true;
+  }
+  if (!cli::parse_uint(v, 256, u) || u < 1) return error = "--threads: expected 1..256, got '" + v + "'", false;
+  threads = static_cast<int>(u);
   return true;
 }
 

@@ -15,6 +15,8 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
 // --orient and --viewpoint alone (truth takes these; its --up is render's).
 bool parse_orient_options(cli::Args& args, OrientOptions& o, std::string& error);
 
+// --threads N (1..256), or one per core.
+bool parse_threads(cli::Args& args, int& threads, std::string& error);
 // "2G", "1500M", "512KiB", "2147483648": bytes (binary units; B, iB optional).
 bool parse_bytes(const std::string& text, uint64_t& bytes);
 std::string summary_json(const std::string& scan, const EncodeReport& r, double seconds, double peak_mb);
