@@ -160,14 +160,7 @@ SpgWriteStatus spg_write(const SpgContent& c, uint8_t* out, size_t capacity, siz
   }
   at += topology_bytes;
   // §4 leaf point counts, LEB128.
-  for (uint32_t i = 0; i < h.leaf_count; ++i) {
-    uint32_t v = c.leaf_points[i];
-    do {
-      const uint8_t byte = v & 0x7F;
-      v >>= 7;
-      *at++ = static_cast<uint8_t>(byte | (v ? 0x80 : 0));
-    } while (v);
-  }
+  for (uint32_t i = 0; i < h.leaf_count; ++i) at += store_leb128(at, c.leaf_points[i]);
   // §5 records, §6 CRC-32.
   for (size_t i = 0; i < size_t{h.node_count} * record_bytes; ++i) *at++ = c.records[i];
   store_u32le(at, crc32(out, static_cast<size_t>(at - out)));

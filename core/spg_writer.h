@@ -75,6 +75,18 @@ size_t spg_write_bound(const SpgHeader& header);
 [[nodiscard]] SpgWriteStatus spg_write_startup_le(const SpgHeader& header, const uint8_t* sigma_p, const uint8_t* sigma_n,
                                                   const uint8_t* sigma_c, uint8_t* out, size_t capacity, size_t* written);
 
+// A leaf's point count as §4 stores it (LEB128, at most 5 bytes) at out;
+// returns the bytes written.
+inline size_t store_leb128(uint8_t* out, uint32_t v) {
+  size_t n = 0;
+  do {
+    const uint8_t byte = v & 0x7F;
+    v >>= 7;
+    out[n++] = static_cast<uint8_t>(byte | (v ? 0x80 : 0));
+  } while (v);
+  return n;
+}
+
 inline void store_u16le(uint8_t* p, uint16_t v) {
   p[0] = static_cast<uint8_t>(v);
   p[1] = static_cast<uint8_t>(v >> 8);

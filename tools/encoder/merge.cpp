@@ -316,12 +316,8 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
           if (child_counts[i]) continue;
           ++leaf_seen;
           points_seen += points[i];
-          uint32_t v = points[i];
-          do {
-            const uint8_t b = v & 0x7F;
-            v >>= 7;
-            bytes.push_back(static_cast<uint8_t>(b | (v ? 0x80 : 0)));
-          } while (v);
+          uint8_t leb[5];
+          bytes.insert(bytes.end(), leb, leb + store_leb128(leb, points[i]));
         }
         if (bytes.size() >= kBlock && !out.put(bytes)) return false;
         if (bytes.size() >= kBlock) bytes.clear();
