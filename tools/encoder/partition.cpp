@@ -576,11 +576,11 @@ PartitionRouter::PartitionRouter(PartitionPlan& plan, const std::string& dir) : 
 
 PartitionRouter::~PartitionRouter() = default;
 
-bool PartitionRouter::add(const PointCloud& cloud, std::string& error) {
+bool PartitionRouter::add(const PointCloud& cloud, std::string& error, size_t begin, size_t end) {
   const bool normals = plan_.normals && !plan_.estimate, colors = plan_.colors;
   if ((normals && cloud.normals.size() != cloud.size()) || (colors && cloud.colors.size() != cloud.size()))
     return error = "the scan's chunk lacks the normals or colours its plan has", false;
-  for (size_t i = 0; i < cloud.size(); ++i) {
+  for (size_t i = begin; i < std::min(end, cloud.size()); ++i) {
     const Vec3& p = cloud.positions[i];
     const uint32_t home = plan_.route(p);
     own_[home].add(cloud, i, normals, colors);
@@ -619,13 +619,9 @@ bool PartitionRouter::finish(std::string& error) {
 bool route_points(const PointCloud& cloud, PartitionPlan& plan, const std::string& dir, std::string& error,
                   ProgressBar* progress) {
   PartitionRouter router(plan, dir);
-  PointCloud chunk;
   for (size_t at = 0; at < cloud.size(); at += kScanChunk) {
     const size_t end = std::min(cloud.size(), at + kScanChunk);
-    chunk.positions.assign(cloud.positions.begin() + static_cast<std::ptrdiff_t>(at), cloud.positions.begin() + static_cast<std::ptrdiff_t>(end));
-    if (cloud.has_normals()) chunk.normals.assign(cloud.normals.begin() + static_cast<std::ptrdiff_t>(at), cloud.normals.begin() + static_cast<std::ptrdiff_t>(end));
-    if (cloud.has_colors()) chunk.colors.assign(cloud.colors.begin() + static_cast<std::ptrdiff_t>(at), cloud.colors.begin() + static_cast<std::ptrdiff_t>(end));
-    if (!router.add(chunk, error)) return false;
+    if (!router.add(cloud, error, at, end)) return false;
     if (progress) progress->update(0.3 * static_cast<double>(end) / static_cast<double>(cloud.size()), "routing points to partitions");
   }
   return router.finish(error);

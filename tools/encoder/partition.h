@@ -133,7 +133,8 @@ class PartitionRouter {
  public:
   PartitionRouter(PartitionPlan& plan, const std::string& dir);
   ~PartitionRouter();
-  bool add(const PointCloud& chunk, std::string& error);
+  // Points [begin, end) of `chunk`, in order.
+  bool add(const PointCloud& chunk, std::string& error, size_t begin = 0, size_t end = SIZE_MAX);
   bool finish(std::string& error);
 
  private:
