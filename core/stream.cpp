@@ -41,27 +41,51 @@ size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* o
   return written;
 }
 
+size_t SenderScratch::bytes(uint32_t cut_capacity) {
+  return align8(kMaxPayload) + align8(kMaxFrameBytes) + CutScratch::bytes(cut_capacity);
+}
+
+void SenderScratch::init(void* storage, size_t size) {
+  uint8_t* base = static_cast<uint8_t*>(storage);
+  const size_t fixed = align8(kMaxPayload) + align8(kMaxFrameBytes);
+  payload = size < fixed ? nullptr : base;
+  frame = size < fixed ? nullptr : base + align8(kMaxPayload);
+  cut.init(base + fixed, size < fixed ? 0 : size - fixed);
+}
+
 size_t StreamSender::storage_bytes(const SpgHeader& header) {
-  return align8(view_cut_state_bytes(header)) + align8(kMaxPayload) + kMaxFrameBytes;
+  return view_cut_state_bytes(header.node_count) + SenderScratch::bytes(header.node_count);
 }
 
 bool StreamSender::init(const SpgView& view, const CutBounds& bounds, void* storage, size_t bytes) {
   if (bytes < storage_bytes(view.header)) return false;
-  uint8_t* base = static_cast<uint8_t*>(storage);
-  const size_t cut_bytes = align8(view_cut_state_bytes(view.header));
-  if (cut_.init(bounds, base, cut_bytes) != CutStatus::kOk) return false;
-  payload_ = base + cut_bytes;
-  frame_ = payload_ + align8(kMaxPayload);
+  const size_t state_bytes = view_cut_state_bytes(view.header.node_count);
+  own_scratch_.init(static_cast<uint8_t*>(storage) + state_bytes, bytes - state_bytes);
+  return init(view, bounds, storage, state_bytes, &own_scratch_);
+}
+
+bool StreamSender::init(const SpgView& view, const CutBounds& bounds, void* state, size_t state_bytes,
+                        const SenderScratch* scratch) {
+  if (scratch == nullptr || scratch->payload == nullptr) return false;
+  if (cut_.init(bounds, state, state_bytes, &scratch->cut) != CutStatus::kOk) return false;
+  scratch_ = scratch;
   view_ = &view;
   started_ = false;
   sequence_ = 0;
   bytes_sent_ = 0;
+  cut_status_ = CutStatus::kOk;
   return true;
 }
 
+void StreamSender::use_scratch(const SenderScratch* scratch) {
+  scratch_ = scratch;
+  cut_.use_scratch(&scratch->cut);
+}
+
 bool StreamSender::send(MessageType type, const uint8_t* payload, size_t size, FrameSink sink, void* context) {
-  const size_t n = write_frame(type, sequence_, payload, size, frame_, kMaxFrameBytes);
-  if (n == 0 || !sink(context, frame_, n)) return false;
+  if (scratch_ == nullptr) return false;
+  const size_t n = write_frame(type, sequence_, payload, size, scratch_->frame, kMaxFrameBytes);
+  if (n == 0 || !sink(context, scratch_->frame, n)) return false;
   ++sequence_;
   bytes_sent_ += n;
   return true;
@@ -75,11 +99,12 @@ bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
   for (int f = 0; f < kFieldCount; ++f) same_layout_ = same_layout_ && reduced_.layout.bits[f] == view_->header.layout.bits[f];
   capacity_ = hello.cache_capacity;
   cut_.reset();  // a fresh client: its cut starts empty, so the first update sends it all
-  const size_t n = write_reduced_startup(*view_, hello.attributes, payload_, kMaxPayload);
+  uint8_t* payload = scratch_->payload;
+  const size_t n = write_reduced_startup(*view_, hello.attributes, payload, kMaxPayload);
   if (n == 0) return false;
   started_ = true;
   sequence_ = 0;  // a new stream (a serial client says hello again to resynchronise)
-  return send(MessageType::kStartup, payload_, n, sink, context);
+  return send(MessageType::kStartup, payload, n, sink, context);
 }
 
 bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context) {
@@ -89,13 +114,15 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
   p.max_nodes = capacity_;
   p.cull_frustum = p.cull_backfaces = cull;
   for (int k = 0; k < 4; ++k) p.window[k] = camera.window[k];
-  if (cut_.update(camera.camera, p) != CutStatus::kOk) return false;
+  cut_status_ = cut_.update(camera.camera, p);
+  if (cut_status_ != CutStatus::kOk) return false;
+  uint8_t* payload = scratch_->payload;
   // Drops first, so a full client cache makes room before new nodes arrive.
   for (uint32_t done = 0; done < cut_.left_count();) {
     const uint32_t n = cut_.left_count() - done < kDropsPerFrame ? cut_.left_count() - done : kDropsPerFrame;
-    store_u32le(payload_, n);
-    for (uint32_t i = 0; i < n; ++i) store_u32le(payload_ + 4 + 4 * size_t{i}, index_of(cut_.left()[done + i]));
-    if (!send(MessageType::kDrop, payload_, 4 + 4 * size_t{n}, sink, context)) return false;
+    store_u32le(payload, n);
+    for (uint32_t i = 0; i < n; ++i) store_u32le(payload + 4 + 4 * size_t{i}, index_of(cut_.left()[done + i]));
+    if (!send(MessageType::kDrop, payload, 4 + 4 * size_t{n}, sink, context)) return false;
     done += n;
   }
   // Batches of at most kNodeBatchBytes, coarse nodes first (ids are
@@ -104,10 +131,10 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
   const uint32_t per_frame = static_cast<uint32_t>((kNodeBatchBytes - 4) / stride);
   for (uint32_t done = 0; done < cut_.entered_count();) {
     const uint32_t n = cut_.entered_count() - done < per_frame ? cut_.entered_count() - done : per_frame;
-    store_u32le(payload_, n);
+    store_u32le(payload, n);
     for (uint32_t i = 0; i < n; ++i) {
       const uint32_t id = index_of(cut_.entered()[done + i]);
-      uint8_t* entry = payload_ + 4 + size_t{i} * stride;
+      uint8_t* entry = payload + 4 + size_t{i} * stride;
       store_u32le(entry, id);
       entry[4] = cut_.points(NodeId{id});
       const uint8_t* record = view_->records + size_t{id} * view_->record_bytes;
@@ -116,7 +143,7 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
       else
         transcode_record(view_->header.layout, reduced_.layout, record, entry + 5);
     }
-    if (!send(MessageType::kNodes, payload_, 4 + size_t{n} * stride, sink, context)) return false;
+    if (!send(MessageType::kNodes, payload, 4 + size_t{n} * stride, sink, context)) return false;
     done += n;
   }
   const UpdateEnd end{camera.sequence, cut_.sent_count()};

@@ -40,22 +40,52 @@ size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* o
 // write, a queue); false stops the update (the link is gone).
 using FrameSink = bool (*)(void* context, const uint8_t* frame, size_t size);
 
+// What a sender works in during one update or send, beside its cut's
+// scratch: a payload and a frame buffer. Senders used from one thread, one
+// at a time, share one (a server: one per worker), so a client's own
+// storage is its cut's sent set and a fixed part.
+struct SenderScratch {
+  static size_t bytes(uint32_t cut_capacity);  // for cuts of up to this many nodes
+  void init(void* storage, size_t bytes);      // needs bytes(0) at least
+  CutScratch cut;
+  uint8_t* payload = nullptr;  // kMaxPayload
+  uint8_t* frame = nullptr;    // kMaxFrameBytes
+};
+
 class StreamSender {
  public:
-  // Storage for one client of a model: its cut's state (the bounds are the
-  // model's, shared by every client) plus a payload and a frame buffer.
+  // One block for a client that may see the whole tree: its state and a
+  // scratch of its own.
   static size_t storage_bytes(const SpgHeader& header);
   // `view` and `bounds` must outlive the sender.
   [[nodiscard]] bool init(const SpgView& view, const CutBounds& bounds, void* storage, size_t bytes);
+  // Over a shared scratch (which must outlive the sender, or be replaced
+  // with use_scratch) and state storage for the cut's sent set
+  // (view_cut_state_bytes; zero bytes is allowed: see update()).
+  [[nodiscard]] bool init(const SpgView& view, const CutBounds& bounds, void* state, size_t state_bytes,
+                          const SenderScratch* scratch);
+  void use_scratch(const SenderScratch* scratch);
+  // Moves the cut's state to larger storage (ViewCut::relocate).
+  [[nodiscard]] bool relocate(void* state, size_t state_bytes) { return cut_.relocate(state, state_bytes); }
   // The client's hello: sends the reduced startup. False for a hello the
   // server cannot serve (version) — the caller sends a close.
   [[nodiscard]] bool start(const Hello& hello, FrameSink sink, void* context);
   // One camera update: the cut's change as drop and node batches, then an
-  // update-end. Returns false when the sink refused a frame.
+  // update-end. Returns false when the sink refused a frame, or when the
+  // cut outgrew its storage (cut_status() is then kStorageTooSmall and
+  // nothing was sent: grow the scratch or the state, and update again).
   [[nodiscard]] bool update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context);
+  // Ends the stream: the cut is forgotten and its state storage let go (the
+  // caller may free it); start() begins a new one.
+  void end() {
+    cut_.reset();
+    (void)cut_.relocate(nullptr, 0);
+    started_ = false;
+  }
   // Any other message in the stream's sequence (keep-alive, close, error).
   [[nodiscard]] bool send(MessageType type, const uint8_t* payload, size_t size, FrameSink sink, void* context);
   const ViewCut& cut() const { return cut_; }
+  CutStatus cut_status() const { return cut_status_; }
   bool started() const { return started_; }
   uint64_t bytes_sent() const { return bytes_sent_; }
   uint16_t next_sequence() const { return sequence_; }
@@ -63,14 +93,15 @@ class StreamSender {
  private:
   const SpgView* view_ = nullptr;
   ViewCut cut_;
-  uint8_t* payload_ = nullptr;  // kMaxPayload
-  uint8_t* frame_ = nullptr;    // kMaxFrameBytes
+  SenderScratch own_scratch_;  // with the one-block init
+  const SenderScratch* scratch_ = nullptr;
   SpgHeader reduced_{};
   size_t reduced_record_bytes_ = 0;
   bool same_layout_ = true;  // the client takes every attribute: records are copied as they are
   uint32_t capacity_ = 0;
   uint16_t sequence_ = 0;
   uint64_t bytes_sent_ = 0;
+  CutStatus cut_status_ = CutStatus::kOk;
   bool started_ = false;
 };
 

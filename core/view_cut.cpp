@@ -34,28 +34,6 @@ struct ViewCut::Eval {
 
 namespace {
 
-struct Layout {
-  size_t sent_bits, fresh_bits, cut, sent, previous, sizes, entered, left, heap, total;
-};
-
-// The per-client state (the bounds are separate).
-Layout layout_of(uint32_t n) {
-  Layout l{};
-  ArenaCarver arena;
-  const auto take = [&](size_t bytes) { return arena.take(bytes); };
-  l.sent_bits = take((size_t{n} + 7) / 8);
-  l.fresh_bits = take((size_t{n} + 7) / 8);
-  l.cut = take(4 * size_t{n});
-  l.sent = take(4 * size_t{n});
-  l.previous = take(4 * size_t{n});
-  l.sizes = take(4 * size_t{n});
-  l.entered = take(4 * size_t{n});
-  l.left = take(4 * size_t{n});
-  l.heap = take(8 * size_t{n});
-  l.total = arena.total();
-  return l;
-}
-
 constexpr int32_t kNoCone = 0x7FFF;
 constexpr uint32_t kInside = 0x80000000u;  // in the breadth-first queue: the node's subtree is wholly visible
 
@@ -90,15 +68,24 @@ Cone widened(const int16_t axis[3], const int16_t n[3], Cone c) {
   return sin_sum >= kQ14One ? Cone{kNoCone, 0} : Cone{static_cast<int32_t>(sin_sum), static_cast<int32_t>(cos_sum)};
 }
 
-inline bool bit(const uint8_t* bits, uint32_t i) { return (bits[i >> 3] >> (i & 7)) & 1u; }
-inline void set_bit(uint8_t* bits, uint32_t i) { bits[i >> 3] = static_cast<uint8_t>(bits[i >> 3] | (1u << (i & 7))); }
-inline void clear_bit(uint8_t* bits, uint32_t i) { bits[i >> 3] = static_cast<uint8_t>(bits[i >> 3] & ~(1u << (i & 7))); }
-
 }  // namespace
 
 size_t CutBounds::bytes(const SpgHeader& header) { return align8(sizeof(ViewCut::Bound) * header.node_count); }
-size_t view_cut_state_bytes(const SpgHeader& header) { return layout_of(header.node_count).total; }
-size_t view_cut_bytes(const SpgHeader& header) { return CutBounds::bytes(header) + view_cut_state_bytes(header); }
+// The scratch of capacity C: cut, fresh sent set, sizes, entered, left (4 C
+// each), then the heap (8 C; the breadth-first queue, a ring of 2 C ids, in
+// its place).
+size_t CutScratch::bytes(uint32_t capacity) { return 28 * size_t{capacity}; }
+
+void CutScratch::init(void* at, size_t size) {
+  storage = at;
+  const size_t c = size / 28;
+  capacity = c > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(c);
+}
+
+size_t view_cut_state_bytes(uint32_t sent) { return align8(4 * size_t{sent}); }
+size_t view_cut_bytes(const SpgHeader& header) {
+  return CutBounds::bytes(header) + view_cut_state_bytes(header.node_count) + CutScratch::bytes(header.node_count);
+}
 
 CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes,
                           const ConeRule& cones) {
@@ -186,47 +173,58 @@ CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void*
 CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes,
                         const ConeRule& cones) {
   ready_ = false;
-  const size_t bound_bytes = CutBounds::bytes(view.header);
+  const uint32_t n = view.header.node_count;
+  const size_t bound_bytes = CutBounds::bytes(view.header), state_bytes = view_cut_state_bytes(n);
   if (bytes < view_cut_bytes(view.header)) return CutStatus::kStorageTooSmall;
   const CutStatus s = own_.init(view, decoder, storage, bound_bytes, cones);
   if (s != CutStatus::kOk) return s;
-  return init(own_, static_cast<uint8_t*>(storage) + bound_bytes, bytes - bound_bytes);
+  uint8_t* state = static_cast<uint8_t*>(storage) + bound_bytes;
+  own_scratch_.init(state + state_bytes, CutScratch::bytes(n));
+  return init(own_, state, state_bytes, &own_scratch_);
 }
 
-CutStatus ViewCut::init(const CutBounds& shared, void* storage, size_t bytes) {
+CutStatus ViewCut::init(const CutBounds& shared, void* state, size_t state_bytes, const CutScratch* scratch) {
   ready_ = false;
   if (shared.bounds_ == nullptr) return CutStatus::kNotReady;
-  const uint32_t n = shared.node_count_;
-  const Layout l = layout_of(n);
-  if (bytes < l.total) return CutStatus::kStorageTooSmall;
-  uint8_t* base = static_cast<uint8_t*>(storage);
   bounds_ = static_cast<const Bound*>(shared.bounds_);
-  node_count_ = n;
+  node_count_ = shared.node_count_;
   normals_ = shared.normals_;
-  sent_bits_ = base + l.sent_bits;
-  fresh_bits_ = base + l.fresh_bits;
-  for (size_t i = 0; i < (size_t{n} + 7) / 8; ++i) sent_bits_[i] = fresh_bits_[i] = 0;
-  cut_ = reinterpret_cast<NodeId*>(base + l.cut);
-  sent_ = reinterpret_cast<NodeId*>(base + l.sent);
-  previous_ = reinterpret_cast<NodeId*>(base + l.previous);
-  sent_size_ = reinterpret_cast<uint32_t*>(base + l.sizes);
-  entered_ = reinterpret_cast<NodeId*>(base + l.entered);
-  left_ = reinterpret_cast<NodeId*>(base + l.left);
-  heap_ = reinterpret_cast<uint64_t*>(base + l.heap);
-  cut_count_ = sent_count_ = previous_count_ = entered_count_ = left_count_ = visited_ = 0;
+  scratch_ = scratch;
+  sent_ = static_cast<NodeId*>(state);
+  const size_t c = state_bytes / 4;
+  state_capacity_ = c > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(c);
+  cut_ = entered_ = left_ = nullptr;
+  sent_size_ = nullptr;
+  heap_ = nullptr;
+  cut_count_ = sent_count_ = entered_count_ = left_count_ = visited_ = needed_ = 0;
   ready_ = true;
   return CutStatus::kOk;
 }
 
+bool ViewCut::relocate(void* state, size_t state_bytes) {
+  if (state_bytes / 4 < sent_count_) return false;
+  NodeId* to = static_cast<NodeId*>(state);
+  std::copy(sent_, sent_ + sent_count_, to);
+  sent_ = to;
+  const size_t c = state_bytes / 4;
+  state_capacity_ = c > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(c);
+  return true;
+}
+
 uint8_t ViewCut::points(NodeId id) const { return bounds_[index_of(id)].points; }
 
-void ViewCut::reset() {
-  for (uint32_t i = 0; i < sent_count_; ++i) {
-    const uint32_t id = index_of(sent_[i]);
-    sent_bits_[id >> 3] = static_cast<uint8_t>(sent_bits_[id >> 3] & ~(1u << (id & 7)));
+bool ViewCut::is_sent(NodeId id) const {
+  uint32_t lo = 0, hi = sent_count_;
+  const uint32_t want = index_of(id);
+  while (lo < hi) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (index_of(sent_[mid]) < want) lo = mid + 1;
+    else hi = mid;
   }
-  cut_count_ = sent_count_ = previous_count_ = entered_count_ = left_count_ = visited_ = 0;
+  return lo < sent_count_ && index_of(sent_[lo]) == want;
 }
+
+void ViewCut::reset() { cut_count_ = sent_count_ = entered_count_ = left_count_ = visited_ = needed_ = 0; }
 
 struct ViewCut::Frame {
   const Camera& camera;
@@ -372,56 +370,77 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
       frame.offset[k] -= int64_t{camera.rotation[k][j]} * camera.eye[j];
     }
   }
-  // The previous sent set is kept for the delta.
-  for (uint32_t i = 0; i < sent_count_; ++i) previous_[i] = sent_[i];
-  previous_count_ = sent_count_;
-  cut_count_ = sent_count_ = 0;
+  // Everything is made in the scratch; the state (the sent set) changes only
+  // once the new cut is whole, so a refusal leaves the cut as it was.
+  if (scratch_ == nullptr || scratch_->storage == nullptr) return CutStatus::kNotReady;
+  const uint32_t capacity = scratch_->capacity;
+  needed_ = 0;
+  if (sent_count_ > capacity) {  // the change is listed in the scratch
+    needed_ = sent_count_;
+    return CutStatus::kStorageTooSmall;
+  }
+  uint8_t* base = static_cast<uint8_t*>(scratch_->storage);
+  cut_ = reinterpret_cast<NodeId*>(base);
+  NodeId* fresh = cut_ + capacity;
+  sent_size_ = reinterpret_cast<uint32_t*>(fresh + capacity);
+  entered_ = reinterpret_cast<NodeId*>(sent_size_ + capacity);
+  left_ = entered_ + capacity;
+  heap_ = reinterpret_cast<uint64_t*>(left_ + capacity);
+  const auto too_large = [&](uint64_t reached) {
+    needed_ = reached > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(reached);
+    cut_count_ = entered_count_ = left_count_ = 0;
+    return CutStatus::kStorageTooSmall;
+  };
+  uint32_t cut_count = 0, fresh_count = 0;
   heap_count_ = 0;
   visited_ = 0;
 
   const auto settle = [&](uint32_t id, const Eval& e) {
-    cut_[cut_count_++] = NodeId{id};
+    cut_[cut_count++] = NodeId{id};
     if (e.visible) {
-      sent_[sent_count_] = NodeId{id};
-      sent_size_[sent_count_++] = e.size;
+      fresh[fresh_count] = NodeId{id};
+      sent_size_[fresh_count++] = e.size;
     }
   };
   // Without a binding budget every splittable node splits, in any order:
   // breadth first, which settles the nodes in id order (ids are breadth-first,
-  // children adjacent in their parents' order), so no sort is needed.
+  // children adjacent in their parents' order), so no sort is needed. The
+  // queue is a ring in the heap's place: what waits in it and what settled
+  // are never more than the finished cut, so 2 C ids hold it.
   uint32_t* queue = reinterpret_cast<uint32_t*>(heap_);
-  uint32_t head = 0, tail = 0;
+  const uint64_t ring = 2 * uint64_t{capacity};
+  uint64_t head = 0, tail = 0;
+  if (capacity == 0) return too_large(1);
   queue[tail++] = 0;
   // A binding budget stops it early (too many sent, or too many visited for
   // the budget: the greedy pass then costs what the budget allows).
   const uint64_t visit_limit = 4 * uint64_t{params.max_nodes} + 8;
   {
-    uint32_t cut_count = 0, sent_count = 0, visited = 0;
-    while (head < tail && sent_count <= params.max_nodes && visited <= visit_limit) {
-      const uint32_t id = queue[head++];
+    uint32_t visited = 0;
+    while (head < tail && fresh_count <= params.max_nodes && visited <= visit_limit) {
+      const uint32_t id = queue[head++ % ring];
       ++visited;
       const Eval e = evaluate(frame, id & ~kInside, id & kInside);
       if (!e.split) {
         cut_[cut_count++] = NodeId{id & ~kInside};
         if (e.visible) {
-          sent_[sent_count] = NodeId{id & ~kInside};
-          sent_size_[sent_count++] = e.size;
+          fresh[fresh_count] = NodeId{id & ~kInside};
+          sent_size_[fresh_count++] = e.size;
         }
         continue;
       }
       const Bound& b = bounds_[id & ~kInside];
+      if (cut_count + (tail - head) + b.children > capacity) return too_large(cut_count + (tail - head) + b.children);
       const uint32_t flag = e.inside ? kInside : 0;
-      for (uint32_t k = 0; k < b.children; ++k) queue[tail++] = (b.first_child + k) | flag;
+      for (uint32_t k = 0; k < b.children; ++k) queue[tail++ % ring] = (b.first_child + k) | flag;
     }
-    cut_count_ = cut_count;
-    sent_count_ = sent_count;
     visited_ = visited;
   }
-  if (head < tail || sent_count_ > params.max_nodes) {
+  if (head < tail || fresh_count > params.max_nodes) {
     // The budget binds: refine largest projected size first. The sent nodes
     // so far are the settled visible ones plus every node waiting in the heap
     // (all visible).
-    cut_count_ = sent_count_ = 0;
+    cut_count = fresh_count = 0;
     frame.split_sizes = true;
     const auto place = [&](uint32_t id) {
       ++visited_;
@@ -435,45 +454,48 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
       const uint64_t top = heap_pop();
       const uint32_t id = ~static_cast<uint32_t>(top);
       const Bound& b = bounds_[id];
-      if (room && uint64_t{sent_count_} + heap_count_ + b.children > params.max_nodes) {
+      if (room && uint64_t{fresh_count} + heap_count_ + b.children > params.max_nodes) {
         // The split's cost: its visible children replace it.
         uint32_t visible = 0;
         for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(frame, b.first_child + k, false).visible;
-        room = uint64_t{sent_count_} + heap_count_ + visible <= params.max_nodes;
+        room = uint64_t{fresh_count} + heap_count_ + visible <= params.max_nodes;
       }
       if (!room) {  // the budget is spent: this node and all still waiting stay whole
         settle(id, Eval{true, false, false, static_cast<uint32_t>(top >> 32)});
         continue;
       }
+      if (uint64_t{cut_count} + heap_count_ + b.children > capacity)
+        return too_large(uint64_t{cut_count} + heap_count_ + b.children);
       for (uint32_t k = 0; k < b.children; ++k) place(b.first_child + k);
     }
     // Sent nodes in id order (the order a client's cache is filled in), with
     // their sizes: sorted as (id, size) pairs in the heap's storage.
-    for (uint32_t i = 0; i < sent_count_; ++i) heap_[i] = (uint64_t{index_of(sent_[i])} << 32) | sent_size_[i];
-    std::sort(heap_, heap_ + sent_count_);
-    for (uint32_t i = 0; i < sent_count_; ++i) {
-      sent_[i] = NodeId{static_cast<uint32_t>(heap_[i] >> 32)};
+    for (uint32_t i = 0; i < fresh_count; ++i) heap_[i] = (uint64_t{index_of(fresh[i])} << 32) | sent_size_[i];
+    std::sort(heap_, heap_ + fresh_count);
+    for (uint32_t i = 0; i < fresh_count; ++i) {
+      fresh[i] = NodeId{static_cast<uint32_t>(heap_[i] >> 32)};
       sent_size_[i] = static_cast<uint32_t>(heap_[i]);
     }
   }
+  if (fresh_count > state_capacity_) return too_large(fresh_count);
 
-  // The delta against the previous sent set (bit sets, cleared by the lists).
+  // The change: both sent sets are in id order, so one merge lists it.
   entered_count_ = left_count_ = 0;
-  for (uint32_t i = 0; i < sent_count_; ++i) {
-    const uint32_t id = index_of(sent_[i]);
-    if (!bit(sent_bits_, id)) entered_[entered_count_++] = sent_[i];
-    set_bit(fresh_bits_, id);
+  uint32_t i = 0, j = 0;
+  while (i < fresh_count || j < sent_count_) {
+    const uint32_t a = i < fresh_count ? index_of(fresh[i]) : 0xFFFFFFFFu;
+    const uint32_t b = j < sent_count_ ? index_of(sent_[j]) : 0xFFFFFFFFu;
+    if (a == b) {
+      ++i, ++j;
+    } else if (a < b) {
+      entered_[entered_count_++] = fresh[i++];
+    } else {
+      left_[left_count_++] = sent_[j++];
+    }
   }
-  for (uint32_t i = 0; i < previous_count_; ++i) {
-    const uint32_t id = index_of(previous_[i]);
-    if (!bit(fresh_bits_, id)) left_[left_count_++] = previous_[i];
-    clear_bit(sent_bits_, id);
-  }
-  for (uint32_t i = 0; i < sent_count_; ++i) {
-    const uint32_t id = index_of(sent_[i]);
-    set_bit(sent_bits_, id);
-    clear_bit(fresh_bits_, id);
-  }
+  std::copy(fresh, fresh + fresh_count, sent_);
+  sent_count_ = fresh_count;
+  cut_count_ = cut_count;
   return CutStatus::kOk;
 }
 

@@ -22,7 +22,22 @@
 // the sent set since the previous update, which is what a server streams.
 // The result depends on the camera and parameters only, never on earlier
 // cameras: an updated cut equals a fresh one. Integer only, no heap, no
-// exceptions; storage comes from the caller (view_cut_bytes).
+// exceptions; storage comes from the caller.
+//
+// Storage is in three parts, so that a server's cost per client follows
+// what the client sees, never the model's size:
+//   CutBounds   per node, built once per model, shared read-only (36 B/node);
+//   the state   per cut: its sent set, 4 bytes a sent node — all that
+//               persists from one update to the next;
+//   CutScratch  what one update works in (the whole cut, the new sent set
+//               and sizes, the change, the queue: 28 bytes a cut node);
+//               cuts updated one at a time (one thread) may share one, and
+//               what a cut reports from it (cut(), sent_size_q4(),
+//               entered(), left()) holds until the next update through it.
+// A cut or a sent set larger than its storage makes update() refuse with
+// kStorageTooSmall, leaving the cut as it was; the caller grows the storage
+// (relocate, a larger scratch) and updates again. view_cut_bytes(header)
+// sizes all three for a whole tree in one block: that never refuses.
 #pragma once
 
 #include <cstddef>
@@ -59,7 +74,7 @@ struct ConeRule {
 
 enum class CutStatus : uint8_t {
   kOk = 0,
-  kStorageTooSmall,  // init: fewer bytes than view_cut_bytes
+  kStorageTooSmall,  // init: fewer bytes than asked for; update: the cut or the sent set outgrew its storage
   kBadView,          // init: a node fails to decode, or 2^31 nodes or more (never for a view spg_parse accepted)
   kNotReady,         // update before a successful init
 };
@@ -82,26 +97,46 @@ class CutBounds {
   bool normals_ = false;
 };
 
-// Storage for one cut of a tree of `header.node_count` nodes: with its own
-// bounds, 68 1/4 bytes a node (view_cut_bytes); over shared bounds, 32 1/4
-// (view_cut_state_bytes).
+// Scratch for updates of cuts of up to `capacity` nodes (culled ones
+// included): 28 bytes a node. Shared by cuts updated one at a time.
+struct CutScratch {
+  static size_t bytes(uint32_t capacity);
+  // The capacity `bytes` of storage gives (at most 2^31 - 1).
+  void init(void* storage, size_t bytes);
+  void* storage = nullptr;
+  uint32_t capacity = 0;
+};
+
+// Storage a cut keeps between updates for up to `sent` sent nodes.
+size_t view_cut_state_bytes(uint32_t sent);
+// One block for a cut of any camera over a whole tree of `header.node_count`
+// nodes with its own bounds, state and scratch (68 bytes a node).
 size_t view_cut_bytes(const SpgHeader& header);
-size_t view_cut_state_bytes(const SpgHeader& header);
 
 class ViewCut {
  public:
   // `view` from spg_parse, `decoder` initialised on it; both are read during
-  // init only. Builds its own bounds table; the cut starts empty.
+  // init only. One block (view_cut_bytes): its own bounds, state and scratch
+  // for the whole tree. The cut starts empty.
   [[nodiscard]] CutStatus init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes,
                                const ConeRule& cones = {});
-  // Over shared bounds, which must outlive the cut.
-  [[nodiscard]] CutStatus init(const CutBounds& bounds, void* storage, size_t bytes);
+  // Over shared bounds and scratch, which must outlive the cut (the scratch
+  // may be replaced with use_scratch); `state` holds view_cut_state_bytes(n)
+  // for a sent set of up to n nodes (zero bytes is allowed: grow it later).
+  [[nodiscard]] CutStatus init(const CutBounds& bounds, void* state, size_t state_bytes, const CutScratch* scratch);
+  void use_scratch(const CutScratch* scratch) { scratch_ = scratch; }
+  // Moves the sent set into new state storage (larger, to follow a growing
+  // cut); false, and nothing moved, when it does not hold the present set.
+  [[nodiscard]] bool relocate(void* state, size_t state_bytes);
+  uint32_t state_capacity() const { return state_capacity_; }
 
   // Forgets the sent set (the next update reports every sent node as entered).
   void reset();
 
   // Re-derives the cut for `camera`; entered() and left() are the change of
   // the sent set since the previous update (everything, the first time).
+  // kStorageTooSmall: the cut outgrew the scratch or the sent set the
+  // state; nothing changed (needed_capacity() says how far it got).
   [[nodiscard]] CutStatus update(const Camera& camera, const CutParams& params);
 
   // The sent nodes, in id (breadth-first) order, and each one's projected
@@ -122,10 +157,13 @@ class ViewCut {
   const NodeId* entered() const { return entered_; }
   uint32_t left_count() const { return left_count_; }
   const NodeId* left() const { return left_; }
-  bool is_sent(NodeId id) const { return (sent_bits_[index_of(id) >> 3] >> (index_of(id) & 7)) & 1u; }
+  bool is_sent(NodeId id) const;  // a binary search of sent()
   // Nodes visited by the last update (the cost: the cut and the nodes above it).
   uint32_t visited() const { return visited_; }
   uint32_t node_count() const { return node_count_; }
+  // After kStorageTooSmall: the cut nodes or sent nodes it reached, a lower
+  // bound on the capacity the refused update needs.
+  uint32_t needed_capacity() const { return needed_; }
 
   struct Bound;
 
@@ -136,21 +174,22 @@ class ViewCut {
   void heap_push(uint32_t size, uint32_t node);
   uint64_t heap_pop();
 
-  CutBounds own_;  // when init built the bounds itself
+  CutBounds own_;        // when init built the bounds itself
+  CutScratch own_scratch_;  // and its scratch
   const Bound* bounds_ = nullptr;
+  const CutScratch* scratch_ = nullptr;
   uint32_t node_count_ = 0;
   bool normals_ = false;
-  uint8_t* sent_bits_ = nullptr;   // the sent set of the last update
-  uint8_t* fresh_bits_ = nullptr;  // scratch: the sent set being made
+  NodeId* sent_ = nullptr;  // the state: the sent set of the last update, in id order
+  uint32_t state_capacity_ = 0;
+  // In the scratch, valid until the next update through it.
   NodeId* cut_ = nullptr;
-  NodeId* sent_ = nullptr;
-  NodeId* previous_ = nullptr;  // the previous update's sent nodes
   uint32_t* sent_size_ = nullptr;
   NodeId* entered_ = nullptr;
   NodeId* left_ = nullptr;
   uint64_t* heap_ = nullptr;  // (size << 32 | ~id): the largest size first, then the smallest id
   uint32_t heap_count_ = 0;
-  uint32_t cut_count_ = 0, sent_count_ = 0, previous_count_ = 0, entered_count_ = 0, left_count_ = 0, visited_ = 0;
+  uint32_t cut_count_ = 0, sent_count_ = 0, entered_count_ = 0, left_count_ = 0, visited_ = 0, needed_ = 0;
   bool ready_ = false;
 };
 
