@@ -36,7 +36,7 @@ finish 1
 for f in "$W"/loop/frame_*.png; do
   "$S" image-diff "$f" "$W/serial/$(basename "$f")" >/dev/null || { echo "differs over serial: $(basename "$f")"; exit 1; }
 done
-for what in "connected" "hello 240x320 rgb565" "first cut" "closed by the client"; do
+for what in "connected" "hello 240x320 rgb565" "first cut" "session 1 ended by the client"; do
   grep -q "$what" "$W/serve1.err" || { echo "the server log lacks '$what'"; cat "$W/serve1.err"; exit 1; }
 done
 

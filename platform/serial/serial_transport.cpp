@@ -2,6 +2,7 @@
 #include "platform/serial/serial_transport.h"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -70,8 +71,22 @@ TransportStatus SerialTransport::read(uint8_t* out, size_t capacity, size_t* mov
     *moved = static_cast<size_t>(n);
     return TransportStatus::kOk;
   }
-  if (n == 0 || errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return TransportStatus::kTimeout;
-  if (errno == EIO || errno == ENXIO || errno == ENODEV) return TransportStatus::kClosed;  // hung up, unplugged
+  if (n == 0) {
+    // A raw tty reads 0 both when nothing is there (VMIN = VTIME = 0) and
+    // when the line hung up (a USB CDC-ACM device unplugged, a pty's other
+    // end closed): poll tells them apart.
+    pollfd p{fd_, POLLIN, 0};
+    if (poll(&p, 1, 0) == 1 && (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0) {
+      error_ = name_ + ": the line hung up";
+      return TransportStatus::kClosed;
+    }
+    return TransportStatus::kTimeout;
+  }
+  if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) return TransportStatus::kTimeout;
+  if (errno == EIO || errno == ENXIO || errno == ENODEV) {  // hung up, unplugged
+    error_ = name_ + ": the line hung up (" + std::strerror(errno) + ")";
+    return TransportStatus::kClosed;
+  }
   error_ = name_ + ": " + std::strerror(errno);
   return TransportStatus::kError;
 }

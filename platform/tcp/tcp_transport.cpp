@@ -103,7 +103,8 @@ bool parse_host_port(const std::string& text, const std::string& default_host, s
   return true;
 }
 
-bool tcp_listen(const std::string& host, uint16_t port, int* out, uint16_t* bound_port, std::string& error) {
+bool tcp_listen(const std::string& host, uint16_t port, int* out, uint16_t* bound_port, std::string& error,
+                bool share_port) {
   sockaddr_storage addr{};
   socklen_t len = 0;
   auto* v4 = reinterpret_cast<sockaddr_in*>(&addr);
@@ -123,7 +124,14 @@ bool tcp_listen(const std::string& host, uint16_t port, int* out, uint16_t* boun
   if (fd < 0) return error = std::string("socket: ") + std::strerror(errno), false;
   const int one = 1;
   setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-  if (bind(fd, reinterpret_cast<sockaddr*>(&addr), len) != 0 || listen(fd, 64) != 0 || !set_nonblocking(fd)) {
+  if (share_port && setsockopt(fd, SOL_SOCKET, SO_REUSEPORT, &one, sizeof one) != 0) {
+    error = describe(addr) + ": SO_REUSEPORT: " + std::strerror(errno);
+    ::close(fd);
+    return false;
+  }
+  // The kernel's limit (somaxconn) caps the backlog: a thousand clients
+  // connecting at once wait there, not in refusals.
+  if (bind(fd, reinterpret_cast<sockaddr*>(&addr), len) != 0 || listen(fd, SOMAXCONN) != 0 || !set_nonblocking(fd)) {
     error = describe(addr) + ": " + std::strerror(errno);
     ::close(fd);
     return false;
@@ -137,11 +145,12 @@ bool tcp_listen(const std::string& host, uint16_t port, int* out, uint16_t* boun
 
 void tcp_close(int fd) { ::close(fd); }
 
-int tcp_accept(int listen_fd, std::string* peer) {
+int tcp_accept(int listen_fd, std::string* peer, int* error) {
   sockaddr_storage addr{};
   socklen_t len = sizeof addr;
   const int fd = accept(listen_fd, reinterpret_cast<sockaddr*>(&addr), &len);
   if (fd >= 0 && peer) *peer = describe(addr);
+  if (error) *error = fd >= 0 ? 0 : errno == EWOULDBLOCK ? EAGAIN : errno;
   return fd;
 }
 

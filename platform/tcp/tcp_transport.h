@@ -37,9 +37,14 @@ bool parse_host_port(const std::string& text, const std::string& default_host, s
 
 // A listening socket on host:port (numeric IPv4 or IPv6; port 0 picks a free
 // one, see *bound_port). Non-blocking, SO_REUSEADDR.
-bool tcp_listen(const std::string& host, uint16_t port, int* fd, uint16_t* bound_port, std::string& error);
-// A pending connection, or -1 when there is none; *peer names it.
-int tcp_accept(int listen_fd, std::string* peer);
+// `share_port`: SO_REUSEPORT, so several listeners (a server's workers)
+// bind the same port and the kernel spreads connections across them.
+bool tcp_listen(const std::string& host, uint16_t port, int* fd, uint16_t* bound_port, std::string& error,
+                bool share_port = false);
+// A pending connection, or -1 when there is none or accept failed: *error
+// (when given) is then EAGAIN for none, else accept's errno (EMFILE: out of
+// descriptors). *peer names the connection ("address:port").
+int tcp_accept(int listen_fd, std::string* peer, int* error = nullptr);
 // Closes a listening socket.
 void tcp_close(int fd);
 // Connects to host:port (a name or a numeric address) within timeout_ms.

@@ -8,6 +8,9 @@
 #include <cstdio>
 
 namespace stipple {
+namespace {
+constexpr int kKeepAliveMs = 30000;  // a quiet client's keep-alive: well within serve's idle timeout (120 s)
+}  // namespace
 
 Hello hello_for(const ClientConfig& config) {
   Hello h;
@@ -60,6 +63,7 @@ bool RemoteModel::send(MessageType type, const uint8_t* payload, size_t size, st
   }
   ++sequence_;
   bytes_sent_ += n;
+  sent_at_ = std::chrono::steady_clock::now();
   return true;
 }
 
@@ -76,6 +80,10 @@ bool RemoteModel::service(int wait_ms, std::string& error) {
     heard_ = now;
     return take(buf, got, error);
   }
+  // A viewer left still says it is there, within the server's idle timeout.
+  if (done(awaiting_) && now - sent_at_ > std::chrono::milliseconds(kKeepAliveMs) && s == TransportStatus::kTimeout &&
+      !send(MessageType::kKeepAlive, nullptr, 0, error))
+    return false;
   // A serial line silent while we wait for something: our hello, camera or
   // resend may have been lost on the way up, or the server's last frames on
   // the way down. Ask again.
@@ -146,6 +154,15 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
       r = receiver_.receive(bytes.data(), bytes.size());
     }
     if (client_.cache().ready()) early_ = {};
+    if (r == ReceiveStatus::kClosed && receiver_.fault().reason == CloseReason::kShutdown && options_.reconnect != nullptr &&
+        !in_reconnect_) {
+      // The server is stopping: another (behind the same address, a
+      // balancer) or the same one restarted serves the view again.
+      in_reconnect_ = true;
+      const bool ok = reconnect(error);
+      in_reconnect_ = false;
+      return ok;
+    }
     return r == ReceiveStatus::kOk || fail(r);
   }
   // A serial line: packet by packet, each a whole frame in sequence. Noise

@@ -110,7 +110,8 @@ class RemoteModel {
   Hello hello_;
   CameraUpdate last_camera_;
   Awaited awaiting_ = Awaited::kStartup;
-  std::chrono::steady_clock::time_point heard_;  // the last bytes from the server, or our last request
+  std::chrono::steady_clock::time_point heard_;
+  std::chrono::steady_clock::time_point sent_at_{};  // our last frame (a keep-alive follows a long quiet)  // the last bytes from the server, or our last request
 };
 
 }  // namespace stipple

@@ -3,7 +3,10 @@
 
 #include <poll.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 
 #include "core/cobs.h"
 #include "platform/tcp/tcp_transport.h"
@@ -12,6 +15,17 @@
 namespace stipple {
 namespace {
 constexpr size_t kRetainedBytes = size_t{4} << 20;  // most unacknowledged bytes kept for a serial client
+constexpr size_t kQueueKept = size_t{64} << 10;      // an idle socket client's queue keeps at most this much memory
+constexpr int kReopenMs = 500;                       // a hung-up line is tried again this often
+constexpr int kAcceptPauseMs = 100;                  // accept failing (out of descriptors): the listener rests
+
+// "address" of "address:port" or "[address]:port".
+std::string address_of(const std::string& peer) {
+  const size_t colon = peer.rfind(':');
+  std::string a = colon == std::string::npos ? peer : peer.substr(0, colon);
+  if (a.size() >= 2 && a.front() == '[' && a.back() == ']') a = a.substr(1, a.size() - 2);
+  return a;
+}
 }  // namespace
 
 struct Server::Client {
@@ -19,8 +33,12 @@ struct Server::Client {
   std::unique_ptr<Transport> transport;
   int fd = -1;
   std::string name;
-  std::vector<uint64_t> sender_storage;
+  std::string address;  // the peer's address, for the per-address limit (empty: not a socket)
+  std::vector<uint32_t> state;  // the cut's sent set: grows with the client's cut, never with the model
   StreamSender sender;
+  Reopen reopen;                // a serial line: how to open it again after a hang-up
+  bool detached = false;        // a serial line that hung up, waiting for its device
+  std::chrono::steady_clock::time_point opened, heard, retry;
   uint8_t in_storage[4096];  // client -> server frames are small; larger ones are refused
   FrameReader reader;
   std::vector<uint8_t> out;  // frames not yet written (serial: and those not yet acknowledged)
@@ -55,6 +73,10 @@ struct Server::Client {
     return true;
   }
   bool idle() const { return out_at == out.size(); }
+  uint64_t state_bytes() const {
+    return sizeof(Client) + state.capacity() * 4 + out.capacity() + retained.capacity() * sizeof(Retained) +
+           cobs_storage.capacity() + name.capacity() + address.capacity();
+  }
 
   // Forgets the retained frames before `sequence` that are written, and
   // their bytes once they are many (or all of them).
@@ -82,30 +104,61 @@ void Server::log(const std::string& line) const {
   if (options_.log) options_.log(line);
 }
 
-bool Server::init(std::vector<uint8_t> file, const std::string& name, const ServerOptions& options, std::string& error) {
-  file_ = std::move(file);
+bool ServedModel::open(const std::string& path, const ConeRule& cones, std::string& error) {
+  name_ = path;
+  if (!mapped_.open(path, error)) return false;
+  return build(mapped_.data(), mapped_.size(), cones, error);
+}
+
+bool ServedModel::adopt(std::vector<uint8_t> file, const std::string& name, const ConeRule& cones, std::string& error) {
+  owned_ = std::move(file);
   name_ = name;
-  options_ = options;
-  const SpgResult r = spg_parse(file_.data(), file_.size(), &view_);
-  if (!r.ok()) return error = spg_error_message(name, r, file_.size()), false;
+  return build(owned_.data(), owned_.size(), cones, error);
+}
+
+bool ServedModel::build(const uint8_t* data, size_t size, const ConeRule& cones, std::string& error) {
+  size_ = size;
+  const SpgResult r = spg_parse(data, size, &view_);
+  if (!r.ok()) return error = spg_error_message(name_, r, size), false;
   decoder_storage_.assign(node_decoder_bytes(view_.header) / 4 + 1, 0);
   if (decoder_.init(view_, decoder_storage_.data(), decoder_storage_.size() * 4) != DecodeStatus::kOk)
-    return error = name + ": the angle fields are wider than the decoder supports", false;
+    return error = name_ + ": the angle fields are wider than the decoder supports", false;
   bounds_storage_.assign(CutBounds::bytes(view_.header) / 8 + 1, 0);
-  if (bounds_.init(view_, decoder_, bounds_storage_.data(), bounds_storage_.size() * 8, options_.cones) != CutStatus::kOk)
-    return error = name + ": the cut's bounds could not be built", false;
+  if (bounds_.init(view_, decoder_, bounds_storage_.data(), bounds_storage_.size() * 8, cones) != CutStatus::kOk)
+    return error = name_ + ": the cut's bounds could not be built", false;
   return true;
 }
 
-bool Server::listen_tcp(const std::string& host, uint16_t port, std::string& error) {
-  if (!tcp_listen(host, port, &listen_fd_, &port_, error)) return false;
-  log("listening on " + (host.find(':') != std::string::npos ? "[" + host + "]" : host) + ":" + std::to_string(port_));
+bool Server::init(std::shared_ptr<const ServedModel> model, const ServerOptions& options, std::string& error) {
+  if (model == nullptr) return error = "no model", false;
+  model_ = std::move(model);
+  options_ = options;
+  // The work space of one update: grown to the largest cut served (update()).
+  scratch_storage_.assign(SenderScratch::bytes(4096) / 8 + 1, 0);
+  scratch_.init(scratch_storage_.data(), scratch_storage_.size() * 8);
   return true;
 }
 
-void Server::add_client(std::unique_ptr<Transport> transport, int fd, const std::string& name, bool serial) {
+bool Server::init(std::vector<uint8_t> file, const std::string& name, const ServerOptions& options, std::string& error) {
+  auto model = std::make_shared<ServedModel>();
+  if (!model->adopt(std::move(file), name, options.cones, error)) return false;
+  return init(std::move(model), options, error);
+}
+
+bool Server::listen_tcp(const std::string& host, uint16_t port, std::string& error, bool share_port) {
+  if (!tcp_listen(host, port, &listen_fd_, &port_, error, share_port)) return false;
+  const std::string where = (host.find(':') != std::string::npos ? "[" + host + "]" : host) + ":" + std::to_string(port_);
+  const bool loopback = host.rfind("127.", 0) == 0 || host == "::1";
+  log("listening on " + where +
+      (loopback ? std::string() : " — reachable beyond this machine: serve only what may be seen, or put it behind a firewall"));
+  return true;
+}
+
+void Server::add_client(std::unique_ptr<Transport> transport, int fd, const std::string& name, bool serial,
+                        Reopen reopen) {
   auto c = std::make_unique<Client>();
   c->serial = serial;
+  c->reopen = std::move(reopen);
   if (serial) {
     c->cobs_storage.assign(sizeof c->in_storage + 16, 0);
     c->deframer.init(c->cobs_storage.data(), c->cobs_storage.size());
@@ -116,19 +169,30 @@ void Server::add_client(std::unique_ptr<Transport> transport, int fd, const std:
   c->name = "client " + std::to_string(c->id) + " (" + name + ")";
   c->report.name = c->name;
   c->reader.init(c->in_storage, sizeof c->in_storage);
-  if (clients_.size() >= options_.max_clients) {
-    // No room: a close frame, then gone. The sender is not needed for it.
-    log(c->name + ": refused, " + std::to_string(clients_.size()) + " clients already");
+  c->opened = c->heard = Clock::now();
+  const auto refuse = [&](const std::string& why) {
+    // A close frame, then gone. The sender is not needed for it.
+    log(c->name + ": refused, " + why);
     uint8_t payload[kFaultBytes], frame[64];
     write_fault(Fault{CloseReason::kServerFull, FrameStatus::kOk, 0}, payload);
     const size_t n = write_frame(MessageType::kClose, 0, payload, kFaultBytes, frame, sizeof frame);
     size_t moved = 0;
     (void)c->transport->write(frame, n, &moved);
     c->transport->close();
-    return;
+  };
+  if (clients_.size() >= options_.max_clients)
+    return refuse(std::to_string(clients_.size()) + " clients already (--max-clients " +
+                  std::to_string(options_.max_clients) + ")");
+  if (fd >= 0 && !serial) c->address = address_of(name);
+  if (options_.per_address > 0 && !c->address.empty()) {
+    uint32_t same = 0;
+    for (const auto& other : clients_) same += other->address == c->address;
+    if (same >= options_.per_address)
+      return refuse(std::to_string(same) + " connections from " + c->address + " already (--per-address " +
+                    std::to_string(options_.per_address) + ")");
   }
-  c->sender_storage.assign(StreamSender::storage_bytes(view_.header) / 8 + 1, 0);
-  if (!c->sender.init(view_, bounds_, c->sender_storage.data(), c->sender_storage.size() * 8)) {
+  // No cut state yet: it is made, as large as the cut, at the first update.
+  if (!c->sender.init(model_->view(), model_->bounds(), nullptr, 0, &scratch_)) {
     log(c->name + ": could not be set up");
     return;
   }
@@ -146,6 +210,39 @@ void Server::close_client(Client& c, CloseReason reason, FrameStatus status, uin
   log(c.name + ": closing: " + why);
 }
 
+void Server::end_session(Client& c) {
+  // A serial line stays served: the next hello on it starts a new session.
+  c.hello = false;
+  c.pending = false;
+  c.out.clear();
+  c.out_at = 0;
+  c.retained.clear();
+  c.sender.end();
+  c.state = {};
+  c.reader.reset();
+}
+
+bool Server::update(Client& c) {
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    if (c.sender.update(c.camera, options_.cull, Client::sink, &c)) return true;
+    if (c.sender.cut_status() != CutStatus::kStorageTooSmall) return false;
+    // The cut outgrew the work space or the client's sent set: both grow
+    // (by half again, so a growing cut costs few refusals), and it is made again.
+    const uint64_t needed = c.sender.cut().needed_capacity();
+    const uint64_t grown = needed + needed / 2 + 64;
+    if (needed > scratch_.cut.capacity) {
+      scratch_storage_.assign(SenderScratch::bytes(static_cast<uint32_t>(std::min<uint64_t>(grown, 0x7FFFFFFF))) / 8 + 1, 0);
+      scratch_.init(scratch_storage_.data(), scratch_storage_.size() * 8);
+    }
+    if (needed > c.sender.cut().state_capacity()) {
+      std::vector<uint32_t> state(static_cast<size_t>(std::min<uint64_t>(grown, model_->view().header.node_count)));
+      if (!c.sender.relocate(state.data(), state.size() * 4)) return false;
+      c.state = std::move(state);
+    }
+  }
+  return false;
+}
+
 void Server::handle(Client& c, const Frame& f) {
   switch (f.type) {
     case MessageType::kHello: {
@@ -153,12 +250,10 @@ void Server::handle(Client& c, const Frame& f) {
       // (and a peer repeating it without reading would grow the queue).
       if (c.hello && !c.serial)
         return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "a second hello on a stream socket");
-      if (c.hello && c.serial) {  // a serial client resynchronising: the stream starts over
-        c.out.clear();
-        c.out_at = 0;
-        c.retained.clear();
-        c.pending = false;
-        log(c.name + ": hello again (resynchronising), " + std::to_string(c.dropped_packets) + " packets dropped so far");
+      if (c.hello && c.serial) {  // a serial client resynchronising, or a new one: the stream starts over
+        log(c.name + ": hello again (a new session, or resynchronising), " + std::to_string(c.dropped_packets) +
+            " packets dropped so far");
+        end_session(c);
       }
       Hello h;
       if (!parse_hello(f.payload, f.payload_bytes, &h))
@@ -170,6 +265,7 @@ void Server::handle(Client& c, const Frame& f) {
         return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "the hello could not be served");
       c.hello = c.report.hello = true;
       c.hello_message = h;
+      ++c.report.sessions;
       char line[160];
       std::snprintf(line, sizeof line, "%s: hello %ux%u %s, attributes%s%s, cache %u nodes", c.name.c_str(), h.width,
                     h.height, h.pixel_format ? "rgb888" : "rgb565", h.attributes & kWantNormals ? " normals" : "",
@@ -179,6 +275,7 @@ void Server::handle(Client& c, const Frame& f) {
     }
     case MessageType::kCamera: {
       CameraUpdate u;
+      if (!c.hello && c.serial) return;  // left on the line by an earlier session: the next hello starts one
       if (!c.hello || !parse_camera_update(f.payload, f.payload_bytes, &u))
         return close_client(c, CloseReason::kBadFrame, FrameStatus::kBadPayload, f.sequence,
                             c.hello ? "a malformed camera update" : "a camera update before the hello");
@@ -219,12 +316,114 @@ void Server::handle(Client& c, const Frame& f) {
       return;
     }
     case MessageType::kClose:
+      if (c.serial) {  // the line stays: the next hello on it starts a new session
+        if (!c.hello) return;  // a stale close left on the line
+        log(c.name + ": session " + std::to_string(c.report.sessions) + " ended by the client after " +
+            std::to_string(c.report.updates) + (c.report.updates == 1 ? " update" : " updates"));
+        end_session(c);
+        c.gone = options_.serial_once;
+        return;
+      }
       log(c.name + ": closed by the client");
       c.gone = true;
       return;
     default:
+      if (c.serial && !c.hello) return;  // garbage before a session: ignored
       return close_client(c, CloseReason::kBadFrame, FrameStatus::kUnknownType, f.sequence,
                           std::string("a ") + message_type_name(static_cast<uint8_t>(f.type)) + " message from a client");
+  }
+}
+
+void Server::accept_all(Clock::time_point now) {
+  if (listen_fd_ < 0 || now < accept_paused_until_) return;
+  for (std::string peer;;) {
+    int err = 0;
+    const int fd = tcp_accept(listen_fd_, &peer, &err);
+    if (fd >= 0) {
+      add_client(std::make_unique<TcpTransport>(fd, peer), fd, peer);
+      continue;
+    }
+    if (err != EAGAIN && err != EINTR && err != ECONNABORTED) {
+      // Out of descriptors (EMFILE, ENFILE) or memory: the pending
+      // connection stays queued and the listener stays readable, so the
+      // loop would spin. It rests instead, and says so.
+      log(std::string("accept failed: ") + std::strerror(err) + " (" + std::to_string(clients_.size()) +
+          " clients); not accepting for " + std::to_string(kAcceptPauseMs) + " ms");
+      accept_paused_until_ = now + std::chrono::milliseconds(kAcceptPauseMs);
+    }
+    return;
+  }
+}
+
+void Server::reopen_line(Client& c, Clock::time_point now) {
+  if (now < c.retry) return;
+  c.retry = now + std::chrono::milliseconds(kReopenMs);
+  int fd = -1;
+  std::unique_ptr<Transport> t = c.reopen(&fd);
+  if (t == nullptr) return;
+  c.transport = std::move(t);
+  c.fd = fd;
+  c.detached = false;
+  c.deframer.init(c.cobs_storage.data(), c.cobs_storage.size());
+  c.heard = now;
+  log(c.name + ": the line is back");
+}
+
+void Server::read_from(Client& c, Clock::time_point now) {
+  // In: every whole frame; a fault closes the client with its reason.
+  uint8_t buf[4096];
+  for (int rounds = 0; rounds < 16 && !c.closing && !c.gone; ++rounds) {
+    size_t got = 0;
+    const TransportStatus s = c.transport->read(buf, sizeof buf, &got);
+    if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
+      const std::string why = s == TransportStatus::kError || c.serial ? std::string(": ") + c.transport->last_error() : "";
+      if (c.serial && c.reopen) {
+        // The device went away (unplugged): the session ends, and the line is
+        // opened again when it comes back.
+        log(c.name + ": the line hung up" + why + "; reopening it when it comes back");
+        end_session(c);
+        c.transport->close();
+        c.fd = -1;
+        c.detached = true;
+        c.retry = now + std::chrono::milliseconds(kReopenMs);
+        return;
+      }
+      log(c.name + ": disconnected" + why + (c.reader.buffered() > 0 ? " mid-frame" : ""));
+      c.gone = true;
+      return;
+    }
+    if (s != TransportStatus::kOk || got == 0) return;
+    c.report.bytes_in += got;
+    c.heard = now;
+    if (c.serial) {
+      // Packet by packet: a damaged one is dropped (noise), any sequence is
+      // taken (cameras are idempotent, a hello restarts the stream).
+      for (size_t i = 0; i < got && !c.closing && !c.gone; ++i) {
+        const CobsStatus cs = c.deframer.push(buf[i]);
+        if (cs == CobsStatus::kDropped) ++c.dropped_packets;
+        if (cs != CobsStatus::kPacket) continue;
+        if (c.deframer.packet_bytes() < kFrameHeaderBytes) {
+          ++c.dropped_packets;
+          continue;
+        }
+        c.reader.reset();
+        c.reader.expect(load_u16le(c.deframer.packet() + 2));
+        c.reader.feed(c.deframer.packet(), c.deframer.packet_bytes());
+        Frame f;
+        if (c.reader.next(&f) == FrameStatus::kOk) handle(c, f);
+        else ++c.dropped_packets;
+      }
+      continue;
+    }
+    for (size_t at = 0; at < got && !c.closing && !c.gone;) {
+      at += c.reader.feed(buf + at, got - at);
+      Frame f;
+      FrameStatus fs = FrameStatus::kNeedMore;
+      while (!c.closing && !c.gone && (fs = c.reader.next(&f)) == FrameStatus::kOk) handle(c, f);
+      if (!c.closing && !c.gone && fs != FrameStatus::kNeedMore)
+        close_client(c, CloseReason::kBadFrame, fs, c.reader.expected_sequence(),
+                     std::string("frame ") + std::to_string(c.reader.expected_sequence()) + ": " + frame_status_text(fs));
+    }
   }
 }
 
@@ -232,61 +431,34 @@ size_t Server::step(int timeout_ms) {
   // Wait for any socket: the listener, readable clients, clients with output.
   std::vector<pollfd> fds;
   bool unpolled = false;
-  if (listen_fd_ >= 0) fds.push_back({listen_fd_, POLLIN, 0});
+  if (listen_fd_ >= 0 && Clock::now() >= accept_paused_until_) fds.push_back({listen_fd_, POLLIN, 0});
   for (const auto& c : clients_) {
+    if (c->detached) continue;
     if (c->fd < 0) unpolled = true;
     else fds.push_back({c->fd, static_cast<short>(POLLIN | (c->idle() ? 0 : POLLOUT)), 0});
   }
   if (!fds.empty()) poll(fds.data(), static_cast<nfds_t>(fds.size()), unpolled ? 0 : timeout_ms);
-  for (std::string peer; listen_fd_ >= 0;) {
-    const int fd = tcp_accept(listen_fd_, &peer);
-    if (fd < 0) break;
-    add_client(std::make_unique<TcpTransport>(fd, peer), fd, peer);
-  }
+  else if (timeout_ms > 0 && !unpolled) poll(nullptr, 0, std::min(timeout_ms, kReopenMs));
+  const Clock::time_point now = Clock::now();
+  accept_all(now);
+  const auto ms = [](int n) { return std::chrono::milliseconds(n); };
   for (auto& owned : clients_) {
     Client& c = *owned;
-    // In: every whole frame; a fault closes the client with its reason.
-    uint8_t buf[4096];
-    for (int rounds = 0; rounds < 16 && !c.closing && !c.gone; ++rounds) {
-      size_t got = 0;
-      const TransportStatus s = c.transport->read(buf, sizeof buf, &got);
-      if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
-        log(c.name + ": disconnected" + (s == TransportStatus::kError ? std::string(": ") + c.transport->last_error() : "") +
-            (c.reader.buffered() > 0 ? " mid-frame" : ""));
-        c.gone = true;
-        break;
-      }
-      if (s != TransportStatus::kOk || got == 0) break;
-      c.report.bytes_in += got;
-      if (c.serial) {
-        // Packet by packet: a damaged one is dropped (noise), any sequence is
-        // taken (cameras are idempotent, a hello restarts the stream).
-        for (size_t i = 0; i < got && !c.closing && !c.gone; ++i) {
-          const CobsStatus cs = c.deframer.push(buf[i]);
-          if (cs == CobsStatus::kDropped) ++c.dropped_packets;
-          if (cs != CobsStatus::kPacket) continue;
-          if (c.deframer.packet_bytes() < kFrameHeaderBytes) {
-            ++c.dropped_packets;
-            continue;
-          }
-          c.reader.reset();
-          c.reader.expect(load_u16le(c.deframer.packet() + 2));
-          c.reader.feed(c.deframer.packet(), c.deframer.packet_bytes());
-          Frame f;
-          if (c.reader.next(&f) == FrameStatus::kOk) handle(c, f);
-          else ++c.dropped_packets;
-        }
-        continue;
-      }
-      for (size_t at = 0; at < got && !c.closing && !c.gone;) {
-        at += c.reader.feed(buf + at, got - at);
-        Frame f;
-        FrameStatus fs = FrameStatus::kNeedMore;
-        while (!c.closing && !c.gone && (fs = c.reader.next(&f)) == FrameStatus::kOk) handle(c, f);
-        if (!c.closing && !c.gone && fs != FrameStatus::kNeedMore)
-          close_client(c, CloseReason::kBadFrame, fs, c.reader.expected_sequence(),
-                       std::string("frame ") + std::to_string(c.reader.expected_sequence()) + ": " + frame_status_text(fs));
-      }
+    if (c.detached) {
+      reopen_line(c, now);
+      if (c.detached) continue;
+    }
+    read_from(c, now);
+    if (c.detached) continue;
+    // Timeouts: a socket that never says hello, or says nothing for long
+    // (a serial line waits for its next session whatever it hears).
+    if (!c.serial && !c.closing && !c.gone) {
+      if (!c.hello && options_.hello_timeout_ms > 0 && now - c.opened > ms(options_.hello_timeout_ms))
+        close_client(c, CloseReason::kTimeout, FrameStatus::kOk, 0,
+                     "no hello within " + std::to_string(options_.hello_timeout_ms) + " ms");
+      else if (options_.idle_timeout_ms > 0 && now - c.heard > ms(options_.idle_timeout_ms))
+        close_client(c, CloseReason::kTimeout, FrameStatus::kOk, 0,
+                     "nothing heard for " + std::to_string(options_.idle_timeout_ms) + " ms");
     }
     // An update only when everything before it is written: a stalled client
     // keeps just its latest camera.
@@ -297,11 +469,13 @@ size_t Server::step(int timeout_ms) {
       }
       const size_t before = c.out.size();
       c.pending = false;
-      if (c.sender.update(c.camera, options_.cull, Client::sink, &c)) {
+      if (update(c)) {
         if (c.report.updates++ == 0)
           log(c.name + ": first cut " + std::to_string(c.sender.cut().sent_count()) + " nodes, " +
               std::to_string(c.out.size() - before) + " bytes");
         c.report.cut_nodes = c.sender.cut().sent_count();
+      } else if (c.sender.cut_status() != CutStatus::kOk) {
+        close_client(c, CloseReason::kShutdown, FrameStatus::kOk, 0, "its cut could not be made (out of memory)");
       }
     }
     // Out: as much as the link takes now.
@@ -316,19 +490,19 @@ size_t Server::step(int timeout_ms) {
       }
       if (s != TransportStatus::kOk || moved == 0) break;
     }
-    if (c.idle() && c.out.size() > (1u << 20)) {  // keep the queue's memory bounded
-      if (!c.serial) {
-        c.out.clear();
-        c.out.shrink_to_fit();
-        c.out_at = 0;
-      } else if (c.out.size() > kRetainedBytes) {
-        // A client that does not acknowledge: the oldest frames go (asked
-        // for again, the stream starts over).
-        c.release(c.sender.next_sequence());
-      }
+    if (c.idle() && !c.serial && c.out.capacity() > kQueueKept) {
+      // A socket client's queue is let go once written (the first cut's is
+      // the largest it will be): what it keeps follows its cut's change.
+      c.out = {};
+      c.out_at = 0;
+    } else if (c.idle() && c.serial && c.out.size() > kRetainedBytes) {
+      // A client that does not acknowledge: the oldest frames go (asked
+      // for again, the stream starts over).
+      c.release(c.sender.next_sequence());
     }
     if (c.closing && c.idle()) c.gone = true;
     c.report.queued_bytes = c.out.size();
+    c.report.state_bytes = c.state_bytes();
   }
   for (size_t i = 0; i < clients_.size();) {
     if (clients_[i]->gone) {
@@ -339,11 +513,33 @@ size_t Server::step(int timeout_ms) {
                     : std::string()));
       c.transport->close();
       clients_.erase(clients_.begin() + static_cast<long>(i));
+      ++served_;
     } else {
       ++i;
     }
   }
   return clients_.size();
+}
+
+void Server::shutdown(const std::string& why) {
+  const size_t connected = clients_.size();
+  for (auto& owned : clients_) {
+    Client& c = *owned;
+    if (c.detached || c.gone) continue;
+    if (c.hello && !c.closing) close_client(c, CloseReason::kShutdown, FrameStatus::kOk, 0, "the server is stopping");
+    while (!c.idle()) {  // what the link takes now; a stalled peer is not waited for
+      size_t moved = 0;
+      const TransportStatus s = c.transport->write(c.out.data() + c.out_at, c.out.size() - c.out_at, &moved);
+      c.out_at += moved;
+      if (s != TransportStatus::kOk || moved == 0) break;
+    }
+    c.transport->close();
+  }
+  clients_.clear();
+  log("stopping (" + why + "): " + std::to_string(connected) + " clients connected, " +
+      std::to_string(served_ + connected) + " served since the start");
+  if (listen_fd_ >= 0) tcp_close(listen_fd_);
+  listen_fd_ = -1;
 }
 
 std::vector<ClientReport> Server::report() const {

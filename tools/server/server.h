@@ -2,17 +2,29 @@
 // once (TOG05 §8): each client's hello, camera updates and keep-alives come
 // in; its startup, cut changes and update-ends go out (core/stream.h over
 // core/protocol.h frames), on any transport — TCP sockets accepted by the
-// server, or a loopback pipe added by the program itself.
+// server, a serial line, or a loopback pipe added by the program itself.
 //
-// One thread, one event loop (poll): nothing blocks on one client. A client
-// whose outgoing queue is not empty gets no new update — only its latest
-// camera is kept — so a slow or stalled client costs its own queue (bounded
-// by one update) and never stalls the others. A client that sends a bad
-// frame gets an error frame naming the fault and is closed; one that
-// disconnects, even mid-frame, is removed and logged; the server's state for
-// the others is untouched.
+// The model (ServedModel) is memory-mapped read-only, validated once, and
+// its per-node cut bounds built once; it is shared by every Server over it
+// (`stipple serve --workers N`: one Server a thread, each with its own
+// listener on the same port). A Server is one thread and one event loop
+// (poll): nothing blocks on one client. What a client costs follows what it
+// sees, not the model: its cut's sent set (4 bytes a sent node) and a fixed
+// part; the work space of an update is the Server's, shared by its clients.
+// Until its hello is valid a connection holds only the fixed part.
+//
+// A client whose outgoing queue is not empty gets no new update — only its
+// latest camera is kept — so a slow or stalled client costs its own queue
+// (bounded by one update) and never stalls the others. A client that sends
+// a bad frame gets an error frame naming the fault and is closed; one that
+// sends no hello in time, or nothing at all for the idle timeout, is closed
+// with reason "timeout"; one that disconnects, even mid-frame, is removed.
+// Every drop is logged with its reason. A serial line serves session after
+// session: a hello always starts one, a close ends it, and a line that
+// hangs up is reopened when its device comes back.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -23,14 +35,51 @@
 #include "core/protocol.h"
 #include "core/spg_format.h"
 #include "core/stream.h"
+#include "platform/file_io.h"
 #include "platform/transport.h"
 
 namespace stipple {
 
+// A model as servers serve it: the file (mapped, or bytes handed over),
+// its validated view, decoder and cut bounds. Read-only once made, so any
+// number of Servers on any threads share one.
+class ServedModel {
+ public:
+  ServedModel() = default;
+  ServedModel(const ServedModel&) = delete;
+  ServedModel& operator=(const ServedModel&) = delete;
+  // Maps `path` read-only (the pages are the page cache's: processes
+  // serving one file share them).
+  bool open(const std::string& path, const ConeRule& cones, std::string& error);
+  // A whole .spg in memory (a loopback server, a test).
+  bool adopt(std::vector<uint8_t> file, const std::string& name, const ConeRule& cones, std::string& error);
+  const SpgView& view() const { return view_; }
+  const CutBounds& bounds() const { return bounds_; }
+  const std::string& name() const { return name_; }
+  size_t file_bytes() const { return size_; }
+  size_t table_bytes() const { return decoder_storage_.size() * 4 + bounds_storage_.size() * 8; }
+
+ private:
+  bool build(const uint8_t* data, size_t size, const ConeRule& cones, std::string& error);
+  MappedFile mapped_;
+  std::vector<uint8_t> owned_;
+  size_t size_ = 0;
+  std::string name_;
+  SpgView view_{};
+  std::vector<uint32_t> decoder_storage_;
+  NodeDecoder decoder_;
+  std::vector<uint64_t> bounds_storage_;
+  CutBounds bounds_;
+};
+
 struct ServerOptions {
-  uint32_t max_clients = 64;
+  uint32_t max_clients = 64;       // at once; more are refused with "server full" (serve sizes it from memory)
+  uint32_t per_address = 0;        // most connections from one address at once (0: no limit)
+  int hello_timeout_ms = 10000;    // a connection that sends no valid hello this long is closed (0: never)
+  int idle_timeout_ms = 120000;    // a client that sends nothing this long is closed (0: never)
+  bool serial_once = false;        // a serial line is let go when its first session ends (serve --once)
   bool cull = true;  // frustum and back-face culling in every client's cut
-  ConeRule cones;    // the normal cones back faces are culled by
+  ConeRule cones;    // the normal cones back faces are culled by (when the Server makes the model)
   std::function<void(const std::string&)> log;  // one line per event; none: quiet
 };
 
@@ -38,46 +87,68 @@ struct ClientReport {
   std::string name;
   bool hello = false;
   uint32_t updates = 0, cut_nodes = 0;
+  uint32_t sessions = 0;  // hellos that started a stream (a serial line serves one after another)
   uint64_t bytes_in = 0, bytes_out = 0;
   uint64_t queued_bytes = 0;  // the outgoing queue after the last step: bounded whatever the peer does
+  uint64_t state_bytes = 0;   // what the client holds beside its queue: its cut's sent set and fixed part
 };
+
+// Reopens a serial line that hung up: the new transport and its fd, or null
+// while the device is not back.
+using Reopen = std::function<std::unique_ptr<Transport>(int* fd)>;
 
 class Server {
  public:
   Server();
   ~Server();
-  // Validates `file` (a whole .spg, kept by the server) and builds its decoder.
+  // Over a model shared with other Servers.
+  bool init(std::shared_ptr<const ServedModel> model, const ServerOptions& options, std::string& error);
+  // Validates `file` (a whole .spg, kept by the server) and builds its model.
   bool init(std::vector<uint8_t> file, const std::string& name, const ServerOptions& options, std::string& error);
-  // Listens on host:port (port 0: a free one, see port()).
-  bool listen_tcp(const std::string& host, uint16_t port, std::string& error);
+  // Listens on host:port (port 0: a free one, see port()). `share_port`:
+  // beside other listeners on that port (SO_REUSEPORT, serve's workers).
+  bool listen_tcp(const std::string& host, uint16_t port, std::string& error, bool share_port = false);
   uint16_t port() const { return port_; }
   // Serves a client over `transport`; `fd` is polled for it (-1: the loop
   // visits it every step, as for a loopback pipe).
   // `serial`: frames are COBS framed (a serial line); damaged packets are
-  // dropped and a hello restarts the stream.
-  void add_client(std::unique_ptr<Transport> transport, int fd, const std::string& name, bool serial = false);
+  // dropped, a hello starts a session, a close ends it, and the line stays
+  // served. When it hangs up it is reopened through `reopen` (null: the
+  // client is removed).
+  void add_client(std::unique_ptr<Transport> transport, int fd, const std::string& name, bool serial = false,
+                  Reopen reopen = nullptr);
   // One pass of the loop: waits up to timeout_ms for a socket, accepts, reads,
-  // answers, writes. Returns the number of clients connected.
+  // answers, writes, times out. Returns the number of clients connected.
   size_t step(int timeout_ms);
+  // Says goodbye: a close (reason "server shutting down") to every client,
+  // what can be written now, and a log line with what was served.
+  void shutdown(const std::string& why);
   std::vector<ClientReport> report() const;
+  // The update work space, shared by this Server's clients (grows with the
+  // largest cut served).
+  size_t scratch_bytes() const { return scratch_storage_.size() * 8; }
 
  private:
   struct Client;
+  using Clock = std::chrono::steady_clock;
   void log(const std::string& line) const;
   void handle(Client& c, const Frame& f);
   void close_client(Client& c, CloseReason reason, FrameStatus status, uint16_t sequence, const std::string& why);
+  bool update(Client& c);  // the cut for the client's latest camera; grows storage as the cut needs
+  void end_session(Client& c);
+  void accept_all(Clock::time_point now);
+  void read_from(Client& c, Clock::time_point now);
+  void reopen_line(Client& c, Clock::time_point now);
 
-  std::vector<uint8_t> file_;
-  std::string name_;
-  SpgView view_{};
-  std::vector<uint32_t> decoder_storage_;
-  NodeDecoder decoder_;
-  std::vector<uint64_t> bounds_storage_;
-  CutBounds bounds_;  // the model's, shared by every client's cut
+  std::shared_ptr<const ServedModel> model_;
+  std::vector<uint64_t> scratch_storage_;
+  SenderScratch scratch_;
   ServerOptions options_;
   int listen_fd_ = -1;
   uint16_t port_ = 0;
   uint32_t next_id_ = 1;
+  uint64_t served_ = 0;  // clients removed so far
+  Clock::time_point accept_paused_until_{};
   std::vector<std::unique_ptr<Client>> clients_;
 };
 

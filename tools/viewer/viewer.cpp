@@ -80,6 +80,7 @@ bool ViewerSource::open(const std::string& model, const std::string& connect, co
     // A server that goes away is redialled for ten seconds.
     ro.reconnect = [](void* context, int* new_fd) -> Transport* {
       auto* r = static_cast<Links*>(context);
+      std::fprintf(stderr, "stipple: server gone — reconnecting to %s:%u\n", r->host.c_str(), r->port);
       for (int attempt = 0; attempt < 50; ++attempt) {
         std::string ignored;
         if (tcp_connect(r->host, r->port, 1000, new_fd, ignored)) {
