@@ -6,6 +6,7 @@
 // a corrupt frame is told why and closed, and the others carry on.
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
 #include <sys/socket.h>
 
 #include <algorithm>
@@ -26,6 +27,7 @@
 #include "test_util.h"
 #include "tools/embedded/embedded.h"
 #include "tools/embedded/remote.h"
+#include "tools/encoder/encoder.h"
 #include "tools/server/server.h"
 
 namespace stipple {
@@ -451,10 +453,11 @@ struct TcpServer {
     std::lock_guard<std::mutex> lock(step_mutex);
     return server.report();
   }
-  explicit TcpServer(uint32_t max_clients = 64, uint16_t port = 0) {
+  explicit TcpServer(uint32_t max_clients = 64, uint16_t port = 0, const std::function<void(ServerOptions&)>& tweak = nullptr) {
     std::string error;
     ServerOptions o;
     o.max_clients = max_clients;
+    if (tweak) tweak(o);
     o.log = [this](const std::string& line) {
       std::lock_guard<std::mutex> lock(log_mutex);
       log.push_back(line);
@@ -798,6 +801,169 @@ TEST(Server, AFullServerSaysSo) {
   std::string error;
   EXPECT_FALSE(remote.connect(second, device(), ro, error));
   EXPECT_NE(error.find("the server has no room for another client"), std::string::npos) << error;
+}
+
+// Idle connections cost a fixed part each and are closed when no hello
+// comes: 500 of them beside a good client, which is served as if alone.
+TEST(Server, FiveHundredIdleSocketsDoNotKeepAGoodClientOut) {
+  rlimit r{};
+  ASSERT_EQ(getrlimit(RLIMIT_NOFILE, &r), 0);
+  if (r.rlim_cur < 1200 && r.rlim_max >= 1200) {
+    r.rlim_cur = std::min<rlim_t>(r.rlim_max, 4096);
+    setrlimit(RLIMIT_NOFILE, &r);
+  }
+  if (r.rlim_cur < 1200) GTEST_SKIP() << "1200 descriptors are needed, the limit is " << r.rlim_cur;
+  const Local local;
+  TcpServer s(1000, 0, [](ServerOptions& o) { o.hello_timeout_ms = 1500; });
+  std::vector<std::unique_ptr<TcpTransport>> idle;
+  for (int i = 0; i < 500; ++i) idle.push_back(std::make_unique<TcpTransport>(connect_to(s.server.port()), "idle"));
+  for (int i = 0; i < 200 && s.report().size() < 500; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_EQ(s.report().size(), 500u);
+  uint64_t largest = 0;
+  for (const ClientReport& c : s.report()) largest = std::max(largest, c.state_bytes);
+  EXPECT_LT(largest, 8192u) << "an idle connection holds more than its fixed part";
+  TcpTransport t(connect_to(s.server.port()), "good");
+  RemoteModel remote;
+  RemoteModel::Options ro;
+  ro.fd = t.fd();
+  std::string error;
+  ASSERT_TRUE(remote.connect(t, device(), ro, error)) << error;
+  const std::vector<uint8_t> frame = remote_frame(remote, local, 30, error);
+  EXPECT_EQ(frame, local.render(30).frame) << error;
+  // No hello in 1.5 s: each idle one is told and let go; the good one stays.
+  for (int i = 0; i < 300 && s.report().size() > 1; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_EQ(s.report().size(), 1u);
+  EXPECT_TRUE(s.logged("closing: no hello within 1500 ms"));
+  uint8_t buf[64];
+  size_t got = 0;
+  for (int i = 0; i < 100 && idle[0]->read(buf, sizeof buf, &got) == TransportStatus::kTimeout; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_GE(got, kFrameHeaderBytes + kFaultBytes);
+  EXPECT_EQ(buf[0], static_cast<uint8_t>(MessageType::kClose));
+  EXPECT_EQ(buf[kFrameHeaderBytes], static_cast<uint8_t>(CloseReason::kTimeout));
+}
+
+TEST(Server, APerAddressLimitAndAnIdleTimeout) {
+  TcpServer s(64, 0, [](ServerOptions& o) {
+    o.per_address = 2;
+    o.idle_timeout_ms = 600;
+  });
+  TcpTransport a(connect_to(s.server.port()), "a"), b(connect_to(s.server.port()), "b");
+  for (int i = 0; i < 100 && s.report().size() < 2; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  TcpTransport c(connect_to(s.server.port()), "c");
+  for (int i = 0; i < 100 && !s.logged("connections from 127.0.0.1 already (--per-address 2)"); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_TRUE(s.logged("refused, 2 connections from 127.0.0.1 already (--per-address 2)"));
+  // A client that said hello and then nothing: dropped after the idle timeout.
+  uint8_t payload[kHelloBytes], frame[64];
+  write_hello(Hello{}, payload);
+  size_t moved = 0;
+  ASSERT_EQ(a.write(frame, write_frame(MessageType::kHello, 0, payload, kHelloBytes, frame, sizeof frame), &moved),
+            TransportStatus::kOk);
+  for (int i = 0; i < 200 && !s.logged("closing: nothing heard for 600 ms"); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_TRUE(s.logged("closing: nothing heard for 600 ms"));
+}
+
+// What a client holds follows its cut, not the model: the same view of a
+// sphere of 20,000 and of 400,000 points (17 times the nodes) costs at most
+// 64 bytes a sent node beside a fixed part (about 6 are spent).
+TEST(Server, ClientStateFollowsTheCutNotTheModel) {
+  struct Measured {
+    uint32_t nodes, sent;
+    uint64_t state;
+  };
+  const auto measure = [](size_t points) {
+    PointCloud cloud = test::sphere_cloud(points);
+    std::vector<uint8_t> spg;
+    EncodeReport report;
+    std::string error;
+    EXPECT_TRUE(encode_cloud(cloud, EncodeOptions{}, spg, report, error)) << error;
+    Server server;
+    EXPECT_TRUE(server.init(spg, "sphere", ServerOptions{}, error)) << error;
+    LoopbackPipe pipe;
+    server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
+    RemoteModel remote;
+    RemoteModel::Options ro;
+    ro.pump = [](void* p) {
+      static_cast<Server*>(p)->step(0);
+      return true;
+    };
+    ro.pump_context = &server;
+    ClientConfig config = device();
+    config.node_capacity = 200000;
+    EXPECT_TRUE(remote.connect(pipe.client(), config, ro, error)) << error;
+    Local local(spg);
+    const int32_t window[4] = {0, 0, 0, 0};
+    EXPECT_TRUE(remote.view(local.camera(30), 32, window, error)) << error;
+    for (int i = 0; i < 4; ++i) server.step(0);  // the queue written and let go
+    const ClientReport r = server.report().at(0);
+    return Measured{local.view.header.node_count, r.cut_nodes, r.state_bytes};
+  };
+  const Measured small = measure(20000), large = measure(400000);
+  std::printf("sphere: %u nodes, %u sent, %llu bytes; %u nodes, %u sent, %llu bytes\n", small.nodes, small.sent,
+              static_cast<unsigned long long>(small.state), large.nodes, large.sent,
+              static_cast<unsigned long long>(large.state));
+  EXPECT_GT(large.nodes, 10 * small.nodes);
+  for (const Measured& m : {small, large}) EXPECT_LE(m.state, 16384u + 64u * m.sent);
+  EXPECT_LT(static_cast<double>(large.state), 1.5 * static_cast<double>(small.state) * large.sent / small.sent + 16384);
+}
+
+// Stopping says goodbye: a connected client hears "server shutting down",
+// the log says what was served.
+TEST_F(ServerWithLog, StoppingSaysGoodbyeToEveryClient) {
+  const Local local;
+  LoopbackPipe pipe;
+  server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
+  RemoteModel remote;
+  RemoteModel::Options ro;
+  ro.pump = [](void* s) {
+    static_cast<Server*>(s)->step(0);
+    return true;
+  };
+  ro.pump_context = &server;
+  ro.timeout_ms = 2000;
+  ASSERT_TRUE(remote.connect(pipe.client(), device(), ro, error)) << error;
+  ASSERT_FALSE(remote_frame(remote, local, 30, error).empty()) << error;
+  server.shutdown("a test");
+  EXPECT_EQ(log.back(), "stopping (a test): 1 clients connected, 1 served since the start");
+  EXPECT_FALSE(remote.service(0, error));
+  EXPECT_EQ(error, "the server closed the stream: the server is shutting down");
+}
+
+// A serial line serves session after session: a client says goodbye, a
+// stale close frame and noise stay on the line, and the next client's
+// hello starts a new session that converges like the first.
+TEST_F(ServerWithLog, ASerialLineServesSessionAfterSession) {
+  const Local local;
+  LoopbackPipe pipe;
+  server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "line", true);
+  SerialLoop loop{&server, nullptr, 0};
+  for (int session = 1; session <= 3; ++session) {
+    if (session > 1) {  // what a previous client left on the line: a close frame and noise
+      uint8_t payload[kFaultBytes], frame[64], cobs[80];
+      write_fault(Fault{}, payload);
+      const size_t n = write_frame(MessageType::kClose, 7, payload, kFaultBytes, frame, sizeof frame);
+      const size_t m = cobs_encode(frame, n, cobs, sizeof cobs);
+      const uint8_t noise[] = {0x13, 0x37, 0x00, 0xFF};
+      size_t moved = 0;
+      ASSERT_EQ(pipe.client().write(noise, sizeof noise, &moved), TransportStatus::kOk);
+      ASSERT_EQ(pipe.client().write(cobs, m, &moved), TransportStatus::kOk);
+      server.step(0);
+    }
+    RemoteModel remote;
+    RemoteModel::Options ro = serial_options(loop, 5000);
+    ro.serial = true;
+    ASSERT_TRUE(remote.connect(pipe.client(), device(), ro, error)) << "session " << session << ": " << error;
+    const std::vector<uint8_t> frame = remote_frame(remote, local, 30.0 * session, error);
+    EXPECT_EQ(frame, local.render(30.0 * session).frame) << "session " << session << ": " << error;
+    remote.close();
+    server.step(0);
+    EXPECT_EQ(server.report().size(), 1u) << "the line is still served";
+    EXPECT_TRUE(std::any_of(log.begin(), log.end(), [&](const std::string& l) {
+      return l.find("session " + std::to_string(session) + " ended by the client") != std::string::npos;
+    })) << "session " << session;
+  }
 }
 
 }  // namespace

@@ -52,6 +52,7 @@ struct Server::Client {
   std::vector<Retained> retained;
   Hello hello_message;
   uint32_t resends = 0;
+  uint32_t session_from = 0;  // report.updates when the session began
   bool hello = false, pending = false, closing = false, gone = false;
   bool serial = false;
   std::vector<uint8_t> cobs_storage;
@@ -218,7 +219,7 @@ void Server::end_session(Client& c) {
   c.out_at = 0;
   c.retained.clear();
   c.sender.end();
-  c.state = {};
+  std::vector<uint32_t>().swap(c.state);  // its memory too (assigning {} keeps the capacity)
   c.reader.reset();
 }
 
@@ -266,6 +267,7 @@ void Server::handle(Client& c, const Frame& f) {
       c.hello = c.report.hello = true;
       c.hello_message = h;
       ++c.report.sessions;
+      c.session_from = c.report.updates;
       char line[160];
       std::snprintf(line, sizeof line, "%s: hello %ux%u %s, attributes%s%s, cache %u nodes", c.name.c_str(), h.width,
                     h.height, h.pixel_format ? "rgb888" : "rgb565", h.attributes & kWantNormals ? " normals" : "",
@@ -318,8 +320,9 @@ void Server::handle(Client& c, const Frame& f) {
     case MessageType::kClose:
       if (c.serial) {  // the line stays: the next hello on it starts a new session
         if (!c.hello) return;  // a stale close left on the line
-        log(c.name + ": session " + std::to_string(c.report.sessions) + " ended by the client after " +
-            std::to_string(c.report.updates) + (c.report.updates == 1 ? " update" : " updates"));
+        const uint32_t n = c.report.updates - c.session_from;
+        log(c.name + ": session " + std::to_string(c.report.sessions) + " ended by the client after " + std::to_string(n) +
+            (n == 1 ? " update" : " updates"));
         end_session(c);
         c.gone = options_.serial_once;
         return;
@@ -376,11 +379,11 @@ void Server::read_from(Client& c, Clock::time_point now) {
     size_t got = 0;
     const TransportStatus s = c.transport->read(buf, sizeof buf, &got);
     if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
-      const std::string why = s == TransportStatus::kError || c.serial ? std::string(": ") + c.transport->last_error() : "";
+      const std::string why = s == TransportStatus::kError ? std::string(": ") + c.transport->last_error() : "";
       if (c.serial && c.reopen) {
         // The device went away (unplugged): the session ends, and the line is
         // opened again when it comes back.
-        log(c.name + ": the line hung up" + why + "; reopening it when it comes back");
+        log(c.name + ": the line hung up; reopening it when it comes back");
         end_session(c);
         c.transport->close();
         c.fd = -1;
@@ -493,7 +496,7 @@ size_t Server::step(int timeout_ms) {
     if (c.idle() && !c.serial && c.out.capacity() > kQueueKept) {
       // A socket client's queue is let go once written (the first cut's is
       // the largest it will be): what it keeps follows its cut's change.
-      c.out = {};
+      std::vector<uint8_t>().swap(c.out);
       c.out_at = 0;
     } else if (c.idle() && c.serial && c.out.size() > kRetainedBytes) {
       // A client that does not acknowledge: the oldest frames go (asked
