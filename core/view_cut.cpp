@@ -71,14 +71,15 @@ Cone widened(const int16_t axis[3], const int16_t n[3], Cone c) {
 }  // namespace
 
 size_t CutBounds::bytes(const SpgHeader& header) { return align8(sizeof(ViewCut::Bound) * header.node_count); }
-// The scratch of capacity C: cut, fresh sent set, sizes, entered, left (4 C
-// each), then the heap (8 C; the breadth-first queue, a ring of 2 C ids, in
-// its place).
-size_t CutScratch::bytes(uint32_t capacity) { return 28 * size_t{capacity}; }
+// The scratch of capacity C: entered, left (4 C each); cut, fresh sent set,
+// sizes (4 C each) and the heap (8 C; the breadth-first queue, a ring of 2 C
+// ids, in its place) — in the incremental mode those 20 C hold the nodes a
+// split adds to the front (16 + 4 bytes each); then 4 C of walk stack.
+size_t CutScratch::bytes(uint32_t capacity) { return 32 * size_t{capacity}; }
 
 void CutScratch::init(void* at, size_t size) {
   storage = at;
-  const size_t c = size / 28;
+  const size_t c = size / 32;
   capacity = c > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(c);
 }
 
@@ -197,6 +198,9 @@ CutStatus ViewCut::init(const CutBounds& shared, void* state, size_t state_bytes
   sent_size_ = nullptr;
   heap_ = nullptr;
   cut_count_ = sent_count_ = entered_count_ = left_count_ = visited_ = needed_ = 0;
+  front_ = nullptr;
+  front_count_ = front_capacity_ = 0;
+  front_valid_ = budget_bound_ = has_previous_ = false;
   ready_ = true;
   return CutStatus::kOk;
 }
@@ -224,7 +228,11 @@ bool ViewCut::is_sent(NodeId id) const {
   return lo < sent_count_ && index_of(sent_[lo]) == want;
 }
 
-void ViewCut::reset() { cut_count_ = sent_count_ = entered_count_ = left_count_ = visited_ = needed_ = 0; }
+void ViewCut::reset() {
+  cut_count_ = sent_count_ = entered_count_ = left_count_ = visited_ = needed_ = 0;
+  front_count_ = 0;
+  front_valid_ = budget_bound_ = has_previous_ = false;
+}
 
 struct ViewCut::Frame {
   const Camera& camera;
@@ -237,6 +245,10 @@ struct ViewCut::Frame {
   int64_t offset[3];
   int64_t eye[3], focal, cx, cy, near, max_size;  // the camera's and parameters' values, widened
   bool cull_frustum, cull_backfaces, window;
+  // Incremental mode: the clock deadlines are set on, and the motion a clock
+  // unit (kClockUnit ticks) stands for.
+  uint32_t clock;
+  int64_t pace_turn, pace_shift, pace_eye;
 };
 
 // `inside`: an ancestor's subtree sphere was wholly in the frustum and
@@ -362,7 +374,11 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
               params.max_size_q4,
               params.cull_frustum,
               params.cull_backfaces && normals_,
-              params.window[0] < params.window[2]};
+              params.window[0] < params.window[2],
+              0,
+              1,
+              1,
+              1};
   for (int k = 0; k < 3; ++k) {
     frame.offset[k] = 1 << 13;
     for (int j = 0; j < 3; ++j) {
@@ -374,18 +390,42 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
   // once the new cut is whole, so a refusal leaves the cut as it was.
   if (scratch_ == nullptr || scratch_->storage == nullptr) return CutStatus::kNotReady;
   const uint32_t capacity = scratch_->capacity;
-  needed_ = 0;
+  needed_ = needed_front_ = 0;
   if (sent_count_ > capacity) {  // the change is listed in the scratch
     needed_ = sent_count_;
     return CutStatus::kStorageTooSmall;
   }
   uint8_t* base = static_cast<uint8_t*>(scratch_->storage);
-  cut_ = reinterpret_cast<NodeId*>(base);
-  NodeId* fresh = cut_ + capacity;
-  sent_size_ = reinterpret_cast<uint32_t*>(fresh + capacity);
-  entered_ = reinterpret_cast<NodeId*>(sent_size_ + capacity);
+  entered_ = reinterpret_cast<NodeId*>(base);
   left_ = entered_ + capacity;
-  heap_ = reinterpret_cast<uint64_t*>(left_ + capacity);
+  cut_ = left_ + capacity;
+  sent_size_ = reinterpret_cast<uint32_t*>(cut_ + 2 * size_t{capacity});
+  heap_ = reinterpret_cast<uint64_t*>(sent_size_ + capacity);
+  evaluated_ = 0;
+  last_incremental_ = false;
+  CutStatus status;
+  const bool setting_kept = has_previous_ && same_setting(camera, params);
+  if (front_ == nullptr || frame.window) {
+    front_valid_ = false;
+    status = derive(frame, params);
+  } else if (budget_bound_ && setting_kept) {
+    // The budget bound the last cut: from the root again, until it does not.
+    front_valid_ = false;
+    status = derive(frame, params);
+  } else {
+    status = update_incremental(frame, params, !front_valid_ || !setting_kept);
+  }
+  if (status == CutStatus::kOk) {
+    previous_camera_ = camera;
+    previous_params_ = params;
+    has_previous_ = true;
+  }
+  return status;
+}
+
+CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
+  const uint32_t capacity = scratch_->capacity;
+  NodeId* fresh = cut_ + capacity;
   const auto too_large = [&](uint64_t reached) {
     needed_ = reached > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(reached);
     cut_count_ = entered_count_ = left_count_ = 0;
@@ -436,7 +476,8 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
     }
     visited_ = visited;
   }
-  if (head < tail || fresh_count > params.max_nodes) {
+  budget_bound_ = head < tail || fresh_count > params.max_nodes;
+  if (budget_bound_) {
     // The budget binds: refine largest projected size first. The sent nodes
     // so far are the settled visible ones plus every node waiting in the heap
     // (all visible).
@@ -496,6 +537,462 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
   std::copy(fresh, fresh + fresh_count, sent_);
   sent_count_ = fresh_count;
   cut_count_ = cut_count;
+  evaluated_ = visited_;
+  return CutStatus::kOk;
+}
+
+// ---------------------------------------------------------------------------
+// Incremental updates.
+//
+// Every decision a node's evaluation makes — behind the near plane or not,
+// crossing it, outside a side plane, facing away, split — compares a
+// quantity with a threshold fixed per node: a camera-space functional
+// g = w . (p - eye) (|w| <= 1: depth, or a side plane's distance), or for
+// facing away n . (eye - p) + sin_a L(eye - p) + r. How far a camera's step
+// can move them is bounded for every node at once:
+//   g changes by at most |w1 - w0| |p - o| + |w1 . (o - e1) - w0 . (o - e0)|,
+//   o the root's centre (the turn and the shift, the largest over the five
+//   functionals; the near plane's move counts as a shift in depth);
+//   the facing quantity by at most (1 + 1.375 sin_a) |e1 - e0|.
+// So each evaluation gives its node a deadline on a clock that runs with the
+// camera's motion, kClockUnit ticks per pace (a step's turn, shift and eye
+// move, each measured against its own pace, the largest counting): the
+// node's smallest margin, less the rounding of the camera transform, over
+// its motion bound per pace (turn x |p - o| + shift, or the eye's). Until
+// the clock reaches it no decision of the node can differ from a fresh
+// evaluation's. An update advances the clock, walks the front (the cut and
+// every node above it, ids ascending) into the parts whose earliest deadline
+// has come (sub_due), evaluates those nodes again, and splits (a subtree
+// evaluated below, as from the root) or merges (the nodes below leave)
+// where a decision changed. The paces are set, when the front is derived,
+// to half again the last step's motion: a step more than twice that (a
+// jump, or a camera that sped up) derives the front again.
+namespace {
+constexpr int64_t kClockUnit = 1024;            // clock ticks per pace of motion
+constexpr int64_t kRoundingMu = 2;              // the camera transform's rounding, and more
+constexpr uint32_t kMaxTicks = 0x7FFFFFFFu;     // a deadline's furthest (the clock restarts before)
+constexpr int64_t kMaxStepTicks = 2 * kClockUnit;  // a step of twice the pace derives the front again, paced by it
+constexpr uint32_t kSplitBit = 0x80000000u;    // above the cut
+constexpr uint32_t kVisibleBit = 0x40000000u;  // a sent cut node
+constexpr uint32_t kFlagMask = kSplitBit | kVisibleBit;
+
+uint32_t ticks(int64_t margin, int64_t slack, int64_t per_tick_num, int64_t pace) {
+  // floor((margin - slack) * kClockUnit / (per_tick_num * pace)), 0 when none
+  if (margin <= slack) return 0;
+  const int64_t num = (margin - slack) > (int64_t{1} << 50) ? (int64_t{1} << 60) : (margin - slack) * kClockUnit;
+  const int64_t t = num / (per_tick_num * pace);
+  return t > kMaxTicks ? kMaxTicks : static_cast<uint32_t>(t);
+}
+
+uint32_t due_at(uint32_t clock, uint32_t t) {
+  const uint64_t d = uint64_t{clock} + t;
+  return d > 0xFFFFFFFFu ? 0xFFFFFFFFu : static_cast<uint32_t>(d);
+}
+}  // namespace
+
+// The front is kept depth first: a node, then its part of the front (its
+// children's parts, in order), `size` entries in all — so a part whose
+// earliest deadline has not come is passed over in one step.
+struct ViewCut::FrontNode {
+  uint32_t id;
+  uint32_t due;      // the clock at which its own decisions must be looked at again
+  uint32_t sub_due;  // the earliest due in its part of the front (its own included)
+  uint32_t size;     // entries in its part (itself included), and kSplitBit, kVisibleBit
+};
+static_assert(sizeof(ViewCut::FrontNode) == 16);
+
+struct ViewCut::Due {
+  bool visible, split;
+  uint32_t due;
+};
+
+void ViewCut::use_front(void* storage, size_t bytes) {
+  front_ = static_cast<FrontNode*>(storage);
+  front_capacity_ = storage == nullptr ? 0 : static_cast<uint32_t>(std::min<size_t>(bytes / 16, 0x3FFFFFFFu));
+  front_count_ = 0;
+  front_valid_ = false;
+}
+
+bool ViewCut::relocate_front(void* storage, size_t bytes) {
+  if (bytes / 16 < front_count_ || storage == nullptr) return false;
+  FrontNode* to = static_cast<FrontNode*>(storage);
+  std::copy(front_, front_ + front_count_, to);
+  front_ = to;
+  front_capacity_ = static_cast<uint32_t>(std::min<size_t>(bytes / 16, 0x3FFFFFFFu));
+  return true;
+}
+
+bool ViewCut::same_setting(const Camera& c, const CutParams& p) const {
+  const Camera& o = previous_camera_;
+  const CutParams& q = previous_params_;
+  return c.focal_q4 == o.focal_q4 && c.center_q4[0] == o.center_q4[0] && c.center_q4[1] == o.center_q4[1] &&
+         p.max_size_q4 == q.max_size_q4 && p.cull_frustum == q.cull_frustum &&
+         p.cull_backfaces == q.cull_backfaces && p.width == q.width && p.height == q.height;
+}
+
+// The node's decisions (as evaluate() makes them, without a window) and the
+// clock at which they may first differ.
+ViewCut::Due ViewCut::evaluate_due(const Frame& f, uint32_t id) const {
+  const Bound& b = bounds_[id];
+  const int64_t p0 = b.center[0], p1 = b.center[1], p2 = b.center[2];
+  const int64_t z = (f.rotation[2][0] * p0 + f.rotation[2][1] * p1 + f.rotation[2][2] * p2 + f.offset[2]) >> 14;
+  const int64_t r = b.radius;
+  constexpr int64_t kFar = int64_t{1} << 62;
+  int64_t keep_cam = kFar, keep_eye = kFar;  // the margins of decisions that must all hold (MU; Q14 MU)
+  int64_t cull_cam = -1, cull_eye = -1;      // the margins of culling decisions, any one of which suffices
+  const auto abs64 = [](int64_t v) { return v < 0 ? -v : v; };
+  const int64_t behind = z + r - f.near;     // < 0: wholly behind the near plane
+  const int64_t crossing = z - r - f.near;   // < 0: reaches behind it
+  bool culled = behind < 0;
+  if (culled) {
+    cull_cam = -behind;
+  } else {
+    keep_cam = std::min(behind, abs64(crossing));
+    if (crossing >= 0 && f.cull_frustum) {
+      const int64_t x = (f.rotation[0][0] * p0 + f.rotation[0][1] * p1 + f.rotation[0][2] * p2 + f.offset[0]) >> 14;
+      const int64_t y = (f.rotation[1][0] * p0 + f.rotation[1][1] * p1 + f.rotation[1][2] * p2 + f.offset[1]) >> 14;
+      const int64_t fx = f.focal * x, cxz = f.cx * z, fy = f.focal * y, cyz = f.cy * z;
+      const int64_t planes[4] = {fx - cxz - r * f.hyp_x, -fx - cxz - r * f.hyp_x, fy - cyz - r * f.hyp_y,
+                                 -fy - cyz - r * f.hyp_y};
+      for (int k = 0; k < 4; ++k) {
+        const int64_t distance = abs64(planes[k]) / (k < 2 ? f.hyp_x : f.hyp_y);  // MU
+        if (planes[k] > 0) {  // outside: culled while it stays outside and the node before the near plane
+          culled = true;
+          cull_cam = std::max(cull_cam, std::min(distance, crossing));
+        } else {
+          keep_cam = std::min(keep_cam, distance);
+        }
+      }
+    }
+  }
+  const int64_t sin_a = b.cone_sin_q14;
+  int64_t k_eye = 0;
+  if (f.cull_backfaces && sin_a < kQ14One) {
+    const int64_t d0 = f.eye[0] - p0, d1 = f.eye[1] - p1, d2 = f.eye[2] - p2;
+    const int64_t dot = b.normal[0] * d0 + b.normal[1] * d1 + b.normal[2] * d2;
+    const int64_t a0 = d0 < 0 ? -d0 : d0, a1 = d1 < 0 ? -d1 : d1, a2 = d2 < 0 ? -d2 : d2;
+    const int64_t m = a0 > a1 ? (a0 > a2 ? a0 : a2) : (a1 > a2 ? a1 : a2);
+    const int64_t len = m + (a0 + a1 + a2 - m + 1) / 2;
+    const int64_t facing = dot + sin_a * len + (r << 14);  // < 0: faces away (evaluate()'s test)
+    k_eye = kQ14One + 8 + ((sin_a * 11) >> 3);           // |n| (Q14, rounded) + 1.375 sin_a (L's slope)
+    if (facing < 0) {
+      culled = true;
+      cull_eye = -facing;
+    } else {
+      keep_eye = facing;
+    }
+  }
+  const int64_t eye_slack = sin_a + 16;
+  // The node's move per pace in camera-space functionals: turn x |p - o| + shift.
+  const Bound& root = bounds_[0];
+  const int64_t o0 = p0 - root.center[0], o1 = p1 - root.center[1], o2 = p2 - root.center[2];
+  const int64_t b0 = o0 < 0 ? -o0 : o0, b1 = o1 < 0 ? -o1 : o1, b2 = o2 < 0 ? -o2 : o2;
+  const int64_t bm = b0 > b1 ? (b0 > b2 ? b0 : b2) : (b1 > b2 ? b1 : b2);
+  const int64_t rho = bm + (b0 + b1 + b2 - bm + 1) / 2 + 1;  // >= |p - o|
+  const int64_t per_pace = ((f.pace_turn * rho) >> 14) + 1 + f.pace_shift;
+  if (culled) {
+    const uint32_t t = std::max(cull_cam >= 0 ? ticks(cull_cam, kRoundingMu, 1, per_pace) : 0u,
+                                cull_eye >= 0 ? ticks(cull_eye, eye_slack, k_eye, f.pace_eye) : 0u);
+    return Due{false, false, due_at(f.clock, t)};
+  }
+  bool split = b.children > 0;
+  if (split && crossing >= 0) {
+    const int64_t q = r * f.focal - f.max_size * z;  // > 0: larger than the threshold on screen
+    split = q > 0;
+    keep_cam = std::min(keep_cam, abs64(q) / f.max_size);
+  }
+  uint32_t t = ticks(keep_cam, kRoundingMu, 1, per_pace);
+  if (keep_eye != kFar) t = std::min(t, ticks(keep_eye, eye_slack, k_eye, f.pace_eye));
+  return Due{true, split, due_at(f.clock, t)};
+}
+
+CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& params, bool rebuild) {
+  Frame frame = frame_in;
+  const uint32_t capacity = scratch_->capacity;
+  const Bound& root = bounds_[0];
+  // The camera's motion since the last update, bounded (above).
+  int64_t turn = 0, shift = 0, eye_move = 0;
+  if (has_previous_) {
+    const Camera& c0 = previous_camera_;
+    const Camera& c1 = frame.camera;
+    // The five functionals (depth, the four side planes) as Q14 vectors,
+    // for a camera, and each one's value at o.
+    const auto functionals = [&](const Camera& c, int64_t w[5][3], int64_t at_o[5]) {
+      for (int j = 0; j < 3; ++j) {
+        const int64_t r0 = c.rotation[0][j], r1 = c.rotation[1][j], r2 = c.rotation[2][j];
+        w[0][j] = r2;
+        w[1][j] = (frame.focal * r0 - frame.cx * r2) / frame.hyp_x;
+        w[2][j] = (-frame.focal * r0 - frame.cx * r2) / frame.hyp_x;
+        w[3][j] = (frame.focal * r1 - frame.cy * r2) / frame.hyp_y;
+        w[4][j] = (-frame.focal * r1 - frame.cy * r2) / frame.hyp_y;
+      }
+      for (int t = 0; t < 5; ++t) {
+        at_o[t] = 0;
+        for (int j = 0; j < 3; ++j) at_o[t] += w[t][j] * (int64_t{root.center[j]} - c.eye[j]);
+      }
+      at_o[0] -= int64_t{c.near_mu} << 14;  // the near plane's move is a move in depth
+    };
+    int64_t w0[5][3], w1[5][3], s0[5], s1[5];
+    functionals(c0, w0, s0);
+    functionals(c1, w1, s1);
+    uint64_t e2 = 0, far = 0;
+    for (int j = 0; j < 3; ++j) {
+      const int64_t de = int64_t{c1.eye[j]} - c0.eye[j];
+      e2 += static_cast<uint64_t>(de * de);
+      const int64_t d = int64_t{root.center[j]} - c1.eye[j];
+      far += static_cast<uint64_t>(d < 0 ? -d : d) + static_cast<uint64_t>(de < 0 ? -de : de);
+    }
+    for (int t = 0; t < 5; ++t) {
+      uint64_t d2 = 0;
+      for (int j = 0; j < 3; ++j) {
+        const int64_t d = w1[t][j] - w0[t][j];
+        d2 += static_cast<uint64_t>(d * d);
+      }
+      turn = std::max(turn, static_cast<int64_t>(isqrt64(d2)) + 4);  // + the vectors' rounding
+      const int64_t ds = s1[t] - s0[t];
+      // + the rounded vectors' error at o (4 Q14 units a component, twice).
+      shift = std::max(shift, ((ds < 0 ? -ds : ds) >> 14) + 2 + static_cast<int64_t>((8 * far) >> 14));
+    }
+    eye_move = static_cast<int64_t>(isqrt64(e2)) + 1;
+    motion_turn_ = turn;
+    motion_shift_ = shift;
+    motion_eye_ = eye_move;
+  }
+  const bool eye_counts = frame.cull_backfaces;
+  if (!rebuild) {
+    const auto over = [](int64_t m, int64_t pace) { return (m * kClockUnit + pace - 1) / pace; };
+    const int64_t step = std::max({over(turn, pace_turn_), over(shift, pace_shift_), eye_counts ? over(eye_move, pace_eye_) : 0});
+    if (step > kMaxStepTicks || int64_t{clock_} + step >= int64_t{1} << 31) rebuild = true;
+    else clock_ += static_cast<uint32_t>(step);
+  }
+  if (rebuild) {
+    // The clock restarts, paced by half again the last step's motion (the
+    // first time: about a degree, and a 64th of the model's radius).
+    clock_ = 0;
+    const int64_t radius = root.subtree_radius / 64 + 1;
+    pace_turn_ = has_previous_ ? motion_turn_ * 3 / 2 + 1 : 300;
+    pace_shift_ = has_previous_ ? motion_shift_ * 3 / 2 + 1 : radius;
+    pace_eye_ = has_previous_ ? motion_eye_ * 3 / 2 + 1 : radius;
+    front_count_ = 0;
+  }
+  frame.clock = clock_;
+  frame.pace_turn = pace_turn_;
+  frame.pace_shift = pace_shift_;
+  frame.pace_eye = pace_eye_;
+  last_incremental_ = !rebuild;
+  front_valid_ = false;  // until this update is whole
+  visited_ = 0;
+
+  // The scratch: the walk's and the expansion's stacks (depth first).
+  struct Open {        // a node of the front being walked below
+    uint32_t at;       // where it is written
+    uint32_t end;      // where its part ends in the old front (read side)
+    uint32_t min_due;  // the earliest due met below it so far (its own included)
+  };
+  struct Grow {        // a node being expanded below
+    uint32_t at, next, left, min_due;  // where it is written, its next child, children to go, earliest due
+  };
+  Open* walk = reinterpret_cast<Open*>(cut_);
+  Grow* grow = reinterpret_cast<Grow*>(walk + capacity / 2);
+  const uint32_t depth_capacity = capacity / 2;
+  uint32_t sp = 0;
+  int64_t cut_delta = 0;
+  entered_count_ = left_count_ = 0;
+  const auto refuse = [&](uint64_t reached, uint64_t front) {
+    needed_ = reached > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(reached);
+    needed_front_ = front > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(front);
+    front_valid_ = false;
+    front_count_ = 0;
+    entered_count_ = left_count_ = 0;
+    return CutStatus::kStorageTooSmall;
+  };
+  // Writes the subtrees of nodes [first, first + count) at `w` in depth-first
+  // order, as from the root, never reaching `limit`; their earliest due in
+  // *earliest. False when the room or the stack runs out.
+  const auto expand = [&](uint32_t first, uint32_t count, uint32_t& w, uint32_t limit, uint32_t& earliest) {
+    uint32_t gp = 0;
+    grow[gp++] = Grow{0xFFFFFFFFu, first, count, 0xFFFFFFFFu};
+    while (gp > 0) {
+      Grow& g = grow[gp - 1];
+      if (g.left == 0) {
+        const Grow done = g;
+        --gp;
+        if (done.at != 0xFFFFFFFFu) {
+          front_[done.at].size = (w - done.at) | (front_[done.at].size & kFlagMask);
+          front_[done.at].sub_due = done.min_due;
+        }
+        if (gp > 0) grow[gp - 1].min_due = std::min(grow[gp - 1].min_due, done.min_due);
+        else earliest = done.min_due;
+        continue;
+      }
+      const uint32_t id = g.next++;
+      --g.left;
+      if (w >= limit) return false;
+      const Due d = evaluate_due(frame, id);
+      ++evaluated_;
+      if (d.split) {
+        if (gp >= depth_capacity) return false;
+        front_[w] = FrontNode{id, d.due, d.due, kSplitBit | 1};
+        const Bound& b = bounds_[id];
+        grow[gp++] = Grow{w, b.first_child, b.children, d.due};
+      } else {
+        front_[w] = FrontNode{id, d.due, d.due, (d.visible ? kVisibleBit : 0) | 1};
+        ++cut_delta;
+        if (d.visible) entered_[entered_count_++] = NodeId{id};
+        g.min_due = std::min(g.min_due, d.due);
+      }
+      ++w;
+    }
+    return true;
+  };
+  if (rebuild) {
+    uint32_t w = 0, earliest = 0;
+    if (!expand(0, 1, w, front_capacity_, earliest))
+      return refuse(uint64_t{capacity} * 2, std::max<uint64_t>(uint64_t{front_capacity_} * 2, 1024));
+    front_count_ = w;
+    // The sent set: the visible cut nodes in id order, and the change
+    // against the old one.
+    if (entered_count_ > state_capacity_) return refuse(entered_count_, 0);
+    if (entered_count_ > params.max_nodes || front_count_ > 4 * uint64_t{params.max_nodes} + 9) {
+      // The from-the-root cut is bounded by the budget here: that one.
+      front_count_ = 0;
+      last_incremental_ = false;
+      return derive(const_cast<Frame&>(frame_in), params);
+    }
+    NodeId* fresh = cut_;  // the stacks are done with
+    const uint32_t fresh_count = entered_count_;
+    std::copy(entered_, entered_ + fresh_count, fresh);
+    std::sort(fresh, fresh + fresh_count, [](NodeId x, NodeId y) { return index_of(x) < index_of(y); });
+    entered_count_ = left_count_ = 0;
+    uint32_t i = 0, j = 0;
+    while (i < fresh_count || j < sent_count_) {
+      const uint32_t x = i < fresh_count ? index_of(fresh[i]) : 0xFFFFFFFFu;
+      const uint32_t y = j < sent_count_ ? index_of(sent_[j]) : 0xFFFFFFFFu;
+      if (x == y) ++i, ++j;
+      else if (x < y) entered_[entered_count_++] = fresh[i++];
+      else left_[left_count_++] = sent_[j++];
+    }
+    std::copy(fresh, fresh + fresh_count, sent_);
+    sent_count_ = fresh_count;
+    cut_count_ = static_cast<uint32_t>(cut_delta);
+  } else {
+    // One sweep: the old front moved to the end of its storage is read from
+    // there and the new one written from the start (a merge frees room, a
+    // split takes it: the room left free is the most it may take).
+    const uint32_t n = front_count_, gap = front_capacity_ - n;
+    if (gap > 0 && n > 0) std::copy_backward(front_, front_ + n, front_ + gap + n);
+    uint32_t r = gap, w = 0;
+    const uint32_t end = gap + n;
+    const auto fold = [&](uint32_t due) {
+      if (sp > 0) walk[sp - 1].min_due = std::min(walk[sp - 1].min_due, due);
+    };
+    for (;;) {
+      while (sp > 0 && walk[sp - 1].end == r) {  // a part walked: its size and earliest due
+        const Open o = walk[--sp];
+        front_[o.at].size = (w - o.at) | (front_[o.at].size & kFlagMask);
+        front_[o.at].sub_due = o.min_due;
+        fold(o.min_due);
+      }
+      if (r == end) break;
+      FrontNode e = front_[r];
+      const uint32_t size = e.size & ~kFlagMask;
+      if (e.sub_due > clock_) {  // nothing in this part has come due: it moves as it is
+        if (w != r) std::copy(front_ + r, front_ + r + size, front_ + w);
+        w += size;
+        r += size;
+        fold(e.sub_due);
+        continue;
+      }
+      ++visited_;
+      const bool was_split = e.size & kSplitBit;
+      Due d{true, was_split, e.due};
+      if (e.due <= clock_) {
+        d = evaluate_due(frame, e.id);
+        ++evaluated_;
+        e.due = d.due;
+      }
+      if (was_split && d.split) {  // still above the cut: walk below it
+        if (sp >= depth_capacity) return refuse(uint64_t{capacity} * 2, 0);
+        front_[w] = e;
+        walk[sp++] = Open{w, r + size, e.due};
+        ++w;
+        ++r;
+        continue;
+      }
+      if (was_split) {  // merge: the part below leaves (its sent nodes, the sent set)
+        for (uint32_t q = r + 1; q < r + size; ++q) {
+          const FrontNode& gone = front_[q];
+          if (gone.size & kSplitBit) continue;
+          --cut_delta;
+          if (gone.size & kVisibleBit) left_[left_count_++] = NodeId{gone.id};
+        }
+        ++cut_delta;
+        if (d.visible) entered_[entered_count_++] = NodeId{e.id};
+        front_[w++] = FrontNode{e.id, e.due, e.due, (d.visible ? kVisibleBit : 0) | 1};
+        r += size;
+        fold(e.due);
+        continue;
+      }
+      if (d.split) {  // split: its subtree is made below it, as from the root
+        if (e.size & kVisibleBit) left_[left_count_++] = NodeId{e.id};
+        --cut_delta;
+        const uint32_t at = w++;
+        ++r;
+        front_[at] = FrontNode{e.id, e.due, e.due, kSplitBit | 1};
+        const Bound& b = bounds_[e.id];
+        uint32_t earliest = 0;
+        if (!expand(b.first_child, b.children, w, r, earliest))
+          return refuse(uint64_t{capacity} * 2, uint64_t{front_capacity_} * 2);
+        front_[at].size = (w - at) | kSplitBit;
+        front_[at].sub_due = std::min(e.due, earliest);
+        fold(front_[at].sub_due);
+        continue;
+      }
+      // Stays in the cut: seen now, or not.
+      const bool was_visible = e.size & kVisibleBit;
+      if (d.visible && !was_visible) entered_[entered_count_++] = NodeId{e.id};
+      if (!d.visible && was_visible) left_[left_count_++] = NodeId{e.id};
+      front_[w++] = FrontNode{e.id, e.due, e.due, (d.visible ? kVisibleBit : 0) | 1};
+      ++r;
+      fold(e.due);
+    }
+    front_count_ = w;
+    const uint64_t sent_after = uint64_t{sent_count_} - left_count_ + entered_count_;
+    if (sent_after > state_capacity_) return refuse(sent_after, 0);
+    if (sent_after > params.max_nodes || front_count_ > 4 * uint64_t{params.max_nodes} + 9) {
+      front_count_ = 0;
+      last_incremental_ = false;
+      return derive(const_cast<Frame&>(frame_in), params);
+    }
+    // The sent set: the left out, the entered in (both in id order).
+    const auto by_id = [](NodeId x, NodeId y) { return index_of(x) < index_of(y); };
+    std::sort(entered_, entered_ + entered_count_, by_id);
+    std::sort(left_, left_ + left_count_, by_id);
+    if (left_count_ > 0) {
+      uint32_t out = 0, l = 0;
+      for (uint32_t i = 0; i < sent_count_; ++i) {
+        if (l < left_count_ && index_of(sent_[i]) == index_of(left_[l])) {
+          ++l;
+          continue;
+        }
+        sent_[out++] = sent_[i];
+      }
+      sent_count_ = out;
+    }
+    if (entered_count_ > 0) {
+      uint32_t i = sent_count_, k = entered_count_, out = sent_count_ + entered_count_;
+      while (k > 0) {
+        if (i > 0 && index_of(sent_[i - 1]) > index_of(entered_[k - 1])) sent_[--out] = sent_[--i];
+        else sent_[--out] = entered_[--k];
+      }
+      sent_count_ += entered_count_;
+    }
+    cut_count_ = static_cast<uint32_t>(int64_t{cut_count_} + cut_delta);
+  }
+  cut_ = nullptr;
+  sent_size_ = nullptr;
+  front_valid_ = true;
+  budget_bound_ = false;
   return CutStatus::kOk;
 }
 

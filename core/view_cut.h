@@ -30,10 +30,13 @@
 //   the state   per cut: its sent set, 4 bytes a sent node — all that
 //               persists from one update to the next;
 //   CutScratch  what one update works in (the whole cut, the new sent set
-//               and sizes, the change, the queue: 28 bytes a cut node);
+//               and sizes, the change, the queue: 32 bytes a cut node);
 //               cuts updated one at a time (one thread) may share one, and
 //               what a cut reports from it (cut(), sent_size_q4(),
 //               entered(), left()) holds until the next update through it.
+//   the front  per cut, only for incremental updates (use_front): the cut
+//              and the nodes above it with when each must be looked at
+//              again (16 bytes a node of the front).
 // A cut or a sent set larger than its storage makes update() refuse with
 // kStorageTooSmall, leaving the cut as it was; the caller grows the storage
 // (relocate, a larger scratch) and updates again. view_cut_bytes(header)
@@ -98,7 +101,7 @@ class CutBounds {
 };
 
 // Scratch for updates of cuts of up to `capacity` nodes (culled ones
-// included): 28 bytes a node. Shared by cuts updated one at a time.
+// included): 32 bytes a node. Shared by cuts updated one at a time.
 struct CutScratch {
   static size_t bytes(uint32_t capacity);
   // The capacity `bytes` of storage gives (at most 2^31 - 1).
@@ -110,7 +113,7 @@ struct CutScratch {
 // Storage a cut keeps between updates for up to `sent` sent nodes.
 size_t view_cut_state_bytes(uint32_t sent);
 // One block for a cut of any camera over a whole tree of `header.node_count`
-// nodes with its own bounds, state and scratch (68 bytes a node).
+// nodes with its own bounds, state and scratch (72 bytes a node).
 size_t view_cut_bytes(const SpgHeader& header);
 
 class ViewCut {
@@ -125,6 +128,27 @@ class ViewCut {
   // for a sent set of up to n nodes (zero bytes is allowed: grow it later).
   [[nodiscard]] CutStatus init(const CutBounds& bounds, void* state, size_t state_bytes, const CutScratch* scratch);
   void use_scratch(const CutScratch* scratch) { scratch_ = scratch; }
+
+  // Incremental updates (TOG05 Fig. 10): with a front, an update starts from
+  // the previous cut and looks again only at the nodes whose decision the
+  // camera's motion since they were last evaluated may have changed (each
+  // has a deadline from its margins and a bound on how fast the camera
+  // moves them), splitting and merging there — work in proportion to the
+  // change, not the cut. The cut is the from-the-root cut of the same
+  // camera, node for node; where that one is bounded by the budget (or
+  // refines in a window) update() derives it from the root instead. Without
+  // sizes: sent_size_q4() and cut() are not kept (null) in this mode.
+  static size_t front_bytes(uint32_t nodes) { return 16 * size_t{nodes}; }
+  // `storage` for a front of up to bytes / 16 nodes (null: incremental off);
+  // the next update derives the front from the root.
+  void use_front(void* storage, size_t bytes);
+  // Moves the front to larger storage; false (nothing moved) when it does not fit.
+  [[nodiscard]] bool relocate_front(void* storage, size_t bytes);
+  uint32_t front_count() const { return front_count_; }
+  uint32_t front_capacity() const { return front_capacity_; }
+  // Evaluations of nodes by the last update (from the root: every node visited).
+  uint32_t evaluated() const { return evaluated_; }
+  bool last_was_incremental() const { return last_incremental_; }
   // Moves the sent set into new state storage (larger, to follow a growing
   // cut); false, and nothing moved, when it does not hold the present set.
   [[nodiscard]] bool relocate(void* state, size_t state_bytes);
@@ -162,15 +186,23 @@ class ViewCut {
   uint32_t visited() const { return visited_; }
   uint32_t node_count() const { return node_count_; }
   // After kStorageTooSmall: the cut nodes or sent nodes it reached, a lower
-  // bound on the capacity the refused update needs.
+  // bound on the capacity the refused update needs (needed_front(): the
+  // front's).
   uint32_t needed_capacity() const { return needed_; }
+  uint32_t needed_front() const { return needed_front_; }
 
   struct Bound;
+  struct FrontNode;
 
  private:
   struct Eval;
   struct Frame;  // one update's camera, parameters and what follows from them
+  struct Due;
   Eval evaluate(const Frame& f, uint32_t node, bool inside) const;
+  CutStatus derive(Frame& frame, const CutParams& params);  // from the root
+  Due evaluate_due(const Frame& f, uint32_t node) const;
+  CutStatus update_incremental(const Frame& frame, const CutParams& params, bool rebuild);
+  bool same_setting(const Camera& camera, const CutParams& params) const;
   void heap_push(uint32_t size, uint32_t node);
   uint64_t heap_pop();
 
@@ -190,6 +222,16 @@ class ViewCut {
   uint64_t* heap_ = nullptr;  // (size << 32 | ~id): the largest size first, then the smallest id
   uint32_t heap_count_ = 0;
   uint32_t cut_count_ = 0, sent_count_ = 0, entered_count_ = 0, left_count_ = 0, visited_ = 0, needed_ = 0;
+  // Incremental mode: the front (ids ascending), the clock its deadlines
+  // are on, and the camera and parameters it was made for.
+  FrontNode* front_ = nullptr;
+  uint32_t front_count_ = 0, front_capacity_ = 0, needed_front_ = 0, evaluated_ = 0;
+  bool front_valid_ = false, budget_bound_ = false, last_incremental_ = false, has_previous_ = false;
+  uint32_t clock_ = 0;  // motion since the front was derived, in 1/1024 paces
+  int64_t pace_turn_ = 1, pace_shift_ = 1, pace_eye_ = 1;        // what a pace stands for (Q14; MU; MU)
+  int64_t motion_turn_ = 0, motion_shift_ = 0, motion_eye_ = 0;  // the last step's, to set the paces by
+  Camera previous_camera_{};
+  CutParams previous_params_{};
   bool ready_ = false;
 };
 

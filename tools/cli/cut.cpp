@@ -16,7 +16,7 @@ namespace stipple {
 namespace {
 
 const char kCutHelp[] =
-    "usage: stipple cut MODEL.spg [--orbit N] [--json] [view and cut options]\n"
+    "usage: stipple cut MODEL.spg [--orbit N] [--incremental] [--json] [view and cut options]\n"
     "\n"
     "Runs the view-dependent cut (core/view_cut.h) for the view, then for N\n"
     "cameras of an orbit about the up axis (the view's yaw + 360 k / N; default\n"
@@ -27,7 +27,11 @@ const char kCutHelp[] =
     "the nodes the\n"
     "update visited. Protocol framing is not counted. The view and cut options\n"
     "are render's: --size, --camera, --up, --max-size, --no-cull, --leaf-cone,\n"
-    "--window, --cache (the node budget).\n";
+    "--window, --cache (the node budget).\n"
+    "\n"
+    "  --incremental   update the cut from the previous one (as the server does),\n"
+    "                  looking again only at nodes whose deadline came; the cut is\n"
+    "                  the same, the nodes evaluated per step are printed\n";
 
 }  // namespace
 
@@ -44,6 +48,7 @@ int cmd_cut(int argc, char** argv) {
   if (args.value("--orbit", v) && (!cli::parse_uint(v, 100000, steps) || steps == 0))
     return cli::fail("cut: --orbit: expected 1..100000 steps, got '" + v + "'");
   const bool json = args.flag("--json");
+  const bool incremental = args.flag("--incremental");
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("cut: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("cut: " + args.unknown_option_message());
@@ -61,6 +66,11 @@ int cmd_cut(int argc, char** argv) {
   ViewCut cut;
   if (cut.init(view, decoder, storage.data(), storage.size() * 8, cone_rule(o.rule)) != CutStatus::kOk)
     return cli::fail("cut: init failed");
+  std::vector<uint64_t> front;
+  if (incremental) {
+    front.resize(ViewCut::front_bytes(view.header.node_count) / 8 + 1);
+    cut.use_front(front.data(), front.size() * 8);
+  }
   const CutParams p = cut_params(o.rule, o.config);
   const ViewSpec base = resolve_view(o.view, view.header, decoder.extent_mu());
   const auto camera_at = [&](double yaw, Camera& c) {
@@ -72,7 +82,7 @@ int cmd_cut(int argc, char** argv) {
   Camera c;
   if (!camera_at(base.yaw, c) || cut.update(c, p) != CutStatus::kOk) return cli::fail("cut: the view is out of range");
   const uint64_t cold_nodes = cut.sent_count(), cold_culled = cut.culled_count(), cold_bytes = cold_nodes * node_entry_bytes(record);
-  double sent = 0, entered = 0, left = 0, visited = 0, change_bytes = 0, resend_bytes = 0;
+  double sent = 0, entered = 0, left = 0, visited = 0, evaluated = 0, change_bytes = 0, resend_bytes = 0, derived = 0;
   for (unsigned long long k = 1; k <= steps; ++k) {
     if (!camera_at(base.yaw + 360.0 * static_cast<double>(k) / static_cast<double>(steps), c) ||
         cut.update(c, p) != CutStatus::kOk)
@@ -81,6 +91,8 @@ int cmd_cut(int argc, char** argv) {
     entered += cut.entered_count();
     left += cut.left_count();
     visited += cut.visited();
+    evaluated += cut.evaluated();
+    derived += incremental && !cut.last_was_incremental();
     change_bytes += static_cast<double>(cut.entered_count() * node_entry_bytes(record) + cut.left_count() * 4);
     resend_bytes += static_cast<double>(cut.sent_count() * node_entry_bytes(record));
   }
@@ -99,6 +111,8 @@ int cmd_cut(int argc, char** argv) {
         .num("entered_per_step", entered / n)
         .num("left_per_step", left / n)
         .num("visited_per_step", visited / n)
+        .num("evaluated_per_step", evaluated / n)
+        .integer("derived_from_the_root", static_cast<long long>(derived))
         .num("change_bytes_per_step", change_bytes / n)
         .num("resend_bytes_per_step", resend_bytes / n)
         .num("change_share", resend_bytes > 0 ? change_bytes / resend_bytes : 0);
@@ -107,10 +121,12 @@ int cmd_cut(int argc, char** argv) {
   }
   std::printf("%s, %ux%u: cold start %s nodes sent, %s culled, %s bytes\n", files[0].c_str(), p.width, p.height,
               cli::with_commas(cold_nodes).c_str(), cli::with_commas(cold_culled).c_str(), cli::with_commas(cold_bytes).c_str());
-  std::printf("orbit of %llu steps, per step: %.0f sent, %.1f entered, %.1f left, %.0f visited; %.0f bytes of change "
-              "against %.0f resending the cut (%.1f %%)\n",
-              steps, sent / n, entered / n, left / n, visited / n, change_bytes / n, resend_bytes / n,
+  std::printf("orbit of %llu steps, per step: %.0f sent, %.1f entered, %.1f left, %.0f visited, %.0f evaluated; %.0f "
+              "bytes of change against %.0f resending the cut (%.1f %%)\n",
+              steps, sent / n, entered / n, left / n, visited / n, evaluated / n, change_bytes / n, resend_bytes / n,
               resend_bytes > 0 ? 100 * change_bytes / resend_bytes : 0.0);
+  if (incremental)
+    std::printf("incremental: %.0f of %llu steps derived from the root\n", derived, steps);
   return 0;
 }
 
