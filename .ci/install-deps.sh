@@ -5,7 +5,8 @@ set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev libpng-dev clang
   liblzf-dev  # PCD's binary_compressed
   g++-arm-linux-gnueabi g++-arm-linux-gnueabihf g++-aarch64-linux-gnu qemu-user  # cross builds, their emulator
-  socat  # a linked pseudo-terminal pair: the serial line in the CLI tests
+  socat  # a linked pseudo-terminal pair: the serial line in the CLI tests; a TLS client end in the balancer test
+  haproxy openssl  # the load balancer in front of several servers (tests/cli_balancer.sh), its TLS certificate
   help2man dpkg-dev  # man pages from --help; the .deb's library dependencies (dpkg-shlibdeps)
   libsdl2-dev libepoxy-dev libegl-dev libgl-dev libgl1-mesa-dri libegl-mesa0  # the emulator, the GL client (llvmpipe)
   xvfb xauth  # their windows in the tests

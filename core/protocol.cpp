@@ -20,6 +20,8 @@ bool message_type_known(uint8_t t) {
     case MessageType::kClose:
     case MessageType::kAck:
     case MessageType::kResend:
+    case MessageType::kResume:
+    case MessageType::kResumed:
     case MessageType::kStartup:
     case MessageType::kNodes:
     case MessageType::kDrop:
@@ -37,6 +39,8 @@ const char* message_type_name(uint8_t t) {
     case MessageType::kClose: return "close";
     case MessageType::kAck: return "ack";
     case MessageType::kResend: return "resend";
+    case MessageType::kResume: return "resume";
+    case MessageType::kResumed: return "resumed";
     case MessageType::kStartup: return "startup";
     case MessageType::kNodes: return "nodes";
     case MessageType::kDrop: return "drop";
@@ -69,7 +73,9 @@ const char* close_reason_text(CloseReason r) {
     case CloseReason::kUnsupported: return "protocol version not supported";
     case CloseReason::kServerFull: return "the server has no room for another client";
     case CloseReason::kShutdown: return "the server is shutting down";
-    case CloseReason::kTimeout: return "no frame within the keep-alive interval";
+    case CloseReason::kTimeout: return "nothing arrived in time (no hello, or an idle client)";
+    case CloseReason::kBadToken: return "the server needs the right token (--token)";
+    case CloseReason::kBadResume: return "the resume was refused";
   }
   return "unknown reason";
 }
@@ -139,18 +145,20 @@ FrameStatus FrameReader::next(Frame* frame) {
   return FrameStatus::kOk;
 }
 
-size_t write_hello(const Hello& h, uint8_t out[kHelloBytes]) {
+size_t write_hello(const Hello& h, uint8_t out[kHelloMaxBytes]) {
   store_u16le(out, h.version);
   store_u16le(out + 2, h.width);
   store_u16le(out + 4, h.height);
   out[6] = h.pixel_format;
   out[7] = h.attributes;
   store_u32le(out + 8, h.cache_capacity);
-  return kHelloBytes;
+  const size_t token = h.token_bytes > kMaxTokenBytes ? kMaxTokenBytes : h.token_bytes;
+  for (size_t i = 0; i < token; ++i) out[kHelloBytes + i] = h.token[i];
+  return kHelloBytes + token;
 }
 
 bool parse_hello(const uint8_t* p, size_t size, Hello* out) {
-  if (size != kHelloBytes) return false;
+  if (size < kHelloBytes || size > kHelloMaxBytes) return false;
   Hello h;
   h.version = load_u16le(p);
   h.width = load_u16le(p + 2);
@@ -158,11 +166,74 @@ bool parse_hello(const uint8_t* p, size_t size, Hello* out) {
   h.pixel_format = p[6];
   h.attributes = p[7];
   h.cache_capacity = load_u32le(p + 8);
+  // Version 2 knows neither a token nor a resume.
+  const uint8_t known = h.version >= 3 ? kWantNormals | kWantColor | kResuming : kWantNormals | kWantColor;
   if (h.width == 0 || h.width > 4096 || h.height == 0 || h.height > 4096 || h.pixel_format > 1 ||
-      (h.attributes & ~(kWantNormals | kWantColor)) != 0 || h.cache_capacity == 0 || h.cache_capacity > (1u << 24))
+      (h.attributes & ~known) != 0 || h.cache_capacity == 0 || h.cache_capacity > (1u << 24) ||
+      (h.version < 3 && size != kHelloBytes))
     return false;
+  h.token_bytes = static_cast<uint8_t>(size - kHelloBytes);
+  for (size_t i = 0; i < h.token_bytes; ++i) h.token[i] = p[kHelloBytes + i];
   *out = h;
   return true;
+}
+
+bool hello_token_matches(const Hello& h, const uint8_t* token, size_t token_bytes) {
+  // Every byte of the longest token is compared, whatever differs first.
+  uint32_t diff = static_cast<uint32_t>(h.token_bytes ^ token_bytes);
+  for (size_t i = 0; i < kMaxTokenBytes; ++i) {
+    const uint8_t a = i < h.token_bytes ? h.token[i] : 0, b = i < token_bytes ? token[i] : 0;
+    diff |= static_cast<uint32_t>(a ^ b);
+  }
+  return diff == 0 && token_bytes <= kMaxTokenBytes;
+}
+
+size_t write_resume_part(uint32_t model_tag, const uint32_t* ids, uint32_t count, uint32_t* at, uint32_t* previous,
+                         uint8_t* out, size_t capacity) {
+  if (capacity < kResumeHeaderBytes + 5) return 0;
+  out[1] = out[2] = out[3] = 0;
+  store_u32le(out + 4, model_tag);
+  store_u32le(out + 8, count);
+  size_t n = kResumeHeaderBytes;
+  while (*at < count && n + 5 <= capacity) {
+    uint32_t gap = ids[*at] - *previous;  // wraps from 0xFFFFFFFF: the first id's difference is id + 1
+    *previous = ids[(*at)++];
+    while (gap >= 0x80) {
+      out[n++] = static_cast<uint8_t>(gap | 0x80);
+      gap >>= 7;
+    }
+    out[n++] = static_cast<uint8_t>(gap);
+  }
+  out[0] = *at == count ? 1 : 0;
+  return n;
+}
+
+bool parse_resume_part(const uint8_t* p, size_t size, ResumePart* out) {
+  if (size < kResumeHeaderBytes || (p[0] & ~1u) != 0 || p[1] != 0 || p[2] != 0 || p[3] != 0) return false;
+  out->last = p[0] & 1;
+  out->model_tag = load_u32le(p + 4);
+  out->total = load_u32le(p + 8);
+  out->ids = p + kResumeHeaderBytes;
+  out->ids_bytes = size - kResumeHeaderBytes;
+  return true;
+}
+
+ResumeId next_resume_id(const uint8_t** at, const uint8_t* end, uint32_t* previous, uint32_t* id) {
+  if (*at >= end) return ResumeId::kEnd;
+  uint64_t gap = 0;
+  for (int shift = 0;; shift += 7) {
+    if (*at >= end || shift > 28) return ResumeId::kMalformed;
+    const uint8_t b = *(*at)++;
+    gap |= uint64_t{b & 0x7Fu} << shift;
+    if (!(b & 0x80)) break;
+  }
+  const int64_t before = *previous == 0xFFFFFFFFu ? -1 : int64_t{*previous};
+  const int64_t next = before + static_cast<int64_t>(gap);
+  if (gap == 0) return ResumeId::kRepeated;
+  if (next > 0xFFFFFFFE) return ResumeId::kMalformed;
+  *previous = static_cast<uint32_t>(next);
+  *id = *previous;
+  return ResumeId::kId;
 }
 
 size_t write_camera_update(const CameraUpdate& c, uint8_t out[kCameraUpdateBytes]) {

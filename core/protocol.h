@@ -24,7 +24,11 @@
 
 namespace stipple {
 
-inline constexpr uint16_t kProtocolVersion = 2;  // 2: node entries carry their original point count
+// 2: node entries carry their original point count. 3: a hello may carry a
+// token and announce a resume (the nodes a reconnecting client still holds);
+// a version 3 server serves version 2 clients as before.
+inline constexpr uint16_t kProtocolVersion = 3;
+inline constexpr uint16_t kOldestProtocolVersion = 2;
 inline constexpr size_t kFrameHeaderBytes = 8;
 inline constexpr size_t kFrameTrailerBytes = 4;
 // The largest payload: a startup message with the default client's largest
@@ -42,12 +46,14 @@ enum class MessageType : uint8_t {
   kClose = 0x04,      // either direction: a reason code
   kAck = 0x05,        // serial lines: every server frame before this sequence arrived whole
   kResend = 0x06,     // serial lines: resend from this sequence on (it, or one after it, was lost)
+  kResume = 0x07,     // (3) after a hello announcing it: the nodes the client still holds, in parts
   // Server -> client.
   kStartup = 0x81,    // the startup message (.spg header and class tables) for the attributes asked
   kNodes = 0x82,      // nodes entering the client's cut: count, then (id, record) each
   kDrop = 0x83,       // nodes leaving it: count, then ids
   kUpdateEnd = 0x84,  // the update for a camera is complete: the camera's sequence, the cut's size
   kError = 0x85,      // a fault the server saw in the client's stream: code and frame sequence
+  kResumed = 0x86,    // (3) the resume was taken: no startup; updates send what the client lacks
 };
 
 bool message_type_known(uint8_t type);
@@ -115,17 +121,55 @@ class FrameReader {
 // ---- Messages: fixed layouts, each with a writer (payload bytes) and a parser.
 
 inline constexpr uint8_t kWantNormals = 1, kWantColor = 2;
+// (3) In the attributes: resume frames follow the hello; the startup waits
+// for them.
+inline constexpr uint8_t kResuming = 0x80;
+inline constexpr size_t kMaxTokenBytes = 64;
 
 struct Hello {
   uint16_t version = kProtocolVersion;
   uint16_t width = 240, height = 320;
   uint8_t pixel_format = 0;     // 0 RGB565, 1 RGB888
-  uint8_t attributes = kWantNormals | kWantColor;  // what the client will use
+  uint8_t attributes = kWantNormals | kWantColor;  // what the client will use (and kResuming)
   uint32_t cache_capacity = 30000;                 // nodes the client can hold
+  // (3) A pre-shared token, after the fields above (a server started with
+  // --token refuses a hello without its token).
+  uint8_t token_bytes = 0;
+  uint8_t token[kMaxTokenBytes] = {};
 };
-inline constexpr size_t kHelloBytes = 12;
-size_t write_hello(const Hello& h, uint8_t out[kHelloBytes]);
+inline constexpr size_t kHelloBytes = 12;  // without a token
+inline constexpr size_t kHelloMaxBytes = kHelloBytes + kMaxTokenBytes;
+size_t write_hello(const Hello& h, uint8_t out[kHelloMaxBytes]);  // kHelloBytes + token_bytes
 [[nodiscard]] bool parse_hello(const uint8_t* payload, size_t size, Hello* out);
+// Whether a hello's token equals `token` (token_bytes long), in time that
+// does not depend on where they differ.
+bool hello_token_matches(const Hello& h, const uint8_t* token, size_t token_bytes);
+
+// kResume (3): one part of the list of nodes a reconnecting client holds —
+// flags (u8: bit 0, the last part), three zero bytes, the model tag (u32:
+// the CRC-32 of the startup payload the client holds, which must be the
+// one this server would send it), the total count (u32, the same in every
+// part), then ids ascending across the parts, each as the LEB128 of its
+// difference from the one before (the first from -1): a difference of 0
+// names a node twice. Parts stay under kResumePartBytes, so a server's
+// small client-frame buffer takes them.
+inline constexpr size_t kResumeHeaderBytes = 12;
+inline constexpr size_t kResumePartBytes = 4000;
+struct ResumePart {
+  bool last = false;
+  uint32_t model_tag = 0, total = 0;
+  const uint8_t* ids = nullptr;  // the LEB128 differences
+  size_t ids_bytes = 0;
+};
+// Writes the next part for ids[*at ..] (ascending; *previous: the id before
+// them, 0xFFFFFFFF at first) into out[0 .. capacity); advances *at and
+// *previous; returns the payload's length (0: capacity below a header and one id).
+size_t write_resume_part(uint32_t model_tag, const uint32_t* ids, uint32_t count, uint32_t* at, uint32_t* previous,
+                         uint8_t* out, size_t capacity);
+[[nodiscard]] bool parse_resume_part(const uint8_t* payload, size_t size, ResumePart* out);
+// The next id of a part's list.
+enum class ResumeId : uint8_t { kId, kEnd, kMalformed, kRepeated };
+ResumeId next_resume_id(const uint8_t** at, const uint8_t* end, uint32_t* previous, uint32_t* id);
 
 struct CameraUpdate {
   uint32_t sequence = 0;  // the client's camera number, echoed in kUpdateEnd
@@ -147,7 +191,17 @@ inline constexpr size_t kUpdateEndBytes = 8;
 size_t write_update_end(const UpdateEnd& u, uint8_t out[kUpdateEndBytes]);
 [[nodiscard]] bool parse_update_end(const uint8_t* payload, size_t size, UpdateEnd* out);
 
-enum class CloseReason : uint8_t { kNormal = 0, kBadFrame, kBadHello, kUnsupported, kServerFull, kShutdown, kTimeout };
+enum class CloseReason : uint8_t {
+  kNormal = 0,
+  kBadFrame,
+  kBadHello,
+  kUnsupported,
+  kServerFull,
+  kShutdown,
+  kTimeout,
+  kBadToken,   // (3) the server needs a token this hello lacks or gets wrong
+  kBadResume,  // (3) a resume the server cannot take (malformed, ids out of range, too many, repeated)
+};
 const char* close_reason_text(CloseReason r);
 
 // kClose and kError: a reason and, for kError, the frame status and the

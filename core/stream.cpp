@@ -92,19 +92,42 @@ bool StreamSender::send(MessageType type, const uint8_t* payload, size_t size, F
 }
 
 bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
-  if (view_ == nullptr || hello.version != kProtocolVersion) return false;
-  reduced_ = reduced_header(view_->header, hello.attributes);
+  if (view_ == nullptr || hello.version < kOldestProtocolVersion || hello.version > kProtocolVersion) return false;
+  const uint8_t attributes = static_cast<uint8_t>(hello.attributes & ~kResuming);
+  reduced_ = reduced_header(view_->header, attributes);
   reduced_record_bytes_ = static_cast<size_t>(reduced_.layout.record_bytes());
   same_layout_ = true;
   for (int f = 0; f < kFieldCount; ++f) same_layout_ = same_layout_ && reduced_.layout.bits[f] == view_->header.layout.bits[f];
   capacity_ = hello.cache_capacity;
   cut_.reset();  // a fresh client: its cut starts empty, so the first update sends it all
   uint8_t* payload = scratch_->payload;
-  const size_t n = write_reduced_startup(*view_, hello.attributes, payload, kMaxPayload);
+  const size_t n = write_reduced_startup(*view_, attributes, payload, kMaxPayload);
   if (n == 0) return false;
   started_ = true;
   sequence_ = 0;  // a new stream (a serial client says hello again to resynchronise)
   return send(MessageType::kStartup, payload, n, sink, context);
+}
+
+uint32_t StreamSender::model_tag(uint8_t attributes) const {
+  if (view_ == nullptr || scratch_ == nullptr) return 0;
+  const size_t n = write_reduced_startup(*view_, static_cast<uint8_t>(attributes & ~kResuming), scratch_->payload, kMaxPayload);
+  return n == 0 ? 0 : crc32(scratch_->payload, n);
+}
+
+bool StreamSender::resume(const Hello& hello, const NodeId* held, uint32_t count, FrameSink sink, void* context) {
+  if (view_ == nullptr || scratch_ == nullptr || hello.version < 3) return false;
+  const uint8_t attributes = static_cast<uint8_t>(hello.attributes & ~kResuming);
+  reduced_ = reduced_header(view_->header, attributes);
+  reduced_record_bytes_ = static_cast<size_t>(reduced_.layout.record_bytes());
+  same_layout_ = true;
+  for (int f = 0; f < kFieldCount; ++f) same_layout_ = same_layout_ && reduced_.layout.bits[f] == view_->header.layout.bits[f];
+  capacity_ = hello.cache_capacity;
+  if (!cut_.adopt_sent(held, count)) return false;
+  started_ = true;
+  sequence_ = 0;
+  uint8_t payload[4];
+  store_u32le(payload, count);
+  return send(MessageType::kResumed, payload, 4, sink, context);
 }
 
 bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context) {
@@ -171,7 +194,7 @@ void StreamReceiver::init(NodeCache* cache, uint8_t* reader_storage, size_t byte
   cache_status_ = CacheStatus::kOk;
   fault_ = Fault{};
   has_update_end_ = false;
-  bytes_ = 0;
+  bytes_ = nodes_ = 0;  // startup_crc_ stays: it is the cache's, which init keeps
   frames_ = 0;
 }
 
@@ -185,6 +208,7 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
     case MessageType::kStartup: {
       const CacheStatus s = cache_->load_startup(f.payload, f.payload_bytes);
       if (s != CacheStatus::kOk) return refused(s);
+      startup_crc_ = crc32(f.payload, f.payload_bytes);
       has_update_end_ = false;
       return ReceiveStatus::kOk;
     }
@@ -197,6 +221,7 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
         const CacheStatus s = cache_->put(b.id(i), b.record(i), b.record_bytes, b.points(i));
         if (s != CacheStatus::kOk) return refused(s);
       }
+      nodes_ += b.count;
       return ReceiveStatus::kOk;
     }
     case MessageType::kDrop: {
@@ -217,6 +242,10 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
       return ReceiveStatus::kOk;
     }
     case MessageType::kKeepAlive: return ReceiveStatus::kOk;
+    case MessageType::kResumed:  // the cache keeps what it holds; updates bring the rest
+      if (!cache_->ready() || f.payload_bytes != 4) return ReceiveStatus::kBadMessage;
+      has_update_end_ = false;
+      return ReceiveStatus::kOk;
     case MessageType::kClose:
     case MessageType::kError: {
       if (!parse_fault(f.payload, f.payload_bytes, &fault_)) return ReceiveStatus::kBadMessage;

@@ -75,6 +75,15 @@ class StreamSender {
   // cut outgrew its storage (cut_status() is then kStorageTooSmall and
   // nothing was sent: grow the scratch or the state, and update again).
   [[nodiscard]] bool update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context);
+  // The tag a resuming client names its model by: the CRC-32 of the startup
+  // payload a client asking for `attributes` receives (0 when none).
+  uint32_t model_tag(uint8_t attributes) const;
+  // A resumed stream (protocol 3): no startup; the client holds `held`
+  // (ascending ids) from an earlier stream of this model, so the first
+  // update sends only what it lacks. Sends kResumed. False when the hello
+  // cannot be served or `held` is not a valid sent set for this state
+  // (relocate first: it must hold `count` ids).
+  [[nodiscard]] bool resume(const Hello& hello, const NodeId* held, uint32_t count, FrameSink sink, void* context);
   // Ends the stream: the cut is forgotten and its state storage let go (the
   // caller may free it); start() begins a new one.
   void end() {
@@ -131,6 +140,10 @@ class StreamReceiver {
   const Fault& fault() const { return fault_; }
   uint64_t bytes_received() const { return bytes_; }
   uint32_t frames() const { return frames_; }
+  uint64_t nodes_received() const { return nodes_; }  // node entries in node batches
+  // The CRC-32 of the last startup payload taken (what a resume names the
+  // model by), 0 before any.
+  uint32_t startup_crc() const { return startup_crc_; }
   // The sequence the next frame must carry.
   uint16_t expected_sequence() const { return reader_.expected_sequence(); }
 
@@ -145,8 +158,9 @@ class StreamReceiver {
   Fault fault_{};
   UpdateEnd last_update_{};
   bool has_update_end_ = false;
-  uint64_t bytes_ = 0;
+  uint64_t bytes_ = 0, nodes_ = 0;
   uint32_t frames_ = 0;
+  uint32_t startup_crc_ = 0;
 };
 
 }  // namespace stipple

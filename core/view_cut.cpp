@@ -215,6 +215,18 @@ bool ViewCut::relocate(void* state, size_t state_bytes) {
   return true;
 }
 
+bool ViewCut::adopt_sent(const NodeId* ids, uint32_t count) {
+  reset();
+  if (count > state_capacity_) return false;
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t id = index_of(ids[i]);
+    if (id >= node_count_ || (i > 0 && id <= index_of(ids[i - 1]))) return false;
+    sent_[i] = ids[i];
+  }
+  sent_count_ = count;
+  return true;
+}
+
 uint8_t ViewCut::points(NodeId id) const { return bounds_[index_of(id)].points; }
 
 bool ViewCut::is_sent(NodeId id) const {

@@ -156,6 +156,11 @@ class ViewCut {
 
   // Forgets the sent set (the next update reports every sent node as entered).
   void reset();
+  // Takes `ids` (ascending, each below the node count) as the sent set a
+  // client already holds (a resumed stream): the next update reports the
+  // change from them. False, and the cut reset, when they are not ascending
+  // or in range, or more than the state holds.
+  [[nodiscard]] bool adopt_sent(const NodeId* ids, uint32_t count);
 
   // Re-derives the cut for `camera`; entered() and left() are the change of
   // the sent set since the previous update (everything, the first time).

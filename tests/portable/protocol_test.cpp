@@ -142,8 +142,15 @@ TEST(Protocol, MessagesParseOnlyInRange) {
   EXPECT_EQ(back.attributes, kWantNormals);
   EXPECT_EQ(back.cache_capacity, 12345u);
   EXPECT_FALSE(parse_hello(buf, kHelloBytes - 1, &back));
-  buf[7] = 0x80;  // an attribute this version does not know
+  buf[7] = 0x40;  // an attribute this version does not know
   EXPECT_FALSE(parse_hello(buf, kHelloBytes, &back));
+  buf[7] = kResuming;  // version 3's; version 2 knows neither it nor a token
+  EXPECT_TRUE(parse_hello(buf, kHelloBytes, &back));
+  buf[0] = 2;
+  EXPECT_FALSE(parse_hello(buf, kHelloBytes, &back));
+  buf[7] = kWantNormals;
+  EXPECT_TRUE(parse_hello(buf, kHelloBytes, &back));
+  EXPECT_FALSE(parse_hello(buf, kHelloBytes + 4, &back));  // a token after a version 2 hello
 
   CameraUpdate c;
   c.sequence = 9;
@@ -256,4 +263,72 @@ TEST(Cobs, DeframerResynchronisesAfterNoise) {
 }
 
 }  // namespace
+// Protocol 3's hello token: carried after the fixed fields, compared whole.
+TEST(Protocol, HelloTokenIsCarriedAndComparedWhole) {
+  Hello h;
+  const char token[] = "correct horse battery staple";
+  h.token_bytes = sizeof token - 1;
+  std::memcpy(h.token, token, h.token_bytes);
+  uint8_t buf[kHelloMaxBytes];
+  const size_t n = write_hello(h, buf);
+  ASSERT_EQ(n, kHelloBytes + h.token_bytes);
+  Hello back;
+  ASSERT_TRUE(parse_hello(buf, n, &back));
+  const auto* t = reinterpret_cast<const uint8_t*>(token);
+  EXPECT_TRUE(hello_token_matches(back, t, sizeof token - 1));
+  EXPECT_FALSE(hello_token_matches(back, t, sizeof token - 2));  // a prefix
+  uint8_t wrong[sizeof token];
+  std::memcpy(wrong, token, sizeof token);
+  wrong[20] ^= 1;
+  EXPECT_FALSE(hello_token_matches(back, wrong, sizeof token - 1));
+  Hello none;
+  EXPECT_FALSE(hello_token_matches(none, t, sizeof token - 1));
+  EXPECT_TRUE(hello_token_matches(none, t, 0));
+  EXPECT_FALSE(parse_hello(buf, kHelloMaxBytes + 1, &back));
+}
+
+// Protocol 3's resume: ids ascending across parts of at most
+// kResumePartBytes, each a LEB128 difference; a difference of 0 (a node
+// named twice) and a cut-off LEB128 are told apart.
+TEST(Protocol, ResumePartsCarryAscendingIdsAndRefuseRepeats) {
+  std::vector<uint32_t> ids;
+  for (uint32_t i = 0; i < 5000; ++i) ids.push_back(i * 37 + (i % 3) * 1000000);
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  uint32_t at = 0, previous = 0xFFFFFFFFu, read_previous = 0xFFFFFFFFu;
+  std::vector<uint32_t> back;
+  int parts = 0;
+  for (bool last = false; !last; ++parts) {
+    uint8_t part[kResumePartBytes];
+    const size_t n = write_resume_part(0xC0FFEE, ids.data(), static_cast<uint32_t>(ids.size()), &at, &previous, part, sizeof part);
+    ASSERT_GT(n, kResumeHeaderBytes);
+    ResumePart p;
+    ASSERT_TRUE(parse_resume_part(part, n, &p));
+    EXPECT_EQ(p.model_tag, 0xC0FFEEu);
+    EXPECT_EQ(p.total, ids.size());
+    last = p.last;
+    const uint8_t* cursor = p.ids;
+    uint32_t id = 0;
+    for (ResumeId r; (r = next_resume_id(&cursor, p.ids + p.ids_bytes, &read_previous, &id)) != ResumeId::kEnd;) {
+      ASSERT_EQ(r, ResumeId::kId);
+      back.push_back(id);
+    }
+  }
+  EXPECT_EQ(back, ids);
+  EXPECT_GT(parts, 1);
+  const uint8_t twice[] = {5, 0}, cut_off[] = {5, 0x80};
+  uint32_t prev = 0xFFFFFFFFu, id = 0;
+  const uint8_t* c = twice;
+  EXPECT_EQ(next_resume_id(&c, twice + 2, &prev, &id), ResumeId::kId);
+  EXPECT_EQ(id, 4u);
+  EXPECT_EQ(next_resume_id(&c, twice + 2, &prev, &id), ResumeId::kRepeated);
+  prev = 0xFFFFFFFFu;
+  c = cut_off;
+  EXPECT_EQ(next_resume_id(&c, cut_off + 2, &prev, &id), ResumeId::kId);
+  EXPECT_EQ(next_resume_id(&c, cut_off + 2, &prev, &id), ResumeId::kMalformed);
+  const uint8_t bad_flags[kResumeHeaderBytes] = {2};
+  ResumePart p;
+  EXPECT_FALSE(parse_resume_part(bad_flags, sizeof bad_flags, &p));
+}
+
 }  // namespace stipple

@@ -58,6 +58,7 @@ int cmd_levels(int argc, char** argv);
 int cmd_render(int argc, char** argv);
 int cmd_cut(int argc, char** argv);
 int cmd_serve(int argc, char** argv);
+int cmd_load(int argc, char** argv);
 int cmd_ppn_table(int argc, char** argv);
 int cmd_truth(int argc, char** argv);
 int cmd_trade(int argc, char** argv);

@@ -31,6 +31,7 @@ const Command kCommands[] = {
     {"render", "draw a .spg with the fixed-point handheld client -> .png", stipple::cmd_render},
     {"cut", "the view-dependent cut along an orbit: nodes, culling, bytes of change", stipple::cmd_cut},
     {"serve", "serve a model's view-dependent cuts to clients over TCP", stipple::cmd_serve},
+    {"load", "many orbiting viewers against a server: cameras answered, latency", stipple::cmd_load},
     {"ppn-table", "measure the points-per-node table with the client's rasterizer", stipple::cmd_ppn_table},
     {"rd", "rate against distortion across encoder settings, level by level: CSV and plot", stipple::cmd_rd},
     {"trade", "sweep the client's knobs: frame time and error against the reference, CSV and plot", stipple::cmd_trade},

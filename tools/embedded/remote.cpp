@@ -235,8 +235,8 @@ bool RemoteModel::ask_again(std::string& error) {
   ++resyncs_;
   uint8_t payload[kCameraUpdateBytes];
   if (receiver_.expected_sequence() == 0) {  // not even the startup came: the hello may be lost
-    write_hello(hello_, payload);
-    return send(MessageType::kHello, payload, kHelloBytes, error);
+    uint8_t hello[kHelloMaxBytes];
+    return send(MessageType::kHello, hello, write_hello(hello_, hello), error);
   }
   write_sequence(receiver_.expected_sequence(), payload);
   if (!send(MessageType::kResend, payload, kSequenceBytes, error)) return false;
@@ -254,14 +254,36 @@ bool RemoteModel::reconnect(std::string& error) {
   ++reconnects_;
   // A new stream: the frame reader from sequence 0, the cache from the new
   // startup; the hello, then the view we were waiting for.
+  const uint32_t tag = receiver_.startup_crc();
   receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
   deframer_.init(cobs_storage_.data(), cobs_storage_.size());
   gap_ = false;
   unacknowledged_ = 0;
   sequence_ = 0;
+  // Over a socket, a client holding nodes says which (protocol 3): a server
+  // of the same model sends only what it lacks (a server of another model
+  // starts over with a startup, which clears the cache).
+  const NodeCache& cache = client_.cache();
+  const bool resume = !options_.serial && tag != 0 && cache.ready() && cache.count() > 0;
+  Hello hello = hello_;
+  if (resume) hello.attributes = static_cast<uint8_t>(hello.attributes | kResuming);
+  uint8_t hello_bytes[kHelloMaxBytes];
+  if (!send(MessageType::kHello, hello_bytes, write_hello(hello, hello_bytes), error)) return false;
+  if (resume) {
+    std::vector<uint32_t>& held = held_;
+    held.clear();
+    for (uint32_t slot = 0; slot < cache.count(); ++slot) held.push_back(index_of(cache.id_at(slot)));
+    std::sort(held.begin(), held.end());
+    uint32_t at = 0, previous = 0xFFFFFFFFu;
+    std::vector<uint8_t> part(kResumePartBytes);
+    do {
+      const size_t n = write_resume_part(tag, held.data(), static_cast<uint32_t>(held.size()), &at, &previous, part.data(),
+                                         part.size());
+      if (!send(MessageType::kResume, part.data(), n, error)) return false;
+    } while (at < held.size());
+    ++resumes_;
+  }
   uint8_t payload[kCameraUpdateBytes];
-  write_hello(hello_, payload);
-  if (!send(MessageType::kHello, payload, kHelloBytes, error)) return false;
   if (has_camera_) {
     write_camera_update(last_camera_, payload);
     if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
@@ -333,9 +355,12 @@ bool RemoteModel::connect(Transport& transport, const ClientConfig& config, cons
   cobs_out_.assign(cobs_bound(kMaxFrameBytes), 0);
   deframer_.init(cobs_storage_.data(), cobs_storage_.size());
   hello_ = hello_for(config);
-  uint8_t payload[kHelloBytes];
-  write_hello(hello_, payload);
-  if (!send(MessageType::kHello, payload, kHelloBytes, error)) return false;
+  if (options.token.size() > kMaxTokenBytes)
+    return error = "the token is longer than " + std::to_string(kMaxTokenBytes) + " bytes", false;
+  hello_.token_bytes = static_cast<uint8_t>(options.token.size());
+  for (size_t i = 0; i < options.token.size(); ++i) hello_.token[i] = static_cast<uint8_t>(options.token[i]);
+  uint8_t payload[kHelloMaxBytes];
+  if (!send(MessageType::kHello, payload, write_hello(hello_, payload), error)) return false;
   return wait(Awaited::kStartup, error);
 }
 

@@ -42,6 +42,7 @@ class RemoteModel {
     // give up. The client then says hello again and asks for its view.
     Transport* (*reconnect)(void* context, int* fd) = nullptr;
     void* reconnect_context = nullptr;
+    std::string token;  // a pre-shared token for a server started with --token (at most 64 bytes)
   };
   // `config` sizes the client (screen, cache capacity, attributes asked for).
   // A startup that needs more than it allows — angle fields wider than its
@@ -71,6 +72,8 @@ class RemoteModel {
   uint32_t resyncs() const { return resyncs_; }  // serial: resends asked for, and hellos repeated
   uint64_t damaged() const { return damaged_; }  // serial: frames that arrived damaged
   uint32_t reconnects() const { return reconnects_; }
+  uint32_t resumes() const { return resumes_; }  // reconnects that named the nodes held (protocol 3)
+  uint64_t nodes_received() const { return receiver_.nodes_received(); }  // since the last (re)connect
 
  private:
   bool send(MessageType type, const uint8_t* payload, size_t size, std::string& error);
@@ -105,7 +108,8 @@ class RemoteModel {
   CobsDeframer deframer_;
   bool gap_ = false, has_camera_ = false, in_reconnect_ = false;
   uint32_t unacknowledged_ = 0;
-  uint32_t resyncs_ = 0, reconnects_ = 0;
+  uint32_t resyncs_ = 0, reconnects_ = 0, resumes_ = 0;
+  std::vector<uint32_t> held_;  // the ids a resume names
   uint64_t damaged_ = 0;
   Hello hello_;
   CameraUpdate last_camera_;

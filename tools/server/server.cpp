@@ -53,6 +53,11 @@ struct Server::Client {
   Hello hello_message;
   uint32_t resends = 0;
   uint32_t session_from = 0;  // report.updates when the session began
+  // A resume being received (protocol 3): the hello that announced it, the
+  // parts' model tag and count, and the ids so far.
+  bool resuming = false;
+  uint32_t resume_tag = 0, resume_total = 0, resume_previous = 0xFFFFFFFFu;
+  std::vector<uint32_t> held;
   bool hello = false, pending = false, closing = false, gone = false;
   bool serial = false;
   std::vector<uint8_t> cobs_storage;
@@ -75,7 +80,7 @@ struct Server::Client {
   }
   bool idle() const { return out_at == out.size(); }
   uint64_t state_bytes() const {
-    return sizeof(Client) + state.capacity() * 4 + out.capacity() + retained.capacity() * sizeof(Retained) +
+    return sizeof(Client) + state.capacity() * 4 + held.capacity() * 4 + out.capacity() + retained.capacity() * sizeof(Retained) +
            cobs_storage.capacity() + name.capacity() + address.capacity();
   }
 
@@ -259,20 +264,99 @@ void Server::handle(Client& c, const Frame& f) {
       Hello h;
       if (!parse_hello(f.payload, f.payload_bytes, &h))
         return close_client(c, CloseReason::kBadHello, FrameStatus::kBadPayload, f.sequence, "a malformed hello");
-      if (h.version != kProtocolVersion)
+      if (h.version < kOldestProtocolVersion || h.version > kProtocolVersion)
         return close_client(c, CloseReason::kUnsupported, FrameStatus::kOk, f.sequence,
                             "protocol version " + std::to_string(h.version));
+      if (!options_.token.empty() &&
+          !hello_token_matches(h, reinterpret_cast<const uint8_t*>(options_.token.data()), options_.token.size()))
+        return close_client(c, CloseReason::kBadToken, FrameStatus::kOk, f.sequence,
+                            h.token_bytes == 0 ? "a hello without the token this server needs"
+                                               : "a hello with a wrong token");
+      c.hello_message = h;
+      char line[160];
+      std::snprintf(line, sizeof line, "%s: hello %ux%u %s, attributes%s%s, cache %u nodes%s", c.name.c_str(), h.width,
+                    h.height, h.pixel_format ? "rgb888" : "rgb565", h.attributes & kWantNormals ? " normals" : "",
+                    h.attributes & kWantColor ? " colour" : "", h.cache_capacity,
+                    h.attributes & kResuming ? ", resuming" : "");
+      log(line);
+      if (h.attributes & kResuming) {  // the startup waits for the resume's parts
+        c.resuming = true;
+        c.resume_total = 0;
+        c.resume_previous = 0xFFFFFFFFu;
+        std::vector<uint32_t>().swap(c.held);
+        return;
+      }
       if (!c.sender.start(h, Client::sink, &c))
         return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "the hello could not be served");
       c.hello = c.report.hello = true;
-      c.hello_message = h;
       ++c.report.sessions;
       c.session_from = c.report.updates;
-      char line[160];
-      std::snprintf(line, sizeof line, "%s: hello %ux%u %s, attributes%s%s, cache %u nodes", c.name.c_str(), h.width,
-                    h.height, h.pixel_format ? "rgb888" : "rgb565", h.attributes & kWantNormals ? " normals" : "",
-                    h.attributes & kWantColor ? " colour" : "", h.cache_capacity);
-      log(line);
+      return;
+    }
+    case MessageType::kResume: {
+      ResumePart part;
+      const auto refuse = [&](const std::string& why) {
+        std::vector<uint32_t>().swap(c.held);
+        c.resuming = false;
+        close_client(c, CloseReason::kBadResume, FrameStatus::kBadPayload, f.sequence, why);
+      };
+      if (!c.resuming) return refuse("a resume without a hello announcing it");
+      if (!parse_resume_part(f.payload, f.payload_bytes, &part)) return refuse("a malformed resume");
+      const uint32_t nodes = model_->view().header.node_count;
+      const uint32_t most = std::min(nodes, c.hello_message.cache_capacity);
+      if (c.held.empty() && c.resume_previous == 0xFFFFFFFFu) {  // the first part
+        if (part.total > most)
+          return refuse("a resume of " + std::to_string(part.total) + " nodes, more than the " + std::to_string(most) +
+                        (most == nodes ? " the model has" : " its cache holds"));
+        c.resume_tag = part.model_tag;
+        c.resume_total = part.total;
+        c.held.reserve(part.total);
+      } else if (part.model_tag != c.resume_tag || part.total != c.resume_total) {
+        return refuse("a resume whose parts disagree on the model or the count");
+      }
+      const uint8_t* at = part.ids;
+      const uint8_t* end = part.ids + part.ids_bytes;
+      for (uint32_t id = 0;;) {
+        const ResumeId r = next_resume_id(&at, end, &c.resume_previous, &id);
+        if (r == ResumeId::kEnd) break;
+        if (r == ResumeId::kMalformed) return refuse("a malformed resume (a cut-off or oversized id)");
+        if (r == ResumeId::kRepeated)
+          return refuse("a resume naming node " + std::to_string(c.resume_previous) + " twice");
+        if (id >= nodes)
+          return refuse("a resume naming node " + std::to_string(id) + ", beyond the model's " + std::to_string(nodes) +
+                        " nodes");
+        if (c.held.size() >= c.resume_total)
+          return refuse("a resume of more nodes than the " + std::to_string(c.resume_total) + " it announced");
+        c.held.push_back(id);
+      }
+      if (!part.last) return;
+      if (c.held.size() != c.resume_total)
+        return refuse("a resume of " + std::to_string(c.held.size()) + " nodes where it announced " +
+                      std::to_string(c.resume_total));
+      c.resuming = false;
+      Hello h = c.hello_message;
+      const uint32_t tag = c.sender.model_tag(h.attributes);
+      bool resumed = false;
+      if (tag == c.resume_tag && tag != 0) {
+        // It holds this model's nodes: it is sent only what it lacks.
+        if (c.state.size() < c.held.size()) {
+          std::vector<uint32_t> state(c.held.size() + c.held.size() / 2 + 64);
+          if (c.sender.relocate(state.data(), state.size() * 4)) c.state = std::move(state);
+        }
+        resumed = c.sender.resume(h, reinterpret_cast<const NodeId*>(c.held.data()),
+                                  static_cast<uint32_t>(c.held.size()), Client::sink, &c);
+      }
+      if (resumed) {
+        log(c.name + ": resumed with the " + std::to_string(c.held.size()) + " nodes it holds");
+      } else {
+        log(c.name + ": a resume for another model (or startup): starting over");
+        if (!c.sender.start(h, Client::sink, &c))
+          return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "the hello could not be served");
+      }
+      std::vector<uint32_t>().swap(c.held);
+      c.hello = c.report.hello = true;
+      ++c.report.sessions;
+      c.session_from = c.report.updates;
       return;
     }
     case MessageType::kCamera: {

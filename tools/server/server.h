@@ -78,6 +78,7 @@ struct ServerOptions {
   int hello_timeout_ms = 10000;    // a connection that sends no valid hello this long is closed (0: never)
   int idle_timeout_ms = 120000;    // a client that sends nothing this long is closed (0: never)
   bool serial_once = false;        // a serial line is let go when its first session ends (serve --once)
+  std::string token;               // non-empty: every hello must carry it (protocol 3, serve --token FILE)
   bool cull = true;  // frustum and back-face culling in every client's cut
   ConeRule cones;    // the normal cones back faces are culled by (when the Server makes the model)
   std::function<void(const std::string&)> log;  // one line per event; none: quiet
