@@ -317,7 +317,7 @@ size_t write_fault(const Fault& f, uint8_t out[kFaultBytes]) {
 }
 
 bool parse_fault(const uint8_t* p, size_t size, Fault* out) {
-  if (size != kFaultBytes || p[0] > static_cast<uint8_t>(CloseReason::kTimeout) ||
+  if (size != kFaultBytes || p[0] > static_cast<uint8_t>(CloseReason::kBadResume) ||
       p[1] > static_cast<uint8_t>(FrameStatus::kTruncated))
     return false;
   out->reason = static_cast<CloseReason>(p[0]);

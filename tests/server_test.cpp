@@ -966,5 +966,131 @@ TEST_F(ServerWithLog, ASerialLineServesSessionAfterSession) {
   }
 }
 
+// A client whose server went away resumes on another server of the same
+// model: it names the nodes it holds, gets no startup, and for the camera it
+// had is sent nothing at all; the next camera brings only the change.
+TEST(Server, AResumedClientIsNotSentWhatItHolds) {
+  const Local local;
+  auto first = std::make_unique<TcpServer>();
+  TcpServer second;
+  struct Links {
+    uint16_t port;
+    std::unique_ptr<TcpTransport> now;
+  } links{second.server.port(), std::make_unique<TcpTransport>(connect_to(first->server.port()), "first")};
+  RemoteModel remote;
+  RemoteModel::Options ro;
+  ro.fd = links.now->fd();
+  ro.reconnect = [](void* context, int* fd) -> Transport* {
+    auto* l = static_cast<Links*>(context);
+    std::string error;
+    if (!tcp_connect("127.0.0.1", l->port, 2000, fd, error)) return nullptr;
+    l->now = std::make_unique<TcpTransport>(*fd, "second");
+    return l->now.get();
+  };
+  ro.reconnect_context = &links;
+  std::string error;
+  ASSERT_TRUE(remote.connect(*links.now, device(), ro, error)) << error;
+  ASSERT_EQ(remote_frame(remote, local, 30, error), local.render(30).frame) << error;
+  const uint64_t cold = remote.nodes_received();
+  EXPECT_GT(cold, 1000u);
+  first.reset();  // gone without a goodbye
+  ASSERT_EQ(remote_frame(remote, local, 30, error), local.render(30).frame) << error;
+  EXPECT_EQ(remote.reconnects(), 1u);
+  EXPECT_EQ(remote.resumes(), 1u);
+  EXPECT_EQ(remote.nodes_received(), 0u) << "the same view again: nothing is missing";
+  EXPECT_TRUE(second.logged("resumed with the " + std::to_string(local.render(30).cut.size()) + " nodes it holds"));
+  ASSERT_EQ(remote_frame(remote, local, 40, error), local.render(40).frame) << error;
+  EXPECT_GT(remote.nodes_received(), 0u);
+  EXPECT_LT(remote.nodes_received(), cold / 4) << "a step on: only the change";
+}
+
+// Hostile resumes are refused, each with its reason: ids beyond the model,
+// more than the count announced or the cache holds, a node named twice, a
+// resume without a hello announcing it.
+TEST(Server, HostileResumesAreRefusedWithTheirReason) {
+  TcpServer s;
+  const uint32_t nodes = Local().view.header.node_count;
+  struct Case {
+    std::vector<uint8_t> ids;  // LEB128 differences
+    uint32_t total;
+    bool announce;
+    std::string why;
+  };
+  const auto leb = [](std::initializer_list<uint32_t> gaps) {
+    std::vector<uint8_t> out;
+    for (uint32_t g : gaps) {
+      for (; g >= 0x80; g >>= 7) out.push_back(static_cast<uint8_t>(g | 0x80));
+      out.push_back(static_cast<uint8_t>(g));
+    }
+    return out;
+  };
+  const std::vector<Case> cases = {
+      {leb({1, nodes + 5}), 2, true, "a resume naming node " + std::to_string(nodes + 5) + ", beyond the model's " + std::to_string(nodes) + " nodes"},
+      {leb({1, 1, 1}), 2, true, "a resume of more nodes than the 2 it announced"},
+      {leb({1}), 7000, true, "a resume of 7000 nodes, more than the " + std::to_string(nodes) + " the model has"},
+      {leb({3, 0}), 2, true, "a resume naming node 2 twice"},
+      {leb({1}), 1, false, "a resume without a hello announcing it"},
+  };
+  for (const Case& k : cases) {
+    TcpTransport t(connect_to(s.server.port()), "hostile");
+    Hello h = hello_for(device());
+    if (k.announce) h.attributes = static_cast<uint8_t>(h.attributes | kResuming);
+    uint8_t payload[kResumePartBytes], frame[kResumePartBytes + 16];
+    size_t n = write_hello(h, payload), moved = 0;
+    size_t f = write_frame(MessageType::kHello, 0, payload, n, frame, sizeof frame);
+    ASSERT_EQ(t.write(frame, f, &moved), TransportStatus::kOk);
+    payload[0] = 1, payload[1] = payload[2] = payload[3] = 0;
+    store_u32le(payload + 4, 1234);
+    store_u32le(payload + 8, k.total);
+    std::copy(k.ids.begin(), k.ids.end(), payload + kResumeHeaderBytes);
+    f = write_frame(MessageType::kResume, 1, payload, kResumeHeaderBytes + k.ids.size(), frame, sizeof frame);
+    ASSERT_EQ(t.write(frame, f, &moved), TransportStatus::kOk);
+    bool seen = false;
+    for (int i = 0; i < 200 && !(seen = s.logged("closing: " + k.why)); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    EXPECT_TRUE(seen) << k.why;
+    // The last frame before the socket closes: a close with the reason.
+    std::vector<uint8_t> in;
+    uint8_t buf[4096];
+    for (int i = 0; i < 200; ++i) {
+      size_t got = 0;
+      const TransportStatus r = t.read(buf, sizeof buf, &got);
+      in.insert(in.end(), buf, buf + got);
+      if (r == TransportStatus::kClosed || r == TransportStatus::kError) break;
+      if (got == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    size_t last = 0;
+    for (size_t at = 0; at + kFrameHeaderBytes <= in.size(); at += kFrameHeaderBytes + load_u32le(in.data() + at + 4) + kFrameTrailerBytes)
+      last = at;
+    ASSERT_GE(in.size(), last + kFrameHeaderBytes + kFaultBytes) << k.why;
+    EXPECT_EQ(in[last], static_cast<uint8_t>(MessageType::kClose)) << k.why;
+    EXPECT_EQ(in[last + kFrameHeaderBytes], static_cast<uint8_t>(CloseReason::kBadResume)) << k.why;
+  }
+}
+
+// A server with a token serves only hellos that carry it.
+TEST(Server, ATokenIsRequiredWhenTheServerHasOne) {
+  const Local local;
+  TcpServer s(64, 0, [](ServerOptions& o) { o.token = "s3cret-t0ken"; });
+  for (const std::string& token : {std::string(), std::string("s3cret-t0keN"), std::string("s3cret-t0ken")}) {
+    TcpTransport t(connect_to(s.server.port()), "client");
+    RemoteModel remote;
+    RemoteModel::Options ro;
+    ro.fd = t.fd();
+    ro.timeout_ms = 3000;
+    ro.token = token;
+    std::string error;
+    const bool ok = remote.connect(t, device(), ro, error);
+    if (token == "s3cret-t0ken") {
+      ASSERT_TRUE(ok) << error;
+      EXPECT_EQ(remote_frame(remote, local, 30, error), local.render(30).frame) << error;
+    } else {
+      EXPECT_FALSE(ok);
+      EXPECT_EQ(error, "the server closed the stream: the server needs the right token (--token)");
+    }
+  }
+  EXPECT_TRUE(s.logged("closing: a hello without the token this server needs"));
+  EXPECT_TRUE(s.logged("closing: a hello with a wrong token"));
+}
+
 }  // namespace
 }  // namespace stipple

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <filesystem>
 
+#include "core/protocol.h"
+#include "platform/file_io.h"
 #include "tools/scan/ply_io.h"
 
 namespace stipple::cli {
@@ -96,6 +98,20 @@ bool check_output_name(const std::string& output, const char* extension, const c
              false;
   warn({output + ": written as " + format + (ext.empty() ? std::string(" (the name has no extension)") : ", whatever '" + ext + "' says") +
         "; " + extension + " is its usual name"});
+  return true;
+}
+
+bool read_token(const std::string& path, std::string& token, std::string& error) {
+  std::vector<uint8_t> bytes;
+  if (!read_file(path, bytes, error)) return false;
+  token.assign(bytes.begin(), bytes.end());
+  while (!token.empty() && (token.back() == '\n' || token.back() == '\r' || token.back() == ' ' || token.back() == '\t'))
+    token.pop_back();
+  if (token.empty()) return error = path + ": the token file is empty", false;
+  if (token.size() > kMaxTokenBytes)
+    return error = path + ": a token of " + std::to_string(token.size()) + " bytes; at most " +
+                   std::to_string(kMaxTokenBytes) + " are carried",
+           false;
   return true;
 }
 

@@ -29,6 +29,10 @@ class Json {
 };
 
 int fail(const std::string& message);  // prints "stipple: <message>" to stderr, returns 1
+// A pre-shared token from a file (serve --token, render --token): its
+// bytes less trailing white space, 1..64 of them; false with a message
+// naming the file.
+bool read_token(const std::string& path, std::string& token, std::string& error);
 
 // True (and `error` says so) when writing `output` would replace `input`:
 // the same path or the same file by another name.

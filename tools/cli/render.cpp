@@ -35,6 +35,7 @@ const char kRenderHelpOutput[] =
     "streaming:\n"
     "  --connect HOST:PORT    receive the model from `stipple serve` instead of a file\n"
     "                         (MODEL.spg is then not given)\n"
+    "  --token FILE           the pre-shared token of a server started with --token\n"
     "  --serial DEV           the same over a serial line (`stipple serve --serial`);\n"
     "  --baud N               its rate (default 115200)\n"
     "  --path orbit:N         N cameras about the up axis from the view's yaw; -o names\n"
@@ -183,6 +184,8 @@ int cmd_render(int argc, char** argv) {
   if (args.value("--frames", frames_text) && (!cli::parse_uint(frames_text, 100000, frames) || frames < 1))
     return cli::fail("render: --frames: expected 1..100000, got '" + frames_text + "'");
   if (!parse_render_options(args, o, error)) return cli::fail("render: " + error);
+  std::string token_file;
+  if (args.value("--token", token_file) && !cli::read_token(token_file, o.token, error)) return cli::fail("render: --token " + error);
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("render: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("render: " + args.unknown_option_message());

@@ -25,7 +25,7 @@ namespace {
 const char kServeHelp[] =
     "usage: stipple serve MODEL.spg [--tcp [ADDR:]PORT] [--serial DEV [--baud N]] [--workers N]\n"
     "                     [--max-clients N] [--per-address N] [--hello-timeout S] [--idle-timeout S]\n"
-    "                     [--no-cull] [--leaf-cone G] [--once]\n"
+    "                     [--token FILE] [--no-cull] [--leaf-cone G] [--once]\n"
     "\n"
     "Serves the model to clients (`stipple render --connect`, `stipple-handheld\n"
     "--connect`, the emulator): each gets the startup for the attributes it asks\n"
@@ -54,6 +54,11 @@ const char kServeHelp[] =
     "  --hello-timeout S   close a connection that sends no hello in S seconds (10)\n"
     "  --idle-timeout S    close a client that sends nothing for S seconds (120; the\n"
     "                      clients send a keep-alive every 30; 0: never)\n"
+    "  --token FILE        serve only clients whose hello carries this token (the\n"
+    "                      file's bytes less trailing white space, at most 64;\n"
+    "                      `stipple render --connect ... --token FILE`); it is not\n"
+    "                      encryption: beyond a trusted network put TLS in front\n"
+    "                      (docs/serving.md)\n"
     "  --no-cull           send nodes outside the view and facing away too\n"
     "  --leaf-cone G       a leaf's normal cone in sigma_n1 (default 1; docs/cut.md)\n"
     "  --once              exit once the last client has gone (a serial line: when\n"
@@ -119,6 +124,9 @@ int cmd_serve(int argc, char** argv) {
   unsigned long long workers = cores;
   if (args.value("--workers", v) && (!cli::parse_uint(v, 256, workers) || workers == 0))
     return cli::fail("serve: --workers: expected 1..256, got '" + v + "'");
+  std::string token_file;
+  if (args.value("--token", token_file) && !cli::read_token(token_file, o.token, error))
+    return cli::fail("serve: --token " + error);
   o.cull = !args.flag("--no-cull");
   if (args.value("--leaf-cone", v) && !parse_leaf_cone(v, o.cones.leaf_gamma_q8, error)) return cli::fail("serve: " + error);
   std::string serial;

@@ -20,6 +20,7 @@ struct RenderOptions {
   bool sized = false;  // --size was given
   bool tile_nodes_given = false;  // --tile-nodes was given (the handheld's default is kHandheldTileNodes: its arena)
   bool lanes_given = false;       // --lanes was given (the handheld's default is its device's: baseline)
+  std::string token;              // --connect: a pre-shared token for a server started with --token
 };
 
 // The help lines of these options (view, cut, client), for a program's usage.

@@ -111,6 +111,7 @@ bool ViewerSource::open(const std::string& model, const std::string& connect, co
     const size_t slash = model.find_last_of('/');
     name_ = slash == std::string::npos ? model : model.substr(slash + 1);
   }
+  ro.token = o.token;
   if (!model_.connect(*link, o.config, ro, error)) return error = (model.empty() ? name_ : model) + ": " + error, false;
   return true;
 }
