@@ -6,8 +6,15 @@
 // a corrupt frame is told why and closed, and the others carry on.
 #include <gtest/gtest.h>
 
+#include <netinet/in.h>
+#include <signal.h>
+#include <spawn.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fstream>
 
 #include <algorithm>
 #include <atomic>
@@ -1090,6 +1097,144 @@ TEST(Server, ATokenIsRequiredWhenTheServerHasOne) {
   }
   EXPECT_TRUE(s.logged("closing: a hello without the token this server needs"));
   EXPECT_TRUE(s.logged("closing: a hello with a wrong token"));
+}
+
+// HAProxy (Debian's haproxy) in TCP mode on loopback, in front of servers.
+struct Haproxy {
+  static std::string path() {
+    for (const char* p : {"/usr/sbin/haproxy", "/usr/bin/haproxy", "/usr/local/sbin/haproxy"})
+      if (access(p, X_OK) == 0) return p;
+    return "";
+  }
+  static uint16_t free_port() {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t len = sizeof a;
+    bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+    getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+    close(fd);
+    return ntohs(a.sin_port);
+  }
+  explicit Haproxy(const std::vector<uint16_t>& backends) : port(free_port()) {
+    config = testing::TempDir() + "stipple_haproxy_" + std::to_string(getpid()) + ".cfg";
+    std::ofstream c(config);
+    c << "global\n  maxconn 4096\n"
+         "defaults\n  mode tcp\n  timeout connect 2s\n  timeout client 60s\n  timeout server 60s\n"
+         "  retries 3\n  option redispatch\n"
+         "frontend viewers\n  bind 127.0.0.1:" << port << "\n  default_backend servers\n"
+         "backend servers\n  balance roundrobin\n";
+    for (size_t k = 0; k < backends.size(); ++k)
+      c << "  server s" << k << " 127.0.0.1:" << backends[k] << " check inter 100ms fall 1 rise 1\n";
+    c.close();
+    const std::string exe = path();
+    char* argv[] = {const_cast<char*>(exe.c_str()), const_cast<char*>("-db"), const_cast<char*>("-q"),
+                    const_cast<char*>("-f"), const_cast<char*>(config.c_str()), nullptr};
+    if (posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv, environ) != 0) pid = -1;
+    for (int i = 0; i < 100; ++i) {  // until it listens
+      int fd = -1;
+      std::string error;
+      if (tcp_connect("127.0.0.1", port, 200, &fd, error)) {
+        close(fd);
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+  ~Haproxy() {
+    if (pid > 0) {
+      kill(pid, SIGTERM);
+      waitpid(pid, nullptr, 0);
+    }
+    std::remove(config.c_str());
+  }
+  uint16_t port;
+  pid_t pid = -1;
+  std::string config;
+};
+
+// Many hosts: 200 viewers through HAProxy, balanced over two servers, each
+// converging to the local render; one server is killed mid-stream and its
+// viewers reconnect through the balancer to the other, which resumes them:
+// the same image, and not one node sent again.
+TEST(Balancer, TwoHundredViewersThroughHaproxyAndAServerKilled) {
+  if (Haproxy::path().empty()) GTEST_SKIP() << "haproxy is not installed (Debian: apt-get install haproxy)";
+  rlimit r{};
+  getrlimit(RLIMIT_NOFILE, &r);
+  if (r.rlim_cur < 2048 && r.rlim_max >= 2048) {
+    r.rlim_cur = 2048;
+    setrlimit(RLIMIT_NOFILE, &r);
+  }
+  const Local local;
+  const double yaws[4] = {30, 120, 210, 300};
+  std::vector<std::vector<uint8_t>> expected;
+  for (double yaw : yaws) expected.push_back(local.render(yaw).frame);
+  auto a = std::make_unique<TcpServer>(400);
+  TcpServer b(400);
+  Haproxy balancer({a->server.port(), b.server.port()});
+  ASSERT_GT(balancer.pid, 0);
+  struct Viewer {
+    uint16_t port = 0;
+    std::unique_ptr<TcpTransport> link;
+    RemoteModel remote;
+    bool good = false;
+  };
+  constexpr int kViewers = 200, kThreads = 8;
+  std::vector<Viewer> viewers(kViewers);
+  const auto reconnect = [](void* context, int* fd) -> Transport* {
+    auto* v = static_cast<Viewer*>(context);
+    for (int attempt = 0; attempt < 50; ++attempt) {
+      std::string error;
+      if (tcp_connect("127.0.0.1", v->port, 1000, fd, error)) {
+        v->link = std::make_unique<TcpTransport>(*fd, "balancer");
+        return v->link.get();
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return nullptr;
+  };
+  const auto phase = [&](bool first) {
+    std::vector<std::thread> threads;
+    for (int t = 0; t < kThreads; ++t)
+      threads.emplace_back([&, t] {
+        for (int k = t; k < kViewers; k += kThreads) {
+          Viewer& v = viewers[k];
+          std::string error;
+          if (first) {
+            v.port = balancer.port;
+            int fd = -1;
+            if (!tcp_connect("127.0.0.1", v.port, 2000, &fd, error)) continue;
+            v.link = std::make_unique<TcpTransport>(fd, "balancer");
+            RemoteModel::Options ro;
+            ro.fd = fd;
+            ro.reconnect = reconnect;
+            ro.reconnect_context = &v;
+            if (!v.remote.connect(*v.link, device(), ro, error)) continue;
+          }
+          v.good = remote_frame(v.remote, local, yaws[k % 4], error) == expected[k % 4];
+          if (!v.good) std::fprintf(stderr, "viewer %d (reconnects %u): %s\n", k, v.remote.reconnects(), error.c_str());
+        }
+      });
+    for (std::thread& t : threads) t.join();
+  };
+  phase(true);
+  const size_t on_a = a->report().size(), on_b = b.report().size();
+  EXPECT_EQ(std::count_if(viewers.begin(), viewers.end(), [](const Viewer& v) { return v.good; }), kViewers);
+  EXPECT_GT(on_a, kViewers / 4u);  // round robin
+  EXPECT_GT(on_b, kViewers / 4u);
+  a.reset();  // killed: its sockets close, nothing said
+  phase(false);
+  EXPECT_EQ(std::count_if(viewers.begin(), viewers.end(), [](const Viewer& v) { return v.good; }), kViewers);
+  size_t moved = 0, resumed_clean = 0;
+  for (const Viewer& v : viewers) {
+    moved += v.remote.reconnects();
+    resumed_clean += v.good && v.remote.resumes() == 1 && v.remote.nodes_received() == 0;
+  }
+  std::printf("balancer: %zu and %zu viewers on the two servers; %zu reconnected after the first was killed, %zu of them "
+              "resumed with nothing sent again\n", on_a, on_b, moved, resumed_clean);
+  EXPECT_GE(moved, on_a);
+  EXPECT_EQ(resumed_clean, moved);
 }
 
 }  // namespace

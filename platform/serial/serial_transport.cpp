@@ -32,7 +32,7 @@ SerialTransport::~SerialTransport() { close(); }
 bool SerialTransport::open(const std::string& device, uint32_t baud, std::string& error) {
   speed_t speed;
   if (!speed_of(baud, &speed)) return error = device + ": " + std::to_string(baud) + " baud is not a termios rate", false;
-  const int fd = ::open(device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
+  const int fd = ::open(device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) return error = device + ": " + std::strerror(errno), false;
   termios t{};
   if (tcgetattr(fd, &t) != 0) {

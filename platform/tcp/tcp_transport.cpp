@@ -120,7 +120,7 @@ bool tcp_listen(const std::string& host, uint16_t port, int* out, uint16_t* boun
   } else {
     return error = host + ": not a numeric IPv4 or IPv6 address", false;
   }
-  const int fd = socket(addr.ss_family, SOCK_STREAM, 0);
+  const int fd = socket(addr.ss_family, SOCK_STREAM | SOCK_CLOEXEC, 0);
   if (fd < 0) return error = std::string("socket: ") + std::strerror(errno), false;
   const int one = 1;
   setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
@@ -148,7 +148,7 @@ void tcp_close(int fd) { ::close(fd); }
 int tcp_accept(int listen_fd, std::string* peer, int* error) {
   sockaddr_storage addr{};
   socklen_t len = sizeof addr;
-  const int fd = accept(listen_fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  const int fd = accept4(listen_fd, reinterpret_cast<sockaddr*>(&addr), &len, SOCK_CLOEXEC);
   if (fd >= 0 && peer) *peer = describe(addr);
   if (error) *error = fd >= 0 ? 0 : errno == EWOULDBLOCK ? EAGAIN : errno;
   return fd;
@@ -162,7 +162,7 @@ bool tcp_connect(const std::string& host, uint16_t port, int timeout_ms, int* ou
     return error = host + ": " + gai_strerror(r), false;
   error = host + ":" + service + ": no address";
   for (addrinfo* a = found; a != nullptr; a = a->ai_next) {
-    const int fd = socket(a->ai_family, a->ai_socktype, a->ai_protocol);
+    const int fd = socket(a->ai_family, a->ai_socktype | SOCK_CLOEXEC, a->ai_protocol);
     if (fd < 0) continue;
     set_nonblocking(fd);
     int rc = connect(fd, a->ai_addr, a->ai_addrlen);

@@ -37,6 +37,8 @@ bool parse_host_port(const std::string& text, const std::string& default_host, s
 
 // A listening socket on host:port (numeric IPv4 or IPv6; port 0 picks a free
 // one, see *bound_port). Non-blocking, SO_REUSEADDR.
+// Every socket is close-on-exec: a program that starts another (a test
+// starting a load balancer) does not hand it its listeners and links.
 // `share_port`: SO_REUSEPORT, so several listeners (a server's workers)
 // bind the same port and the kernel spreads connections across them.
 bool tcp_listen(const std::string& host, uint16_t port, int* fd, uint16_t* bound_port, std::string& error,
