@@ -68,7 +68,54 @@ Cone widened(const int16_t axis[3], const int16_t n[3], Cone c) {
   return sin_sum >= kQ14One ? Cone{kNoCone, 0} : Cone{static_cast<int32_t>(sin_sum), static_cast<int32_t>(cos_sum)};
 }
 
+// The state's sent set: ids ascending, each the LEB128 of its distance from
+// the one before less one (the first: the id itself), so the ids of a
+// screen's cut — dense in id order — take one or two bytes each.
+size_t leb_bytes(uint32_t v) { return v < 0x80u ? 1 : v < 0x4000u ? 2 : v < 0x200000u ? 3 : v < 0x10000000u ? 4 : 5; }
+
+size_t encode_ids(const NodeId* ids, uint32_t n, uint8_t* out) {
+  size_t at = 0;
+  uint32_t next = 0;  // the smallest id the next may be
+  for (uint32_t i = 0; i < n; ++i) {
+    uint32_t d = index_of(ids[i]) - next;
+    next = index_of(ids[i]) + 1;
+    while (d >= 0x80u) {
+      out[at++] = static_cast<uint8_t>(d | 0x80u);
+      d >>= 7;
+    }
+    out[at++] = static_cast<uint8_t>(d);
+  }
+  return at;
+}
+
+// Reads the ids back in order (the state is ours: well formed).
+struct IdReader {
+  const uint8_t* at;
+  uint32_t next = 0;
+  uint32_t read() {
+    uint32_t d = 0;
+    for (int shift = 0;; shift += 7) {
+      const uint8_t b = *at++;
+      d |= uint32_t{b & 0x7Fu} << shift;
+      if (!(b & 0x80u)) break;
+    }
+    const uint32_t id = next + d;
+    next = id + 1;
+    return id;
+  }
+};
+
 }  // namespace
+
+size_t sent_set_bytes(const NodeId* ids, uint32_t count) {
+  size_t n = 0;
+  uint32_t next = 0;
+  for (uint32_t i = 0; i < count; ++i) {
+    n += leb_bytes(index_of(ids[i]) - next);
+    next = index_of(ids[i]) + 1;
+  }
+  return n;
+}
 
 size_t CutBounds::bytes(const SpgHeader& header) { return align8(sizeof(ViewCut::Bound) * header.node_count); }
 // The scratch of capacity C: entered, left (4 C each); cut, fresh sent set,
@@ -83,7 +130,7 @@ void CutScratch::init(void* at, size_t size) {
   capacity = c > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(c);
 }
 
-size_t view_cut_state_bytes(uint32_t sent) { return align8(4 * size_t{sent}); }
+size_t view_cut_state_bytes(uint32_t sent) { return align8(5 * size_t{sent}); }
 size_t view_cut_bytes(const SpgHeader& header) {
   return CutBounds::bytes(header) + view_cut_state_bytes(header.node_count) + CutScratch::bytes(header.node_count);
 }
@@ -191,9 +238,10 @@ CutStatus ViewCut::init(const CutBounds& shared, void* state, size_t state_bytes
   node_count_ = shared.node_count_;
   normals_ = shared.normals_;
   scratch_ = scratch;
-  sent_ = static_cast<NodeId*>(state);
-  const size_t c = state_bytes / 4;
-  state_capacity_ = c > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(c);
+  state_ = static_cast<uint8_t*>(state);
+  state_bytes_ = state == nullptr ? 0 : state_bytes;
+  state_used_ = needed_state_ = 0;
+  sent_ = nullptr;
   cut_ = entered_ = left_ = nullptr;
   sent_size_ = nullptr;
   heap_ = nullptr;
@@ -206,23 +254,26 @@ CutStatus ViewCut::init(const CutBounds& shared, void* state, size_t state_bytes
 }
 
 bool ViewCut::relocate(void* state, size_t state_bytes) {
-  if (state_bytes / 4 < sent_count_) return false;
-  NodeId* to = static_cast<NodeId*>(state);
-  std::copy(sent_, sent_ + sent_count_, to);
-  sent_ = to;
-  const size_t c = state_bytes / 4;
-  state_capacity_ = c > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(c);
+  if (state_bytes < state_used_ || (state == nullptr && state_used_ > 0)) return false;
+  uint8_t* to = static_cast<uint8_t*>(state);
+  if (state_used_ > 0) std::copy(state_, state_ + state_used_, to);
+  state_ = to;
+  state_bytes_ = state == nullptr ? 0 : state_bytes;
   return true;
 }
 
 bool ViewCut::adopt_sent(const NodeId* ids, uint32_t count) {
   reset();
-  if (count > state_capacity_) return false;
   for (uint32_t i = 0; i < count; ++i) {
     const uint32_t id = index_of(ids[i]);
     if (id >= node_count_ || (i > 0 && id <= index_of(ids[i - 1]))) return false;
-    sent_[i] = ids[i];
   }
+  const size_t bytes = sent_set_bytes(ids, count);
+  if (bytes > state_bytes_) {
+    needed_state_ = bytes;
+    return false;
+  }
+  state_used_ = encode_ids(ids, count, state_);
   sent_count_ = count;
   return true;
 }
@@ -230,18 +281,18 @@ bool ViewCut::adopt_sent(const NodeId* ids, uint32_t count) {
 uint8_t ViewCut::points(NodeId id) const { return bounds_[index_of(id)].points; }
 
 bool ViewCut::is_sent(NodeId id) const {
-  uint32_t lo = 0, hi = sent_count_;
-  const uint32_t want = index_of(id);
-  while (lo < hi) {
-    const uint32_t mid = lo + (hi - lo) / 2;
-    if (index_of(sent_[mid]) < want) lo = mid + 1;
-    else hi = mid;
+  IdReader r{state_};
+  for (uint32_t i = 0; i < sent_count_; ++i) {
+    const uint32_t got = r.read();
+    if (got >= index_of(id)) return got == index_of(id);
   }
-  return lo < sent_count_ && index_of(sent_[lo]) == want;
+  return false;
 }
 
 void ViewCut::reset() {
   cut_count_ = sent_count_ = entered_count_ = left_count_ = visited_ = needed_ = 0;
+  state_used_ = needed_state_ = 0;
+  sent_ = nullptr;
   front_count_ = 0;
   front_valid_ = budget_bound_ = has_previous_ = false;
 }
@@ -435,6 +486,36 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
   return status;
 }
 
+// The change against the state's sent set (both in id order: one merge),
+// then `fresh` (ascending, in the scratch) becomes the state.
+CutStatus ViewCut::keep_sent(const NodeId* fresh, uint32_t fresh_count) {
+  const size_t bytes = sent_set_bytes(fresh, fresh_count);
+  if (bytes > state_bytes_) {
+    needed_state_ = bytes;
+    entered_count_ = left_count_ = 0;
+    return CutStatus::kStorageTooSmall;
+  }
+  entered_count_ = left_count_ = 0;
+  IdReader old{state_};
+  uint32_t i = 0, j = 0, b = j < sent_count_ ? old.read() : 0xFFFFFFFFu;
+  while (i < fresh_count || j < sent_count_) {
+    const uint32_t a = i < fresh_count ? index_of(fresh[i]) : 0xFFFFFFFFu;
+    if (a == b) {
+      ++i;
+      b = ++j < sent_count_ ? old.read() : 0xFFFFFFFFu;
+    } else if (a < b) {
+      entered_[entered_count_++] = fresh[i++];
+    } else {
+      left_[left_count_++] = NodeId{b};
+      b = ++j < sent_count_ ? old.read() : 0xFFFFFFFFu;
+    }
+  }
+  state_used_ = encode_ids(fresh, fresh_count, state_);
+  sent_count_ = fresh_count;
+  sent_ = fresh;
+  return CutStatus::kOk;
+}
+
 CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
   const uint32_t capacity = scratch_->capacity;
   NodeId* fresh = cut_ + capacity;
@@ -530,24 +611,8 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
       sent_size_[i] = static_cast<uint32_t>(heap_[i]);
     }
   }
-  if (fresh_count > state_capacity_) return too_large(fresh_count);
-
-  // The change: both sent sets are in id order, so one merge lists it.
-  entered_count_ = left_count_ = 0;
-  uint32_t i = 0, j = 0;
-  while (i < fresh_count || j < sent_count_) {
-    const uint32_t a = i < fresh_count ? index_of(fresh[i]) : 0xFFFFFFFFu;
-    const uint32_t b = j < sent_count_ ? index_of(sent_[j]) : 0xFFFFFFFFu;
-    if (a == b) {
-      ++i, ++j;
-    } else if (a < b) {
-      entered_[entered_count_++] = fresh[i++];
-    } else {
-      left_[left_count_++] = sent_[j++];
-    }
-  }
-  std::copy(fresh, fresh + fresh_count, sent_);
-  sent_count_ = fresh_count;
+  const CutStatus kept = keep_sent(fresh, fresh_count);
+  if (kept != CutStatus::kOk) return kept;
   cut_count_ = cut_count;
   evaluated_ = visited_;
   return CutStatus::kOk;
@@ -850,6 +915,7 @@ CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& pa
       } else {
         front_[w] = FrontNode{id, d.due, d.due, (d.visible ? kVisibleBit : 0) | 1};
         ++cut_delta;
+        if (d.visible && entered_count_ >= capacity) return false;
         if (d.visible) entered_[entered_count_++] = NodeId{id};
         g.min_due = std::min(g.min_due, d.due);
       }
@@ -864,28 +930,18 @@ CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& pa
     front_count_ = w;
     // The sent set: the visible cut nodes in id order, and the change
     // against the old one.
-    if (entered_count_ > state_capacity_) return refuse(entered_count_, 0);
     if (entered_count_ > params.max_nodes || front_count_ > 4 * uint64_t{params.max_nodes} + 9) {
       // The from-the-root cut is bounded by the budget here: that one.
       front_count_ = 0;
       last_incremental_ = false;
       return derive(const_cast<Frame&>(frame_in), params);
     }
-    NodeId* fresh = cut_;  // the stacks are done with
+    NodeId* fresh = cut_ + capacity;  // the stacks are done with
     const uint32_t fresh_count = entered_count_;
     std::copy(entered_, entered_ + fresh_count, fresh);
     std::sort(fresh, fresh + fresh_count, [](NodeId x, NodeId y) { return index_of(x) < index_of(y); });
-    entered_count_ = left_count_ = 0;
-    uint32_t i = 0, j = 0;
-    while (i < fresh_count || j < sent_count_) {
-      const uint32_t x = i < fresh_count ? index_of(fresh[i]) : 0xFFFFFFFFu;
-      const uint32_t y = j < sent_count_ ? index_of(sent_[j]) : 0xFFFFFFFFu;
-      if (x == y) ++i, ++j;
-      else if (x < y) entered_[entered_count_++] = fresh[i++];
-      else left_[left_count_++] = sent_[j++];
-    }
-    std::copy(fresh, fresh + fresh_count, sent_);
-    sent_count_ = fresh_count;
+    const CutStatus kept = keep_sent(fresh, fresh_count);
+    if (kept != CutStatus::kOk) return refuse(0, 0), kept;
     cut_count_ = static_cast<uint32_t>(cut_delta);
   } else {
     // One sweep: the old front moved to the end of its storage is read from
@@ -939,6 +995,7 @@ CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& pa
           if (gone.size & kVisibleBit) left_[left_count_++] = NodeId{gone.id};
         }
         ++cut_delta;
+        if (d.visible && entered_count_ >= capacity) return refuse(uint64_t{capacity} * 2, 0);
         if (d.visible) entered_[entered_count_++] = NodeId{e.id};
         front_[w++] = FrontNode{e.id, e.due, e.due, (d.visible ? kVisibleBit : 0) | 1};
         r += size;
@@ -962,6 +1019,7 @@ CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& pa
       }
       // Stays in the cut: seen now, or not.
       const bool was_visible = e.size & kVisibleBit;
+      if (d.visible && !was_visible && entered_count_ >= capacity) return refuse(uint64_t{capacity} * 2, 0);
       if (d.visible && !was_visible) entered_[entered_count_++] = NodeId{e.id};
       if (!d.visible && was_visible) left_[left_count_++] = NodeId{e.id};
       front_[w++] = FrontNode{e.id, e.due, e.due, (d.visible ? kVisibleBit : 0) | 1};
@@ -970,35 +1028,32 @@ CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& pa
     }
     front_count_ = w;
     const uint64_t sent_after = uint64_t{sent_count_} - left_count_ + entered_count_;
-    if (sent_after > state_capacity_) return refuse(sent_after, 0);
+    if (sent_after > capacity) return refuse(sent_after, 0);
     if (sent_after > params.max_nodes || front_count_ > 4 * uint64_t{params.max_nodes} + 9) {
       front_count_ = 0;
       last_incremental_ = false;
       return derive(const_cast<Frame&>(frame_in), params);
     }
-    // The sent set: the left out, the entered in (both in id order).
+    // The sent set: the old one (read from the state) less the left, with
+    // the entered, in id order; then kept (which lists the same change).
     const auto by_id = [](NodeId x, NodeId y) { return index_of(x) < index_of(y); };
     std::sort(entered_, entered_ + entered_count_, by_id);
     std::sort(left_, left_ + left_count_, by_id);
-    if (left_count_ > 0) {
-      uint32_t out = 0, l = 0;
-      for (uint32_t i = 0; i < sent_count_; ++i) {
-        if (l < left_count_ && index_of(sent_[i]) == index_of(left_[l])) {
-          ++l;
-          continue;
-        }
-        sent_[out++] = sent_[i];
+    NodeId* fresh = cut_ + capacity;
+    uint32_t fresh_count = 0, l = 0, k = 0;
+    IdReader old{state_};
+    for (uint32_t i = 0; i < sent_count_; ++i) {
+      const uint32_t id = old.read();
+      if (l < left_count_ && index_of(left_[l]) == id) {
+        ++l;
+        continue;
       }
-      sent_count_ = out;
+      while (k < entered_count_ && index_of(entered_[k]) < id) fresh[fresh_count++] = entered_[k++];
+      fresh[fresh_count++] = NodeId{id};
     }
-    if (entered_count_ > 0) {
-      uint32_t i = sent_count_, k = entered_count_, out = sent_count_ + entered_count_;
-      while (k > 0) {
-        if (i > 0 && index_of(sent_[i - 1]) > index_of(entered_[k - 1])) sent_[--out] = sent_[--i];
-        else sent_[--out] = entered_[--k];
-      }
-      sent_count_ += entered_count_;
-    }
+    while (k < entered_count_) fresh[fresh_count++] = entered_[k++];
+    const CutStatus kept = keep_sent(fresh, fresh_count);
+    if (kept != CutStatus::kOk) return refuse(0, 0), kept;
     cut_count_ = static_cast<uint32_t>(int64_t{cut_count_} + cut_delta);
   }
   cut_ = nullptr;

@@ -27,7 +27,8 @@
 // Storage is in three parts, so that a server's cost per client follows
 // what the client sees, never the model's size:
 //   CutBounds   per node, built once per model, shared read-only (36 B/node);
-//   the state   per cut: its sent set, 4 bytes a sent node — all that
+//   the state   per cut: its sent set, ids as LEB128 differences (1-2
+//               bytes a sent node for a screen's cut) — all that
 //               persists from one update to the next;
 //   CutScratch  what one update works in (the whole cut, the new sent set
 //               and sizes, the change, the queue: 32 bytes a cut node);
@@ -110,10 +111,13 @@ struct CutScratch {
   uint32_t capacity = 0;
 };
 
-// Storage a cut keeps between updates for up to `sent` sent nodes.
+// Storage a cut keeps between updates for up to `sent` sent nodes, at the
+// most (the ids are kept as LEB128 differences: one or two bytes each for a
+// screen's cut, five at worst); sent_set_bytes: what `ids` (ascending) take.
 size_t view_cut_state_bytes(uint32_t sent);
+size_t sent_set_bytes(const NodeId* ids, uint32_t count);
 // One block for a cut of any camera over a whole tree of `header.node_count`
-// nodes with its own bounds, state and scratch (72 bytes a node).
+// nodes with its own bounds, state and scratch (73 bytes a node).
 size_t view_cut_bytes(const SpgHeader& header);
 
 class ViewCut {
@@ -152,7 +156,8 @@ class ViewCut {
   // Moves the sent set into new state storage (larger, to follow a growing
   // cut); false, and nothing moved, when it does not hold the present set.
   [[nodiscard]] bool relocate(void* state, size_t state_bytes);
-  uint32_t state_capacity() const { return state_capacity_; }
+  size_t state_bytes() const { return state_bytes_; }  // the state storage's size
+  size_t state_used() const { return state_used_; }    // what the sent set takes of it
 
   // Forgets the sent set (the next update reports every sent node as entered).
   void reset();
@@ -175,6 +180,8 @@ class ViewCut {
   // saturated at 255; 0 when the view had no leaf counts. `id` below the
   // node count.
   uint8_t points(NodeId id) const;
+  // The sent set decoded, in the scratch: valid until the next update
+  // through it (null before the first update, and after adopt_sent).
   const NodeId* sent() const { return sent_; }
   const uint32_t* sent_size_q4() const { return sent_size_; }
   // Every node of the cut, culled ones included (update's order).
@@ -195,6 +202,7 @@ class ViewCut {
   // front's).
   uint32_t needed_capacity() const { return needed_; }
   uint32_t needed_front() const { return needed_front_; }
+  size_t needed_state_bytes() const { return needed_state_; }  // the state's, in bytes
 
   struct Bound;
   struct FrontNode;
@@ -205,6 +213,7 @@ class ViewCut {
   struct Due;
   Eval evaluate(const Frame& f, uint32_t node, bool inside) const;
   CutStatus derive(Frame& frame, const CutParams& params);  // from the root
+  CutStatus keep_sent(const NodeId* fresh, uint32_t fresh_count);
   Due evaluate_due(const Frame& f, uint32_t node) const;
   CutStatus update_incremental(const Frame& frame, const CutParams& params, bool rebuild);
   bool same_setting(const Camera& camera, const CutParams& params) const;
@@ -217,8 +226,9 @@ class ViewCut {
   const CutScratch* scratch_ = nullptr;
   uint32_t node_count_ = 0;
   bool normals_ = false;
-  NodeId* sent_ = nullptr;  // the state: the sent set of the last update, in id order
-  uint32_t state_capacity_ = 0;
+  uint8_t* state_ = nullptr;  // the state: the sent set of the last update (LEB128 differences)
+  size_t state_bytes_ = 0, state_used_ = 0, needed_state_ = 0;
+  const NodeId* sent_ = nullptr;  // the same, decoded, in the scratch
   // In the scratch, valid until the next update through it.
   NodeId* cut_ = nullptr;
   uint32_t* sent_size_ = nullptr;

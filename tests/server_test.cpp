@@ -874,7 +874,7 @@ TEST(Server, APerAddressLimitAndAnIdleTimeout) {
 
 // What a client holds follows its cut, not the model: the same view of a
 // sphere of 20,000 and of 400,000 points (17 times the nodes) costs at most
-// 64 bytes a sent node beside a fixed part (about 6 are spent).
+// 64 bytes a sent node beside a fixed part (a byte or two are spent).
 TEST(Server, ClientStateFollowsTheCutNotTheModel) {
   struct Measured {
     uint32_t nodes, sent;

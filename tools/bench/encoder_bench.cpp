@@ -506,7 +506,8 @@ BENCHMARK(BM_GlFrame)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTim
 #endif
 
 // The view-dependent cut's update along a 120-step orbit of the scan at
-// 240x320 (arg 0: culling off/on): the server's cost per camera update.
+// 240x320 (arg 0: culling off, 1: on, 2: on and incremental, docs/cut.md):
+// the server's cost per camera update.
 void BM_ViewCutUpdate(benchmark::State& state) {
   const SpgView view = parsed_scan();
   std::vector<uint8_t> storage(node_decoder_bytes(view.header));
@@ -515,6 +516,11 @@ void BM_ViewCutUpdate(benchmark::State& state) {
   std::vector<uint64_t> cut_storage(view_cut_bytes(view.header) / 8 + 1);
   ViewCut cut;
   if (cut.init(view, decoder, cut_storage.data(), cut_storage.size() * 8) != CutStatus::kOk) std::abort();
+  std::vector<uint64_t> front;
+  if (state.range(0) == 2) {
+    front.resize(ViewCut::front_bytes(view.header.node_count) / 8 + 1);
+    cut.use_front(front.data(), front.size() * 8);
+  }
   std::vector<Camera> cameras(120);
   for (size_t i = 0; i < cameras.size(); ++i) {
     ViewSpec s;
@@ -533,7 +539,7 @@ void BM_ViewCutUpdate(benchmark::State& state) {
   state.counters["ns_per_cut_node"] =
       benchmark::Counter(nodes, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
-BENCHMARK(BM_ViewCutUpdate)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ViewCutUpdate)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // Time to the first image and to the converged view over an emulated link
 // (platform/shaper, simulated clock: the figures are link time, not CPU

@@ -110,7 +110,8 @@ int run(int argc, char** argv) {
     }
   }
 
-  std::vector<uint8_t> file;
+  MappedFile mapped;
+  size_t file_bytes = 0;
   FixedRender frame;
   if (remote) {
     // The nodes come over the wire: the server cuts, this client draws.
@@ -153,11 +154,14 @@ int run(int argc, char** argv) {
     image_from_frame(frame.frame.data(), row, config.raster.width, config.raster.height, config.raster.format, frame.image);
     std::printf("%s: %llu bytes received\n", model.c_str(), static_cast<unsigned long long>(server.bytes_received()));
   } else {
-    if (!read_file(model, file, error)) return fail(error);
+    // Mapped, not read: the file's pages are the page cache's, taken as the
+    // cut needs them, not a copy on the heap.
+    if (!mapped.open(model, error)) return fail(error);
+    file_bytes = mapped.size();
     SpgView spg;
-    const SpgResult r = spg_parse(file.data(), file.size(), &spg);
-    if (!r.ok()) return fail(spg_error_message(model, r, file.data(), file.size()));
-    if (!render_fixed(spg, file.data(), config, o.rule, o.view, frame, error, static_cast<int>(frames),
+    const SpgResult r = spg_parse(mapped.data(), mapped.size(), &spg);
+    if (!r.ok()) return fail(spg_error_message(model, r, mapped.data(), mapped.size()));
+    if (!render_fixed(spg, mapped.data(), config, o.rule, o.view, frame, error, static_cast<int>(frames),
                       memory ? heap_in_use : nullptr))
       return fail(model + ": " + error);
   }
@@ -167,7 +171,7 @@ int run(int argc, char** argv) {
               frame.stats.points, frame.arena_bytes, 1e3 * t[t.size() / 2], static_cast<unsigned long>(frames));
   if (memory)
     std::printf("memory: client arena %zu bytes, frame %zu bytes, model file %zu bytes; heap in use while drawing %zu bytes\n",
-                frame.arena_bytes, frame.frame.size(), file.size(), frame.heap_bytes);
+                frame.arena_bytes, frame.frame.size(), file_bytes, frame.heap_bytes);
   if (crc) std::printf("crc32 %08x\n", crc32(frame.image.rgb.data(), frame.image.rgb.size()));
   // The frame goes to each display asked for: the null one writes it as PPM.
   const size_t stride = static_cast<size_t>(config.raster.width) * bytes_per_pixel(config.raster.format);

@@ -15,7 +15,7 @@
 namespace stipple {
 namespace {
 constexpr size_t kRetainedBytes = size_t{4} << 20;  // most unacknowledged bytes kept for a serial client
-constexpr size_t kQueueKept = size_t{64} << 10;      // an idle socket client's queue keeps at most this much memory
+constexpr size_t kQueueKept = size_t{16} << 10;      // an idle socket client's queue keeps at most this much memory
 constexpr int kReopenMs = 500;                       // a hung-up line is tried again this often
 constexpr int kAcceptPauseMs = 100;                  // accept failing (out of descriptors): the listener rests
 
@@ -34,7 +34,7 @@ struct Server::Client {
   int fd = -1;
   std::string name;
   std::string address;  // the peer's address, for the per-address limit (empty: not a socket)
-  std::vector<uint32_t> state;  // the cut's sent set: grows with the client's cut, never with the model
+  std::vector<uint8_t> state;  // the cut's sent set (LEB128 differences): grows with the client's cut, never with the model
   StreamSender sender;
   Reopen reopen;                // a serial line: how to open it again after a hang-up
   bool detached = false;        // a serial line that hung up, waiting for its device
@@ -80,7 +80,7 @@ struct Server::Client {
   }
   bool idle() const { return out_at == out.size(); }
   uint64_t state_bytes() const {
-    return sizeof(Client) + state.capacity() * 4 + held.capacity() * 4 + out.capacity() + retained.capacity() * sizeof(Retained) +
+    return sizeof(Client) + state.capacity() + held.capacity() * 4 + out.capacity() + retained.capacity() * sizeof(Retained) +
            cobs_storage.capacity() + name.capacity() + address.capacity();
   }
 
@@ -224,25 +224,27 @@ void Server::end_session(Client& c) {
   c.out_at = 0;
   c.retained.clear();
   c.sender.end();
-  std::vector<uint32_t>().swap(c.state);  // its memory too (assigning {} keeps the capacity)
+  std::vector<uint8_t>().swap(c.state);  // its memory too (assigning {} keeps the capacity)
   c.reader.reset();
 }
 
 bool Server::update(Client& c) {
-  for (int attempt = 0; attempt < 8; ++attempt) {
+  for (int attempt = 0; attempt < 24; ++attempt) {
     if (c.sender.update(c.camera, options_.cull, Client::sink, &c)) return true;
     if (c.sender.cut_status() != CutStatus::kStorageTooSmall) return false;
-    // The cut outgrew the work space or the client's sent set: both grow
-    // (by half again, so a growing cut costs few refusals), and it is made again.
+    // The cut outgrew the work space (shared: it doubles, at least to what
+    // the refused update reached) or the client's sent set (exactly what it
+    // needs and an eighth again), and it is made again.
     const uint64_t needed = c.sender.cut().needed_capacity();
-    const uint64_t grown = needed + needed / 2 + 64;
+    const uint64_t grown = std::max<uint64_t>(needed + needed / 8 + 256, 2 * uint64_t{scratch_.cut.capacity});
     if (needed > scratch_.cut.capacity) {
       scratch_storage_.assign(SenderScratch::bytes(static_cast<uint32_t>(std::min<uint64_t>(grown, 0x7FFFFFFF))) / 8 + 1, 0);
       scratch_.init(scratch_storage_.data(), scratch_storage_.size() * 8);
     }
-    if (needed > c.sender.cut().state_capacity()) {
-      std::vector<uint32_t> state(static_cast<size_t>(std::min<uint64_t>(grown, model_->view().header.node_count)));
-      if (!c.sender.relocate(state.data(), state.size() * 4)) return false;
+    const size_t state_needed = c.sender.cut().needed_state_bytes();
+    if (state_needed > c.state.size()) {
+      std::vector<uint8_t> state(state_needed + state_needed / 8 + 256);
+      if (!c.sender.relocate(state.data(), state.size())) return false;
       c.state = std::move(state);
     }
   }
@@ -339,9 +341,10 @@ void Server::handle(Client& c, const Frame& f) {
       bool resumed = false;
       if (tag == c.resume_tag && tag != 0) {
         // It holds this model's nodes: it is sent only what it lacks.
-        if (c.state.size() < c.held.size()) {
-          std::vector<uint32_t> state(c.held.size() + c.held.size() / 2 + 64);
-          if (c.sender.relocate(state.data(), state.size() * 4)) c.state = std::move(state);
+        const size_t bytes = sent_set_bytes(reinterpret_cast<const NodeId*>(c.held.data()), static_cast<uint32_t>(c.held.size()));
+        if (c.state.size() < bytes) {
+          std::vector<uint8_t> state(bytes + bytes / 8 + 256);
+          if (c.sender.relocate(state.data(), state.size())) c.state = std::move(state);
         }
         resumed = c.sender.resume(h, reinterpret_cast<const NodeId*>(c.held.data()),
                                   static_cast<uint32_t>(c.held.size()), Client::sink, &c);

@@ -9,7 +9,7 @@
 // (`stipple serve --workers N`: one Server a thread, each with its own
 // listener on the same port). A Server is one thread and one event loop
 // (poll): nothing blocks on one client. What a client costs follows what it
-// sees, not the model: its cut's sent set (4 bytes a sent node) and a fixed
+// sees, not the model: its cut's sent set (1-2 bytes a sent node) and a fixed
 // part; the work space of an update is the Server's, shared by its clients.
 // Until its hello is valid a connection holds only the fixed part.
 //
