@@ -91,14 +91,19 @@ bool StreamSender::send(MessageType type, const uint8_t* payload, size_t size, F
   return true;
 }
 
-bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
-  if (view_ == nullptr || hello.version < kOldestProtocolVersion || hello.version > kProtocolVersion) return false;
+uint8_t StreamSender::adopt_hello(const Hello& hello) {
   const uint8_t attributes = static_cast<uint8_t>(hello.attributes & ~kResuming);
   reduced_ = reduced_header(view_->header, attributes);
   reduced_record_bytes_ = static_cast<size_t>(reduced_.layout.record_bytes());
   same_layout_ = true;
   for (int f = 0; f < kFieldCount; ++f) same_layout_ = same_layout_ && reduced_.layout.bits[f] == view_->header.layout.bits[f];
   capacity_ = hello.cache_capacity;
+  return attributes;
+}
+
+bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
+  if (view_ == nullptr || hello.version < kOldestProtocolVersion || hello.version > kProtocolVersion) return false;
+  const uint8_t attributes = adopt_hello(hello);
   cut_.reset();  // a fresh client: its cut starts empty, so the first update sends it all
   uint8_t* payload = scratch_->payload;
   const size_t n = write_reduced_startup(*view_, attributes, payload, kMaxPayload);
@@ -116,12 +121,7 @@ uint32_t StreamSender::model_tag(uint8_t attributes) const {
 
 bool StreamSender::resume(const Hello& hello, const NodeId* held, uint32_t count, FrameSink sink, void* context) {
   if (view_ == nullptr || scratch_ == nullptr || hello.version < 3) return false;
-  const uint8_t attributes = static_cast<uint8_t>(hello.attributes & ~kResuming);
-  reduced_ = reduced_header(view_->header, attributes);
-  reduced_record_bytes_ = static_cast<size_t>(reduced_.layout.record_bytes());
-  same_layout_ = true;
-  for (int f = 0; f < kFieldCount; ++f) same_layout_ = same_layout_ && reduced_.layout.bits[f] == view_->header.layout.bits[f];
-  capacity_ = hello.cache_capacity;
+  (void)adopt_hello(hello);
   if (!cut_.adopt_sent(held, count)) return false;
   started_ = true;
   sequence_ = 0;

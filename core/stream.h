@@ -100,6 +100,7 @@ class StreamSender {
   uint16_t next_sequence() const { return sequence_; }
 
  private:
+  uint8_t adopt_hello(const Hello& hello);  // the reduced layout and capacity; the attributes wanted
   const SpgView* view_ = nullptr;
   ViewCut cut_;
   SenderScratch own_scratch_;  // with the one-block init

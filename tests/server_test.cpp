@@ -96,6 +96,17 @@ struct Local {
   }
 };
 
+// A client's options for a server in the same thread: it steps while waiting.
+RemoteModel::Options stepping(Server& server) {
+  RemoteModel::Options ro;
+  ro.pump = [](void* s) {
+    static_cast<Server*>(s)->step(0);
+    return true;
+  };
+  ro.pump_context = &server;
+  return ro;
+}
+
 // A remote client's frame for the same view.
 std::vector<uint8_t> remote_frame(RemoteModel& remote, const Local& local, double yaw, std::string& error) {
   std::vector<uint32_t> storage(node_decoder_bytes(local.view.header) / 4 + 1);
@@ -137,12 +148,7 @@ TEST_F(ServerWithLog, LoopbackFramesEqualTheLocalRender) {
   LoopbackPipe pipe;
   server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
   RemoteModel remote;
-  RemoteModel::Options ro;
-  ro.pump = [](void* s) {
-    static_cast<Server*>(s)->step(0);
-    return true;
-  };
-  ro.pump_context = &server;
+  RemoteModel::Options ro = stepping(server);
   ASSERT_TRUE(remote.connect(pipe.client(), device(), ro, error)) << error;
   for (double yaw : {30.0, 60.0, 90.0, 200.0, 30.0}) {
     const std::vector<uint8_t> frame = remote_frame(remote, local, yaw, error);
@@ -891,12 +897,7 @@ TEST(Server, ClientStateFollowsTheCutNotTheModel) {
     LoopbackPipe pipe;
     server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
     RemoteModel remote;
-    RemoteModel::Options ro;
-    ro.pump = [](void* p) {
-      static_cast<Server*>(p)->step(0);
-      return true;
-    };
-    ro.pump_context = &server;
+    RemoteModel::Options ro = stepping(server);
     ClientConfig config = device();
     config.node_capacity = 200000;
     EXPECT_TRUE(remote.connect(pipe.client(), config, ro, error)) << error;
@@ -923,12 +924,7 @@ TEST_F(ServerWithLog, StoppingSaysGoodbyeToEveryClient) {
   LoopbackPipe pipe;
   server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
   RemoteModel remote;
-  RemoteModel::Options ro;
-  ro.pump = [](void* s) {
-    static_cast<Server*>(s)->step(0);
-    return true;
-  };
-  ro.pump_context = &server;
+  RemoteModel::Options ro = stepping(server);
   ro.timeout_ms = 2000;
   ASSERT_TRUE(remote.connect(pipe.client(), device(), ro, error)) << error;
   ASSERT_FALSE(remote_frame(remote, local, 30, error).empty()) << error;

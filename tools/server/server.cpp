@@ -216,6 +216,12 @@ void Server::close_client(Client& c, CloseReason reason, FrameStatus status, uin
   log(c.name + ": closing: " + why);
 }
 
+void Server::begin_session(Client& c) {
+  c.hello = c.report.hello = true;
+  ++c.report.sessions;
+  c.session_from = c.report.updates;
+}
+
 void Server::end_session(Client& c) {
   // A serial line stays served: the next hello on it starts a new session.
   c.hello = false;
@@ -290,10 +296,7 @@ void Server::handle(Client& c, const Frame& f) {
       }
       if (!c.sender.start(h, Client::sink, &c))
         return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "the hello could not be served");
-      c.hello = c.report.hello = true;
-      ++c.report.sessions;
-      c.session_from = c.report.updates;
-      return;
+      return begin_session(c);
     }
     case MessageType::kResume: {
       ResumePart part;
@@ -357,10 +360,7 @@ void Server::handle(Client& c, const Frame& f) {
           return close_client(c, CloseReason::kBadHello, FrameStatus::kOk, f.sequence, "the hello could not be served");
       }
       std::vector<uint32_t>().swap(c.held);
-      c.hello = c.report.hello = true;
-      ++c.report.sessions;
-      c.session_from = c.report.updates;
-      return;
+      return begin_session(c);
     }
     case MessageType::kCamera: {
       CameraUpdate u;
