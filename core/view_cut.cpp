@@ -118,10 +118,11 @@ size_t sent_set_bytes(const NodeId* ids, uint32_t count) {
 }
 
 size_t CutBounds::bytes(const SpgHeader& header) { return align8(sizeof(ViewCut::Bound) * header.node_count); }
-// The scratch of capacity C: entered, left (4 C each); cut, fresh sent set,
-// sizes (4 C each) and the heap (8 C; the breadth-first queue, a ring of 2 C
-// ids, in its place) — in the incremental mode those 20 C hold the nodes a
-// split adds to the front (16 + 4 bytes each); then 4 C of walk stack.
+// The scratch of capacity C: the heap (8 C; the breadth-first queue, a ring
+// of 2 C ids, in its place), entered, left, cut, fresh sent set, sizes (4 C
+// each), 4 C to spare — in the incremental mode the walk's and the
+// expansion's stacks take 14 C from the cut on, then the fresh sent set
+// takes the place it has in a derivation.
 size_t CutScratch::bytes(uint32_t capacity) { return 32 * size_t{capacity}; }
 
 void CutScratch::init(void* at, size_t size) {
@@ -459,11 +460,13 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
     return CutStatus::kStorageTooSmall;
   }
   uint8_t* base = static_cast<uint8_t*>(scratch_->storage);
-  entered_ = reinterpret_cast<NodeId*>(base);
+  // The heap first (8-byte entries on the storage's 8-byte alignment, for
+  // any capacity), then the 4-byte lists.
+  heap_ = reinterpret_cast<uint64_t*>(base);
+  entered_ = reinterpret_cast<NodeId*>(heap_ + capacity);
   left_ = entered_ + capacity;
   cut_ = left_ + capacity;
   sent_size_ = reinterpret_cast<uint32_t*>(cut_ + 2 * size_t{capacity});
-  heap_ = reinterpret_cast<uint64_t*>(sent_size_ + capacity);
   evaluated_ = 0;
   last_incremental_ = false;
   CutStatus status;
