@@ -130,6 +130,23 @@ int run(int argc, char** argv) {
   // The interactive loop: input, the latest camera to the server, whatever
   // the link brought, a frame, the status line; about 30 frames a second.
   if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(error);
+  // While the server is redialled the last frame stays up, saying so.
+  struct Shown {
+    SdlDisplay* display;
+    const std::vector<uint8_t>* frame;
+    size_t stride;
+    const RasterConfig* raster;
+    std::string line1;
+  } shown{&display, &frame, stride, &r, source.name()};
+  source.on_reconnecting(
+      [](void* context, const char* text) {
+        auto* s = static_cast<Shown*>(context);
+        std::string ignored;
+        s->display->set_status(s->line1, text);
+        (void)s->display->present(s->frame->data(), s->stride, s->raster->width, s->raster->height, s->raster->format,
+                                  ignored);
+      },
+      &shown);
   size_t next_step = 0;
   uint32_t frame_number = 0;
   FrameStats stats;

@@ -51,9 +51,16 @@ struct ViewerSource::Links {
   std::unique_ptr<SerialTransport> serial;
   std::string host;
   uint16_t port = 0;
+  void (*announce)(void* context, const char* text) = nullptr;
+  void* announce_context = nullptr;
 };
 
 ViewerSource::ViewerSource() : links_(std::make_unique<Links>()) {}
+
+void ViewerSource::on_reconnecting(void (*announce)(void* context, const char* text), void* context) {
+  links_->announce = announce;
+  links_->announce_context = context;
+}
 ViewerSource::~ViewerSource() { model_.close(); }
 
 bool ViewerSource::open(const std::string& model, const std::string& connect, const std::string& serial, uint32_t baud,
@@ -81,6 +88,7 @@ bool ViewerSource::open(const std::string& model, const std::string& connect, co
     ro.reconnect = [](void* context, int* new_fd) -> Transport* {
       auto* r = static_cast<Links*>(context);
       std::fprintf(stderr, "stipple: server gone — reconnecting to %s:%u\n", r->host.c_str(), r->port);
+      if (r->announce) r->announce(r->announce_context, "server gone \u2014 reconnecting");
       for (int attempt = 0; attempt < 50; ++attempt) {
         std::string ignored;
         if (tcp_connect(r->host, r->port, 1000, new_fd, ignored)) {

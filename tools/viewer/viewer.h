@@ -60,6 +60,10 @@ class ViewerSource {
   RemoteModel& model() { return model_; }
   // What it is, for the status line and logs: "bunny.spg", "tcp 127.0.0.1:7878", "serial /dev/ttyACM0".
   const std::string& name() const { return name_; }
+  // Called with "server gone — reconnecting" when the server went away and
+  // is being redialled (which blocks for up to ten seconds): a window shows
+  // it on its status line. Null: the message goes to stderr only.
+  void on_reconnecting(void (*announce)(void* context, const char* text), void* context);
 
  private:
   struct Links;
