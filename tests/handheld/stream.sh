@@ -33,5 +33,5 @@ pids+=($!)
 for _ in $(seq 100); do grep -q "serving on port" "$W/serial.out" && break; sleep 0.05; done
 serial_crc=$("${emu[@]}" "$H" --serial "$W/client.tty" --camera 90,20 --crc | grep '^crc32')
 [ "$serial_crc" = "$local_crc" ] || { echo "--serial: $serial_crc, from the file: $local_crc"; cat "$W/serial.err"; exit 1; }
-grep -q "closed by the client" "$W/serial.err" || { echo "the server log lacks the goodbye"; cat "$W/serial.err"; exit 1; }
+grep -q "session 1 ended by the client" "$W/serial.err" || { echo "the server log lacks the goodbye"; cat "$W/serial.err"; exit 1; }
 echo "stipple-handheld on the target, over TCP and serial from a host server: $local_crc"
