@@ -1233,5 +1233,45 @@ TEST(Balancer, TwoHundredViewersThroughHaproxyAndAServerKilled) {
   EXPECT_EQ(resumed_clean, moved);
 }
 
+// Protocol 3 serves a version 2 client as before: its hello (12 bytes, no
+// token, no resume) gets the startup, its camera the cut.
+TEST(Server, AVersion2ClientIsServedAsBefore) {
+  TcpServer s;
+  TcpTransport t(connect_to(s.server.port()), "old");
+  Hello h = hello_for(device());
+  h.version = 2;
+  uint8_t payload[kCameraUpdateBytes], frame[kCameraUpdateBytes + 16];
+  size_t n = write_hello(h, payload), moved = 0;
+  ASSERT_EQ(n, kHelloBytes);
+  ASSERT_EQ(t.write(frame, write_frame(MessageType::kHello, 0, payload, n, frame, sizeof frame), &moved), TransportStatus::kOk);
+  CameraUpdate u;
+  u.sequence = 7;
+  u.camera = Local().camera(30);
+  write_camera_update(u, payload);
+  ASSERT_EQ(t.write(frame, write_frame(MessageType::kCamera, 1, payload, kCameraUpdateBytes, frame, sizeof frame), &moved),
+            TransportStatus::kOk);
+  std::vector<uint8_t> reader_storage(kMaxFrameBytes);
+  FrameReader reader;
+  reader.init(reader_storage.data(), reader_storage.size());
+  std::vector<uint8_t> types;
+  uint8_t buf[16384];
+  for (int i = 0; i < 400 && (types.empty() || types.back() != static_cast<uint8_t>(MessageType::kUpdateEnd)); ++i) {
+    size_t got = 0;
+    if (t.read(buf, sizeof buf, &got) != TransportStatus::kOk || got == 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      continue;
+    }
+    for (size_t at = 0; at < got;) {
+      at += reader.feed(buf + at, got - at);
+      Frame f;
+      while (reader.next(&f) == FrameStatus::kOk) types.push_back(static_cast<uint8_t>(f.type));
+    }
+  }
+  ASSERT_FALSE(types.empty());
+  EXPECT_EQ(types.front(), static_cast<uint8_t>(MessageType::kStartup));
+  EXPECT_EQ(types.back(), static_cast<uint8_t>(MessageType::kUpdateEnd));
+  EXPECT_TRUE(s.logged("hello 240x320 rgb565"));
+}
+
 }  // namespace
 }  // namespace stipple
