@@ -196,13 +196,9 @@ size_t write_resume_part(uint32_t model_tag, const uint32_t* ids, uint32_t count
   store_u32le(out + 8, count);
   size_t n = kResumeHeaderBytes;
   while (*at < count && n + 5 <= capacity) {
-    uint32_t gap = ids[*at] - *previous;  // wraps from 0xFFFFFFFF: the first id's difference is id + 1
+    // Wraps from 0xFFFFFFFF: the first id's difference is id + 1.
+    n += store_leb128(out + n, ids[*at] - *previous);
     *previous = ids[(*at)++];
-    while (gap >= 0x80) {
-      out[n++] = static_cast<uint8_t>(gap | 0x80);
-      gap >>= 7;
-    }
-    out[n++] = static_cast<uint8_t>(gap);
   }
   out[0] = *at == count ? 1 : 0;
   return n;

@@ -136,10 +136,7 @@ SpgWriteStatus spg_write(const SpgContent& c, uint8_t* out, size_t capacity, siz
   if (leaves != h.leaf_count) return SpgWriteStatus::kBadTree;
   // Exact size: LEB128 lengths are known now.
   size_t leb_bytes = 0;
-  for (uint32_t i = 0; i < h.leaf_count; ++i) {
-    uint32_t v = c.leaf_points[i];
-    do ++leb_bytes; while (v >>= 7);
-  }
+  for (uint32_t i = 0; i < h.leaf_count; ++i) leb_bytes += leb128_bytes(c.leaf_points[i]);
   const size_t table_bytes = spg_startup_bytes(h.version, h.class_count) - spg_fixed_header_bytes(h.version);
   const size_t topology_bytes = static_cast<size_t>((uint64_t{h.node_count} * (h.tree_arity == 8 ? 4 : 1) + 7) / 8);
   const size_t record_bytes = static_cast<size_t>(h.layout.record_bytes());

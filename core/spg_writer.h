@@ -87,6 +87,13 @@ inline size_t store_leb128(uint8_t* out, uint32_t v) {
   return n;
 }
 
+// The bytes store_leb128 writes for v.
+inline size_t leb128_bytes(uint32_t v) {
+  size_t n = 1;
+  while (v >>= 7) ++n;
+  return n;
+}
+
 inline void store_u16le(uint8_t* p, uint16_t v) {
   p[0] = static_cast<uint8_t>(v);
   p[1] = static_cast<uint8_t>(v >> 8);

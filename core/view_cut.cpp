@@ -9,6 +9,7 @@
 #include "core/cut.h"
 #include "core/fixed_trig.h"
 #include "core/gaussian_table.h"
+#include "core/spg_writer.h"
 
 namespace stipple {
 
@@ -71,22 +72,18 @@ Cone widened(const int16_t axis[3], const int16_t n[3], Cone c) {
 // The state's sent set: ids ascending, each the LEB128 of its distance from
 // the one before less one (the first: the id itself), so the ids of a
 // screen's cut — dense in id order — take one or two bytes each.
-size_t leb_bytes(uint32_t v) { return v < 0x80u ? 1 : v < 0x4000u ? 2 : v < 0x200000u ? 3 : v < 0x10000000u ? 4 : 5; }
-
 size_t encode_ids(const NodeId* ids, uint32_t n, uint8_t* out) {
   size_t at = 0;
   uint32_t next = 0;  // the smallest id the next may be
   for (uint32_t i = 0; i < n; ++i) {
-    uint32_t d = index_of(ids[i]) - next;
+    at += store_leb128(out + at, index_of(ids[i]) - next);
     next = index_of(ids[i]) + 1;
-    while (d >= 0x80u) {
-      out[at++] = static_cast<uint8_t>(d | 0x80u);
-      d >>= 7;
-    }
-    out[at++] = static_cast<uint8_t>(d);
   }
   return at;
 }
+
+// A count as the 31 bits every capacity here has (larger: the largest).
+uint32_t count31(uint64_t n) { return n > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(n); }
 
 // Reads the ids back in order (the state is ours: well formed).
 struct IdReader {
@@ -111,7 +108,7 @@ size_t sent_set_bytes(const NodeId* ids, uint32_t count) {
   size_t n = 0;
   uint32_t next = 0;
   for (uint32_t i = 0; i < count; ++i) {
-    n += leb_bytes(index_of(ids[i]) - next);
+    n += leb128_bytes(index_of(ids[i]) - next);
     next = index_of(ids[i]) + 1;
   }
   return n;
@@ -127,8 +124,7 @@ size_t CutScratch::bytes(uint32_t capacity) { return 32 * size_t{capacity}; }
 
 void CutScratch::init(void* at, size_t size) {
   storage = at;
-  const size_t c = size / 32;
-  capacity = c > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(c);
+  capacity = count31(size / 32);
 }
 
 size_t view_cut_state_bytes(uint32_t sent) { return align8(5 * size_t{sent}); }
@@ -523,7 +519,7 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
   const uint32_t capacity = scratch_->capacity;
   NodeId* fresh = cut_ + capacity;
   const auto too_large = [&](uint64_t reached) {
-    needed_ = reached > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(reached);
+    needed_ = count31(reached);
     cut_count_ = entered_count_ = left_count_ = 0;
     return CutStatus::kStorageTooSmall;
   };
@@ -786,8 +782,7 @@ ViewCut::Due ViewCut::evaluate_due(const Frame& f, uint32_t id) const {
   return Due{true, split, due_at(f.clock, t)};
 }
 
-CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& params, bool rebuild) {
-  Frame frame = frame_in;
+CutStatus ViewCut::update_incremental(Frame& frame, const CutParams& params, bool rebuild) {
   const uint32_t capacity = scratch_->capacity;
   const Bound& root = bounds_[0];
   // The camera's motion since the last update, bounded (above).
@@ -879,8 +874,8 @@ CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& pa
   int64_t cut_delta = 0;
   entered_count_ = left_count_ = 0;
   const auto refuse = [&](uint64_t reached, uint64_t front) {
-    needed_ = reached > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(reached);
-    needed_front_ = front > 0x7FFFFFFFu ? 0x7FFFFFFFu : static_cast<uint32_t>(front);
+    needed_ = count31(reached);
+    needed_front_ = count31(front);
     front_valid_ = false;
     front_count_ = 0;
     entered_count_ = left_count_ = 0;
@@ -937,7 +932,7 @@ CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& pa
       // The from-the-root cut is bounded by the budget here: that one.
       front_count_ = 0;
       last_incremental_ = false;
-      return derive(const_cast<Frame&>(frame_in), params);
+      return derive(frame, params);
     }
     NodeId* fresh = cut_ + capacity;  // the stacks are done with
     const uint32_t fresh_count = entered_count_;
@@ -1035,7 +1030,7 @@ CutStatus ViewCut::update_incremental(const Frame& frame_in, const CutParams& pa
     if (sent_after > params.max_nodes || front_count_ > 4 * uint64_t{params.max_nodes} + 9) {
       front_count_ = 0;
       last_incremental_ = false;
-      return derive(const_cast<Frame&>(frame_in), params);
+      return derive(frame, params);
     }
     // The sent set: the old one (read from the state) less the left, with
     // the entered, in id order; then kept (which lists the same change).

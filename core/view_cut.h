@@ -215,7 +215,7 @@ class ViewCut {
   CutStatus derive(Frame& frame, const CutParams& params);  // from the root
   CutStatus keep_sent(const NodeId* fresh, uint32_t fresh_count);
   Due evaluate_due(const Frame& f, uint32_t node) const;
-  CutStatus update_incremental(const Frame& frame, const CutParams& params, bool rebuild);
+  CutStatus update_incremental(Frame& frame, const CutParams& params, bool rebuild);
   bool same_setting(const Camera& camera, const CutParams& params) const;
   void heap_push(uint32_t size, uint32_t node);
   uint64_t heap_pop();

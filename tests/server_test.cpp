@@ -26,6 +26,7 @@
 #include <thread>
 
 #include "core/cobs.h"
+#include "core/spg_writer.h"
 #include "platform/file_io.h"
 #include "platform/loopback/loopback_transport.h"
 #include "platform/serial/serial_transport.h"
@@ -1022,8 +1023,8 @@ TEST(Server, HostileResumesAreRefusedWithTheirReason) {
   const auto leb = [](std::initializer_list<uint32_t> gaps) {
     std::vector<uint8_t> out;
     for (uint32_t g : gaps) {
-      for (; g >= 0x80; g >>= 7) out.push_back(static_cast<uint8_t>(g | 0x80));
-      out.push_back(static_cast<uint8_t>(g));
+      uint8_t bytes[5];
+      out.insert(out.end(), bytes, bytes + store_leb128(bytes, g));
     }
     return out;
   };

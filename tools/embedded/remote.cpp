@@ -46,10 +46,7 @@ bool RemoteModel::send(MessageType type, const uint8_t* payload, size_t size, st
     if ((s == TransportStatus::kClosed || s == TransportStatus::kError) && options_.reconnect != nullptr && !in_reconnect_) {
       // A new link carries the hello and the latest camera (this frame's
       // purpose when it was a camera) again.
-      in_reconnect_ = true;
-      const bool ok = reconnect(error);
-      in_reconnect_ = false;
-      return ok;
+      return reconnect(error);
     }
     if (s == TransportStatus::kClosed || s == TransportStatus::kError) return error = went_away(s), false;
     at += moved;
@@ -158,10 +155,7 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
         !in_reconnect_) {
       // The server is stopping: another (behind the same address, a
       // balancer) or the same one restarted serves the view again.
-      in_reconnect_ = true;
-      const bool ok = reconnect(error);
-      in_reconnect_ = false;
-      return ok;
+      return reconnect(error);
     }
     return r == ReceiveStatus::kOk || fail(r);
   }
@@ -246,6 +240,14 @@ bool RemoteModel::ask_again(std::string& error) {
 }
 
 bool RemoteModel::reconnect(std::string& error) {
+  // While the new link is made, a send on it that fails does not redial.
+  in_reconnect_ = true;
+  const bool ok = link_again(error);
+  in_reconnect_ = false;
+  return ok;
+}
+
+bool RemoteModel::link_again(std::string& error) {
   int fd = -1;
   Transport* t = options_.reconnect(options_.reconnect_context, &fd);
   if (t == nullptr) return error = "the server went away and did not come back", false;

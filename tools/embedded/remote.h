@@ -83,7 +83,8 @@ class RemoteModel {
   bool take(const uint8_t* data, size_t size, std::string& error);  // bytes from the link
   bool lost(std::string& error);       // serial: a frame did not arrive whole: ask for a resend
   bool ask_again(std::string& error);  // serial: a silence: the hello, or a resend and the camera, again
-  bool reconnect(std::string& error);  // a new link, a new stream
+  bool reconnect(std::string& error);  // a new link, a new stream (not again from within)
+  bool link_again(std::string& error);  // reconnect's work
   // The startup `frame` (a whole frame) was refused as too large: the
   // client re-made for it (a new arena), the receiver started over.
   bool fit_startup(const uint8_t* frame, size_t size, std::string& error);

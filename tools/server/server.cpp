@@ -79,6 +79,18 @@ struct Server::Client {
     return true;
   }
   bool idle() const { return out_at == out.size(); }
+  // Out: as much of the queue as the link takes now. False when the link is gone.
+  bool write_out() {
+    while (!idle()) {
+      size_t moved = 0;
+      const TransportStatus s = transport->write(out.data() + out_at, out.size() - out_at, &moved);
+      out_at += moved;
+      report.bytes_out += moved;
+      if (s == TransportStatus::kClosed || s == TransportStatus::kError) return false;
+      if (s != TransportStatus::kOk || moved == 0) break;
+    }
+    return true;
+  }
   uint64_t state_bytes() const {
     return sizeof(Client) + state.capacity() + held.capacity() * 4 + out.capacity() + retained.capacity() * sizeof(Retained) +
            cobs_storage.capacity() + name.capacity() + address.capacity();
@@ -234,6 +246,14 @@ void Server::end_session(Client& c) {
   c.reader.reset();
 }
 
+bool Server::grow_state(Client& c, size_t needed) {
+  if (needed <= c.state.size()) return true;
+  std::vector<uint8_t> state(needed + needed / 8 + 256);  // an eighth again: a cut that grows slowly costs few refusals
+  if (!c.sender.relocate(state.data(), state.size())) return false;
+  c.state = std::move(state);
+  return true;
+}
+
 bool Server::update(Client& c) {
   for (int attempt = 0; attempt < 24; ++attempt) {
     if (c.sender.update(c.camera, options_.cull, Client::sink, &c)) return true;
@@ -247,12 +267,7 @@ bool Server::update(Client& c) {
       scratch_storage_.assign(SenderScratch::bytes(static_cast<uint32_t>(std::min<uint64_t>(grown, 0x7FFFFFFF))) / 8 + 1, 0);
       scratch_.init(scratch_storage_.data(), scratch_storage_.size() * 8);
     }
-    const size_t state_needed = c.sender.cut().needed_state_bytes();
-    if (state_needed > c.state.size()) {
-      std::vector<uint8_t> state(state_needed + state_needed / 8 + 256);
-      if (!c.sender.relocate(state.data(), state.size())) return false;
-      c.state = std::move(state);
-    }
+    if (!grow_state(c, c.sender.cut().needed_state_bytes())) return false;
   }
   return false;
 }
@@ -344,13 +359,9 @@ void Server::handle(Client& c, const Frame& f) {
       bool resumed = false;
       if (tag == c.resume_tag && tag != 0) {
         // It holds this model's nodes: it is sent only what it lacks.
-        const size_t bytes = sent_set_bytes(reinterpret_cast<const NodeId*>(c.held.data()), static_cast<uint32_t>(c.held.size()));
-        if (c.state.size() < bytes) {
-          std::vector<uint8_t> state(bytes + bytes / 8 + 256);
-          if (c.sender.relocate(state.data(), state.size())) c.state = std::move(state);
-        }
-        resumed = c.sender.resume(h, reinterpret_cast<const NodeId*>(c.held.data()),
-                                  static_cast<uint32_t>(c.held.size()), Client::sink, &c);
+        const auto* held = reinterpret_cast<const NodeId*>(c.held.data());
+        const auto count = static_cast<uint32_t>(c.held.size());
+        resumed = grow_state(c, sent_set_bytes(held, count)) && c.sender.resume(h, held, count, Client::sink, &c);
       }
       if (resumed) {
         log(c.name + ": resumed with the " + std::to_string(c.held.size()) + " nodes it holds");
@@ -568,17 +579,9 @@ size_t Server::step(int timeout_ms) {
         close_client(c, CloseReason::kShutdown, FrameStatus::kOk, 0, "its cut could not be made (out of memory)");
       }
     }
-    // Out: as much as the link takes now.
-    while (!c.idle() && !c.gone) {
-      size_t moved = 0;
-      const TransportStatus s = c.transport->write(c.out.data() + c.out_at, c.out.size() - c.out_at, &moved);
-      c.out_at += moved;
-      c.report.bytes_out += moved;
-      if (s == TransportStatus::kClosed || s == TransportStatus::kError) {
-        log(c.name + ": disconnected while sending");
-        c.gone = true;
-      }
-      if (s != TransportStatus::kOk || moved == 0) break;
+    if (!c.gone && !c.write_out()) {
+      log(c.name + ": disconnected while sending");
+      c.gone = true;
     }
     if (c.idle() && !c.serial && c.out.capacity() > kQueueKept) {
       // A socket client's queue is let go once written (the first cut's is
@@ -617,12 +620,7 @@ void Server::shutdown(const std::string& why) {
     Client& c = *owned;
     if (c.detached || c.gone) continue;
     if (c.hello && !c.closing) close_client(c, CloseReason::kShutdown, FrameStatus::kOk, 0, "the server is stopping");
-    while (!c.idle()) {  // what the link takes now; a stalled peer is not waited for
-      size_t moved = 0;
-      const TransportStatus s = c.transport->write(c.out.data() + c.out_at, c.out.size() - c.out_at, &moved);
-      c.out_at += moved;
-      if (s != TransportStatus::kOk || moved == 0) break;
-    }
+    (void)c.write_out();  // a stalled peer is not waited for
     c.transport->close();
   }
   clients_.clear();

@@ -136,6 +136,7 @@ class Server {
   void handle(Client& c, const Frame& f);
   void close_client(Client& c, CloseReason reason, FrameStatus status, uint16_t sequence, const std::string& why);
   bool update(Client& c);  // the cut for the client's latest camera; grows storage as the cut needs
+  bool grow_state(Client& c, size_t needed);  // the client's sent-set storage to at least `needed` bytes
   void begin_session(Client& c);  // a hello (or a resume) taken: the stream is on
   void end_session(Client& c);
   void accept_all(Clock::time_point now);
