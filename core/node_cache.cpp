@@ -71,6 +71,7 @@ const char* cache_status_text(CacheStatus s) {
     case CacheStatus::kBadRecordSize: return "node record size differs from the startup message's";
     case CacheStatus::kBadRecord: return "node record has a class index beyond its table or nonzero padding";
     case CacheStatus::kFull: return "node cache is full";
+    case CacheStatus::kBadClasses: return "a class table piece that does not continue the classes held, or a bad value";
     case CacheStatus::kUnknownNode: return "node is not in the cache";
   }
   return "unknown status";
@@ -111,6 +112,21 @@ CacheStatus NodeCache::load_startup(const uint8_t* data, size_t size) {
   size_t used = 0;
   startup_error_ = spg_parse_startup(data, size, &view, &used);
   if (!startup_error_.ok()) return CacheStatus::kBadStartup;
+  return adopt(view);
+}
+
+CacheStatus NodeCache::load_model(const uint8_t* data, size_t size) {
+  if (records_ == nullptr) return CacheStatus::kBadLimits;
+  ready_ = false;
+  clear();
+  SpgView view;
+  size_t used = 0;
+  startup_error_ = spg_parse_header(data, size, &view.header, &used);
+  if (!startup_error_.ok()) return CacheStatus::kBadStartup;
+  return adopt(view);  // no tables: the decoder holds no class yet
+}
+
+CacheStatus NodeCache::adopt(const SpgView& view) {
   const SpgHeader& h = view.header;
   if ((h.has_normals() && !limits_.normals) || (h.has_color() && !limits_.color)) return CacheStatus::kStartupTooLarge;
   for (int c = 0; c < 3; ++c)
@@ -123,8 +139,24 @@ CacheStatus NodeCache::load_startup(const uint8_t* data, size_t size) {
       if (h.layout.bits[static_cast<int>(theta) + k] > limits_.max_angle_bits) return CacheStatus::kStartupTooLarge;
   if (decoder_.init(view, decoder_storage_, decoder_bytes_) != DecodeStatus::kOk) return CacheStatus::kStartupTooLarge;
   header_ = h;
+  for (int c = 0; c < 3; ++c) header_.class_count[c] = decoder_.class_count(c);
   record_bytes_ = static_cast<size_t>(h.layout.record_bytes());
+  ++classes_changed_;
   ready_ = true;
+  return CacheStatus::kOk;
+}
+
+CacheStatus NodeCache::add_classes(int table, uint32_t first, uint32_t count, const uint8_t* values, size_t size) {
+  if (!ready_) return CacheStatus::kNoStartup;
+  if (table < 0 || table > 2 || decoder_.full_class_count(table) == 0) return CacheStatus::kBadClasses;
+  const size_t per_class = (table == 1 ? 2 : 3) * spg_class_value_bytes(header_.version);
+  // The new classes continue those held (a piece may repeat some of them).
+  if (first > decoder_.class_count(table) || count > uint32_t{decoder_.full_class_count(table)} - first ||
+      size != per_class * count || !spg_check_class_values(header_.version, values, size).ok())
+    return CacheStatus::kBadClasses;
+  if (!decoder_.set_classes(table, first, count, values)) return CacheStatus::kBadClasses;
+  header_.class_count[table] = decoder_.class_count(table);
+  ++classes_changed_;
   return CacheStatus::kOk;
 }
 

@@ -51,6 +51,7 @@ enum class CacheStatus : uint8_t {
   kBadRecord,         // put: class index beyond its table or nonzero padding
   kFull,              // put: node_capacity nodes already held
   kUnknownNode,       // drop: id not held
+  kBadClasses,        // add_classes: a piece that does not continue the classes held, or a bad value
 };
 
 const char* cache_status_text(CacheStatus s);
@@ -65,6 +66,16 @@ class NodeCache {
   // Validates and adopts a startup message (spg_parse_startup); forgets
   // every node. What it needs is copied: the caller's buffer may go away.
   [[nodiscard]] CacheStatus load_startup(const uint8_t* data, size_t size);
+  // The same from the fixed header alone (.spg §1, protocol version 4):
+  // the class tables come in pieces (add_classes) before the nodes that use
+  // them; header().class_count says how many of each are held.
+  [[nodiscard]] CacheStatus load_model(const uint8_t* data, size_t size);
+  // `count` classes of table 0 (sigma_p), 1 (sigma_n) or 2 (sigma_c) from
+  // `first` on (at most the classes held: no gaps), values as in the header's
+  // version of .spg §2.
+  [[nodiscard]] CacheStatus add_classes(int table, uint32_t first, uint32_t count, const uint8_t* values, size_t size);
+  // Rises whenever the class tables change (a GPU client re-uploads them).
+  uint32_t classes_changed() const { return classes_changed_; }
   SpgResult startup_error() const { return startup_error_; }
   bool ready() const { return ready_; }
   const SpgHeader& header() const { return header_; }
@@ -95,6 +106,7 @@ class NodeCache {
   bool decoded() const { return limits_.decoded; }
 
  private:
+  CacheStatus adopt(const SpgView& view);  // a parsed startup or header
   uint32_t find(uint32_t id) const;  // id's hash entry, or the empty one ending its probe sequence
   uint32_t home_slot(uint32_t id) const;  // where id's probe sequence starts
   void erase_hash(uint32_t at);
@@ -120,6 +132,7 @@ class NodeCache {
   uint32_t* hash32_ = nullptr;
   uint32_t hash_mask_ = 0;
   uint32_t count_ = 0;
+  uint32_t classes_changed_ = 0;
 };
 
 }  // namespace stipple

@@ -140,25 +140,48 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
     extent_mu_[a] = static_cast<int32_t>((axis_scale_q8_[a] + 128) >> 8);
   }
 
-  // Class tables: sigma_p in MU, sigma_n and sigma_c in Q12 — converted from
-  // float32 (version 1) or read from the 16-bit codes (version 2, where
-  // sigma_p is relative to E and sigma_n, sigma_c are Q12 already).
+  // Class tables, laid out for the header's counts: all of them now, or
+  // (without tables in the view) none until set_classes brings them.
   int32_t* sigmas = reinterpret_cast<int32_t*>(at);
-  const int64_t limit = int64_t{1} << 30;
-  const bool floats = spg_class_value_bytes(header_.version) == 4;
-  for (uint32_t i = 0; i < 3u * header_.class_count[0]; ++i)
-    sigmas[i] = floats ? static_cast<int32_t>(ratio(dyadic_of(load_u32le(view.sigma_p + 4 * i)), largest, kModelUnitBits, limit))
-                       : static_cast<int32_t>(spg_sigma_p_code_units(load_u16le(view.sigma_p + 2 * i), kModelUnitBits));
   sigma_p_ = sigmas;
-  sigmas += 3u * header_.class_count[0];
-  for (uint32_t i = 0; i < 2u * header_.class_count[1]; ++i)
-    sigmas[i] = floats ? f32_bits_to_fixed(load_u32le(view.sigma_n + 4 * i), 12, nullptr) : load_u16le(view.sigma_n + 2 * i);
-  sigma_n_ = sigmas;
-  sigmas += 2u * header_.class_count[1];
-  for (uint32_t i = 0; i < 3u * header_.class_count[2]; ++i)
-    sigmas[i] = floats ? f32_bits_to_fixed(load_u32le(view.sigma_c + 4 * i), 12, nullptr) : load_u16le(view.sigma_c + 2 * i);
-  sigma_c_ = sigmas;
+  sigma_n_ = sigma_p_ + 3u * header_.class_count[0];
+  sigma_c_ = sigma_n_ + 2u * header_.class_count[1];
+  for (int t = 0; t < 3; ++t) {
+    full_classes_[t] = header_.class_count[t];
+    header_.class_count[t] = 0;
+  }
+  const uint8_t* tables[3] = {view.sigma_p, view.sigma_n, view.sigma_c};
+  for (int t = 0; t < 3; ++t)
+    if (tables[t] != nullptr && full_classes_[t] > 0 && !set_classes(t, 0, full_classes_[t], tables[t]))
+      return DecodeStatus::kBadClass;
   return DecodeStatus::kOk;
+}
+
+bool NodeDecoder::set_classes(int table, uint32_t first, uint32_t count, const uint8_t* values) {
+  if (table < 0 || table > 2 || first > header_.class_count[table] || count > full_classes_[table] - first) return false;
+  // sigma_p in MU, sigma_n and sigma_c in Q12 — converted from float32
+  // (version 1) or read from the 16-bit codes (version 2, where sigma_p is
+  // relative to E and sigma_n, sigma_c are Q12 already).
+  const bool floats = spg_class_value_bytes(header_.version) == 4;
+  const uint32_t per_class = table == 1 ? 2 : 3;
+  int32_t* out = (table == 0 ? sigma_p_ : table == 1 ? sigma_n_ : sigma_c_) + per_class * first;
+  if (table == 0) {
+    Dyadic largest;
+    for (int a = 0; a < 3; ++a) {
+      const Dyadic extent = subtract(dyadic_of(header_.bbox_bits[3 + a]), dyadic_of(header_.bbox_bits[a]));
+      if (greater(extent, largest)) largest = extent;
+    }
+    if (largest.m <= 0) largest = Dyadic{1, 0};
+    const int64_t limit = int64_t{1} << 30;
+    for (uint32_t i = 0; i < per_class * count; ++i)
+      out[i] = floats ? static_cast<int32_t>(ratio(dyadic_of(load_u32le(values + 4 * i)), largest, kModelUnitBits, limit))
+                      : static_cast<int32_t>(spg_sigma_p_code_units(load_u16le(values + 2 * i), kModelUnitBits));
+  } else {
+    for (uint32_t i = 0; i < per_class * count; ++i)
+      out[i] = floats ? f32_bits_to_fixed(load_u32le(values + 4 * i), 12, nullptr) : load_u16le(values + 2 * i);
+  }
+  if (first + count > header_.class_count[table]) header_.class_count[table] = static_cast<uint16_t>(first + count);
+  return true;
 }
 
 void NodeDecoder::color_rgb(const NodeFields& f, uint8_t out[3]) const {

@@ -22,6 +22,9 @@ bool message_type_known(uint8_t t) {
     case MessageType::kResend:
     case MessageType::kResume:
     case MessageType::kResumed:
+    case MessageType::kModel:
+    case MessageType::kClasses:
+    case MessageType::kUpdateBegin:
     case MessageType::kStartup:
     case MessageType::kNodes:
     case MessageType::kDrop:
@@ -41,6 +44,9 @@ const char* message_type_name(uint8_t t) {
     case MessageType::kResend: return "resend";
     case MessageType::kResume: return "resume";
     case MessageType::kResumed: return "resumed";
+    case MessageType::kModel: return "model";
+    case MessageType::kClasses: return "classes";
+    case MessageType::kUpdateBegin: return "update-begin";
     case MessageType::kStartup: return "startup";
     case MessageType::kNodes: return "nodes";
     case MessageType::kDrop: return "drop";
@@ -302,6 +308,43 @@ bool parse_update_end(const uint8_t* p, size_t size, UpdateEnd* out) {
   if (size != kUpdateEndBytes) return false;
   out->camera_sequence = load_u32le(p);
   out->sent_nodes = load_u32le(p + 4);
+  return true;
+}
+
+size_t write_classes_header(const ClassesPiece& c, uint8_t out[kClassesHeaderBytes]) {
+  out[0] = c.table;
+  out[1] = 0;
+  store_u16le(out + 2, c.first);
+  store_u16le(out + 4, c.count);
+  store_u16le(out + 6, 0);
+  return kClassesHeaderBytes;
+}
+
+bool parse_classes(const uint8_t* p, size_t size, ClassesPiece* out) {
+  if (size <= kClassesHeaderBytes || p[0] > 2 || p[1] != 0 || load_u16le(p + 6) != 0) return false;
+  out->table = p[0];
+  out->first = load_u16le(p + 2);
+  out->count = load_u16le(p + 4);
+  out->values = p + kClassesHeaderBytes;
+  out->value_bytes = size - kClassesHeaderBytes;
+  return out->count > 0;
+}
+
+size_t write_update_begin(const UpdateBegin& u, uint8_t out[kUpdateBeginBytes]) {
+  store_u32le(out, u.camera_sequence);
+  store_u32le(out + 4, u.entering);
+  store_u32le(out + 8, u.leaving);
+  out[12] = u.parts_after;
+  out[13] = out[14] = out[15] = 0;
+  return kUpdateBeginBytes;
+}
+
+bool parse_update_begin(const uint8_t* p, size_t size, UpdateBegin* out) {
+  if (size != kUpdateBeginBytes || p[13] != 0 || p[14] != 0 || p[15] != 0) return false;
+  out->camera_sequence = load_u32le(p);
+  out->entering = load_u32le(p + 4);
+  out->leaving = load_u32le(p + 8);
+  out->parts_after = p[12];
   return true;
 }
 

@@ -26,8 +26,10 @@ namespace stipple {
 
 // 2: node entries carry their original point count. 3: a hello may carry a
 // token and announce a resume (the nodes a reconnecting client still holds);
-// a version 3 server serves version 2 clients as before.
-inline constexpr uint16_t kProtocolVersion = 3;
+// a version 3 server serves version 2 clients as before. 4: the class tables
+// in pieces (model, classes) before the nodes that use them, and each
+// update's parts announced (update-begin); older clients are served as before.
+inline constexpr uint16_t kProtocolVersion = 4;
 inline constexpr uint16_t kOldestProtocolVersion = 2;
 inline constexpr size_t kFrameHeaderBytes = 8;
 inline constexpr size_t kFrameTrailerBytes = 4;
@@ -54,6 +56,9 @@ enum class MessageType : uint8_t {
   kUpdateEnd = 0x84,  // the update for a camera is complete: the camera's sequence, the cut's size
   kError = 0x85,      // a fault the server saw in the client's stream: code and frame sequence
   kResumed = 0x86,    // (3) the resume was taken: no startup; updates send what the client lacks
+  kModel = 0x87,      // (4) the startup's fixed header alone, with the model's tag: classes come in pieces
+  kClasses = 0x88,    // (4) a piece of one class table: the classes the next nodes use
+  kUpdateBegin = 0x89,  // (4) a part of an update begins: the nodes entering and leaving in it
 };
 
 bool message_type_known(uint8_t type);
@@ -190,6 +195,35 @@ struct UpdateEnd {
 inline constexpr size_t kUpdateEndBytes = 8;
 size_t write_update_end(const UpdateEnd& u, uint8_t out[kUpdateEndBytes]);
 [[nodiscard]] bool parse_update_end(const uint8_t* payload, size_t size, UpdateEnd* out);
+
+// kModel: u32 model tag (the CRC-32 of the startup message the client would
+// hold with every class: what a resume names the model by), then the fixed
+// header of .spg §1 (the full tables' class counts).
+inline constexpr size_t kModelTagBytes = 4;
+
+// kClasses: u8 table (0 sigma_p, 1 sigma_n, 2 sigma_c), u8 0, u16 first
+// class, u16 count (>= 1), u16 0, then count classes' values as in .spg §2
+// for the header's version. The receiver checks the values' length.
+inline constexpr size_t kClassesHeaderBytes = 8;
+struct ClassesPiece {
+  uint8_t table = 0;
+  uint16_t first = 0, count = 0;
+  const uint8_t* values = nullptr;
+  size_t value_bytes = 0;
+};
+size_t write_classes_header(const ClassesPiece& c, uint8_t out[kClassesHeaderBytes]);
+[[nodiscard]] bool parse_classes(const uint8_t* payload, size_t size, ClassesPiece* out);
+
+// kUpdateBegin: u32 camera sequence, u32 nodes entering in this part, u32
+// nodes leaving in it, u8 parts of the update after this one, 3 zero bytes.
+struct UpdateBegin {
+  uint32_t camera_sequence = 0;
+  uint32_t entering = 0, leaving = 0;
+  uint8_t parts_after = 0;  // 0: the last part (a cold start sends a coarse part first)
+};
+inline constexpr size_t kUpdateBeginBytes = 16;
+size_t write_update_begin(const UpdateBegin& u, uint8_t out[kUpdateBeginBytes]);
+[[nodiscard]] bool parse_update_begin(const uint8_t* payload, size_t size, UpdateBegin* out);
 
 enum class CloseReason : uint8_t {
   kNormal = 0,

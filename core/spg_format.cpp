@@ -148,7 +148,7 @@ namespace {
 
 // §1 fixed header and §2 class tables: the startup message. With
 // `whole_file`, the counts must also fit the bytes after the header.
-SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgView& view, Cursor& in) {
+SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgView& view, Cursor& in, bool tables = true) {
   SpgHeader& h = view.header;
 
   // §1 fixed header.
@@ -216,6 +216,7 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
     h.origin_bits[a] = bits;
   }
   in.pos = header_bytes;
+  if (!tables) return SpgResult{};
 
   // §2 class tables: non-negative finite float32 (version 1) or 16-bit
   // codes, every one of which is a valid value (version 2).
@@ -246,6 +247,25 @@ SpgResult spg_parse_startup(const uint8_t* data, size_t size, SpgView* out, size
   *out = view;
   *startup_bytes = in.pos;
   return r;
+}
+
+SpgResult spg_parse_header(const uint8_t* data, size_t size, SpgHeader* out, size_t* header_bytes) {
+  Cursor in{data, size, 0};
+  SpgView view;
+  const SpgResult r = parse_startup(data, size, false, view, in, false);
+  if (!r.ok()) return r;
+  *out = view.header;
+  *header_bytes = in.pos;
+  return r;
+}
+
+SpgResult spg_check_class_values(uint16_t version, const uint8_t* values, size_t bytes) {
+  if (spg_class_value_bytes(version) == 4)
+    for (size_t i = 0; i + 4 <= bytes; i += 4) {
+      const uint32_t bits = load_u32le(values + i);
+      if (!f32_finite(bits) || f32_negative(bits)) return fail(SpgError::kBadFloat, i);
+    }
+  return SpgResult{};
 }
 
 SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {

@@ -185,6 +185,15 @@ struct SpgResult {
 // the startup message first and node records afterwards.
 [[nodiscard]] SpgResult spg_parse_startup(const uint8_t* data, size_t size, SpgView* out, size_t* startup_bytes);
 
+// The fixed header alone (§1, every rule of it), for a stream that sends the
+// class tables in pieces (docs/protocol.md, version 4): *header_bytes is its
+// length.
+[[nodiscard]] SpgResult spg_parse_header(const uint8_t* data, size_t size, SpgHeader* out, size_t* header_bytes);
+// Class table values of a header's version (§2): version 1's float32 must
+// be finite and non-negative (every version 2 code is a value). The offset
+// of a bad one is relative to `values`.
+[[nodiscard]] SpgResult spg_check_class_values(uint16_t version, const uint8_t* values, size_t bytes);
+
 // Children of node `i` of a validated view: number of children.
 uint32_t spg_child_count(const SpgView& view, uint32_t node);
 

@@ -1,6 +1,8 @@
 // stipple core — the two ends of a node stream. See stream.h and docs/protocol.md.
 #include "core/stream.h"
 
+#include <algorithm>
+
 #include "core/arena.h"
 
 #include "core/spg_writer.h"
@@ -32,17 +34,72 @@ void transcode_record(const RecordLayout& from, const RecordLayout& to, const ui
   pack_record(to, f, out);
 }
 
-size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity) {
+size_t ClassOrder::bytes(const SpgHeader& h) {
+  return align8(4 * (size_t{h.class_count[0]} + h.class_count[1] + h.class_count[2]));
+}
+
+bool ClassOrder::init(const SpgView& view, void* storage, size_t size) {
+  const SpgHeader& h = view.header;
+  if (size < bytes(h)) return false;
+  uint16_t* at = static_cast<uint16_t*>(storage);
+  for (int t = 0; t < 3; ++t) {
+    to_sent_[t] = at;
+    from_sent_[t] = at + h.class_count[t];
+    at += 2 * size_t{h.class_count[t]};
+    for (uint32_t c = 0; c < h.class_count[t]; ++c) to_sent_[t][c] = 0xFFFF;  // counts are below 0xFFFF
+  }
+  static constexpr Field kClassField[3] = {Field::kSigmaP, Field::kSigmaN, Field::kSigmaC};
+  uint32_t next[3] = {};
+  const auto take = [&](int t, uint32_t c) {
+    if (to_sent_[t][c] != 0xFFFF) return;
+    to_sent_[t][c] = static_cast<uint16_t>(next[t]);
+    from_sent_[t][next[t]++] = static_cast<uint16_t>(c);
+  };
+  for (uint32_t i = 0; i < h.node_count; ++i) {
+    const NodeFields f = unpack_record(h.layout, view.records + size_t{i} * view.record_bytes);
+    for (int t = 0; t < 3; ++t)
+      if (h.class_count[t] > 0 && f[kClassField[t]] < h.class_count[t]) take(t, f[kClassField[t]]);
+  }
+  for (int t = 0; t < 3; ++t)
+    for (uint32_t c = 0; c < h.class_count[t]; ++c) take(t, c);  // the unused ones, last
+  return true;
+}
+
+namespace {
+
+constexpr Field kClassField[3] = {Field::kSigmaP, Field::kSigmaN, Field::kSigmaC};
+
+// Bytes of one class's values in table t.
+size_t class_bytes(uint16_t version, int t) { return (t == 1 ? 2u : 3u) * spg_class_value_bytes(version); }
+
+}  // namespace
+
+size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity,
+                             const ClassOrder* order, uint8_t* spare) {
   const SpgHeader h = reduced_header(view.header, attributes);
+  uint8_t* first = order != nullptr ? spare : out;
   size_t written = 0;
-  if (spg_write_startup_le(h, view.sigma_p, h.class_count[1] ? view.sigma_n : nullptr,
-                           h.class_count[2] ? view.sigma_c : nullptr, out, capacity, &written) != SpgWriteStatus::kOk)
+  if (first == nullptr ||
+      spg_write_startup_le(h, view.sigma_p, h.class_count[1] ? view.sigma_n : nullptr,
+                           h.class_count[2] ? view.sigma_c : nullptr, first, capacity, &written) != SpgWriteStatus::kOk)
     return 0;
+  if (order == nullptr) return written;
+  // The same header, each table's classes in the order's.
+  size_t at = spg_fixed_header_bytes(h.version);
+  for (size_t b = 0; b < at; ++b) out[b] = spare[b];
+  for (int t = 0; t < 3; ++t) {
+    const size_t per = class_bytes(h.version, t);
+    for (uint32_t k = 0; k < h.class_count[t]; ++k) {
+      const uint8_t* from = spare + at + per * order->from_sent(t, k);
+      for (size_t b = 0; b < per; ++b) out[at + per * k + b] = from[b];
+    }
+    at += per * h.class_count[t];
+  }
   return written;
 }
 
 size_t SenderScratch::bytes(uint32_t cut_capacity) {
-  return align8(kMaxPayload) + align8(kMaxFrameBytes) + CutScratch::bytes(cut_capacity);
+  return align8(kMaxPayload) + align8(kMaxFrameBytes) + 24 * size_t{cut_capacity} + CutScratch::bytes(cut_capacity);
 }
 
 void SenderScratch::init(void* storage, size_t size) {
@@ -50,7 +107,16 @@ void SenderScratch::init(void* storage, size_t size) {
   const size_t fixed = align8(kMaxPayload) + align8(kMaxFrameBytes);
   payload = size < fixed ? nullptr : base;
   frame = size < fixed ? nullptr : base + align8(kMaxPayload);
-  cut.init(base + fixed, size < fixed ? 0 : size - fixed);
+  // The rest: 24 bytes a node for the order, 32 for the cut's scratch.
+  const size_t per_node = 24 + CutScratch::bytes(1);
+  const size_t fit = size < fixed ? 0 : (size - fixed) / per_node;
+  const uint32_t n = static_cast<uint32_t>(fit < 0x7FFFFFFEu ? fit : 0x7FFFFFFEu) & ~1u;  // even: the cut's part stays 8-aligned
+  order_capacity = n;
+  order = reinterpret_cast<uint64_t*>(base + fixed);
+  left = reinterpret_cast<uint32_t*>(order + n);
+  waiting = left + n;
+  ready = waiting + n;
+  cut.init(ready + n, size < fixed ? 0 : size - fixed - 24 * size_t{n});
 }
 
 size_t StreamSender::storage_bytes(const SpgHeader& header) {
@@ -98,6 +164,8 @@ uint8_t StreamSender::adopt_hello(const Hello& hello) {
   same_layout_ = true;
   for (int f = 0; f < kFieldCount; ++f) same_layout_ = same_layout_ && reduced_.layout.bits[f] == view_->header.layout.bits[f];
   capacity_ = hello.cache_capacity;
+  pieces_ = hello.version >= 4;
+  for (uint16_t& c : classes_sent_) c = 0;
   return attributes;
 }
 
@@ -106,16 +174,26 @@ bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
   const uint8_t attributes = adopt_hello(hello);
   cut_.reset();  // a fresh client: its cut starts empty, so the first update sends it all
   uint8_t* payload = scratch_->payload;
-  const size_t n = write_reduced_startup(*view_, attributes, payload, kMaxPayload);
-  if (n == 0) return false;
   started_ = true;
   sequence_ = 0;  // a new stream (a serial client says hello again to resynchronise)
+  if (pieces_) {
+    // The model: its tag and header; the classes follow the nodes' needs.
+    const size_t n = write_reduced_startup(*view_, attributes, payload + kModelTagBytes, kMaxPayload - kModelTagBytes,
+                                           classes_, scratch_->frame);
+    if (n == 0) return started_ = false;
+    store_u32le(payload, crc32(payload + kModelTagBytes, n));
+    return send(MessageType::kModel, payload, kModelTagBytes + spg_fixed_header_bytes(reduced_.version), sink, context);
+  }
+  const size_t n = write_reduced_startup(*view_, attributes, payload, kMaxPayload);
+  if (n == 0) return started_ = false;
   return send(MessageType::kStartup, payload, n, sink, context);
 }
 
-uint32_t StreamSender::model_tag(uint8_t attributes) const {
+uint32_t StreamSender::model_tag(uint8_t attributes, uint16_t version) const {
   if (view_ == nullptr || scratch_ == nullptr) return 0;
-  const size_t n = write_reduced_startup(*view_, static_cast<uint8_t>(attributes & ~kResuming), scratch_->payload, kMaxPayload);
+  const uint8_t wanted = static_cast<uint8_t>(attributes & ~kResuming);
+  const size_t n = version >= 4 ? write_reduced_startup(*view_, wanted, scratch_->payload, kMaxPayload, classes_, scratch_->frame)
+                                : write_reduced_startup(*view_, wanted, scratch_->payload, kMaxPayload);
   return n == 0 ? 0 : crc32(scratch_->payload, n);
 }
 
@@ -123,6 +201,17 @@ bool StreamSender::resume(const Hello& hello, const NodeId* held, uint32_t count
   if (view_ == nullptr || scratch_ == nullptr || hello.version < 3) return false;
   (void)adopt_hello(hello);
   if (!cut_.adopt_sent(held, count)) return false;
+  if (pieces_) {
+    // The client holds at least the classes its nodes use.
+    for (uint32_t i = 0; i < count; ++i) {
+      const NodeFields f = unpack_record(view_->header.layout, view_->records + size_t{index_of(held[i])} * view_->record_bytes);
+      for (int t = 0; t < 3; ++t) {
+        if (reduced_.class_count[t] == 0) continue;
+        const uint32_t k = (classes_ != nullptr ? classes_->to_sent(t, f[kClassField[t]]) : f[kClassField[t]]) + 1u;
+        if (k > classes_sent_[t]) classes_sent_[t] = static_cast<uint16_t>(k);
+      }
+    }
+  }
   started_ = true;
   sequence_ = 0;
   uint8_t payload[4];
@@ -137,42 +226,241 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
   p.max_nodes = capacity_;
   p.cull_frustum = p.cull_backfaces = cull;
   for (int k = 0; k < 4; ++k) p.window[k] = camera.window[k];
+  const bool cold = cut_.sent_count() == 0;
+  if (cold && capacity_ > kCoarseNodes) {
+    // A cold start: a whole coarse picture first, then its refinement.
+    CutParams coarse = p;
+    coarse.max_nodes = kCoarseNodes;
+    cut_status_ = cut_.update(camera.camera, coarse);
+    if (cut_status_ != CutStatus::kOk || !send_change(camera.sequence, 1, true, sink, context)) return false;
+  }
   cut_status_ = cut_.update(camera.camera, p);
-  if (cut_status_ != CutStatus::kOk) return false;
-  uint8_t* payload = scratch_->payload;
-  // Drops first, so a full client cache makes room before new nodes arrive.
-  for (uint32_t done = 0; done < cut_.left_count();) {
-    const uint32_t n = cut_.left_count() - done < kDropsPerFrame ? cut_.left_count() - done : kDropsPerFrame;
-    store_u32le(payload, n);
-    for (uint32_t i = 0; i < n; ++i) store_u32le(payload + 4 + 4 * size_t{i}, index_of(cut_.left()[done + i]));
-    if (!send(MessageType::kDrop, payload, 4 + 4 * size_t{n}, sink, context)) return false;
-    done += n;
-  }
-  // Batches of at most kNodeBatchBytes, coarse nodes first (ids are
-  // breadth-first): on a slow link the first arrive soon after the startup.
-  const size_t stride = node_entry_bytes(reduced_record_bytes_);
-  const uint32_t per_frame = static_cast<uint32_t>((kNodeBatchBytes - 4) / stride);
-  for (uint32_t done = 0; done < cut_.entered_count();) {
-    const uint32_t n = cut_.entered_count() - done < per_frame ? cut_.entered_count() - done : per_frame;
-    store_u32le(payload, n);
-    for (uint32_t i = 0; i < n; ++i) {
-      const uint32_t id = index_of(cut_.entered()[done + i]);
-      uint8_t* entry = payload + 4 + size_t{i} * stride;
-      store_u32le(entry, id);
-      entry[4] = cut_.points(NodeId{id});
-      const uint8_t* record = view_->records + size_t{id} * view_->record_bytes;
-      if (same_layout_)
-        for (size_t b = 0; b < reduced_record_bytes_; ++b) entry[5 + b] = record[b];
-      else
-        transcode_record(view_->header.layout, reduced_.layout, record, entry + 5);
-    }
-    if (!send(MessageType::kNodes, payload, 4 + size_t{n} * stride, sink, context)) return false;
-    done += n;
-  }
+  if (cut_status_ != CutStatus::kOk || !send_change(camera.sequence, 0, cold, sink, context)) return false;
   const UpdateEnd end{camera.sequence, cut_.sent_count()};
   uint8_t buf[kUpdateEndBytes];
   write_update_end(end, buf);
   return send(MessageType::kUpdateEnd, buf, kUpdateEndBytes, sink, context);
+}
+
+void StreamSender::reduce(const uint8_t* record, uint8_t* out) const {
+  if (!pieces_ || classes_ == nullptr) {
+    if (same_layout_)
+      for (size_t b = 0; b < reduced_record_bytes_; ++b) out[b] = record[b];
+    else
+      transcode_record(view_->header.layout, reduced_.layout, record, out);
+    return;
+  }
+  NodeFields f = unpack_record(view_->header.layout, record);
+  for (int k = 0; k < kFieldCount; ++k)
+    if (reduced_.layout.bits[k] == 0) f.v[k] = 0;
+  for (int t = 0; t < 3; ++t)
+    if (reduced_.class_count[t] > 0) f.v[static_cast<int>(kClassField[t])] = classes_->to_sent(t, f[kClassField[t]]);
+  pack_record(reduced_.layout, f, out);
+}
+
+bool StreamSender::send_classes(const uint64_t* order, uint32_t count, FrameSink sink, void* context) {
+  uint32_t need[3] = {classes_sent_[0], classes_sent_[1], classes_sent_[2]};
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t id = ~static_cast<uint32_t>(order[i]);
+    const NodeFields f = unpack_record(view_->header.layout, view_->records + size_t{id} * view_->record_bytes);
+    for (int t = 0; t < 3; ++t) {
+      if (reduced_.class_count[t] == 0) continue;
+      const uint32_t k = (classes_ != nullptr ? classes_->to_sent(t, f[kClassField[t]]) : f[kClassField[t]]) + 1u;
+      if (k > need[t]) need[t] = k;
+    }
+  }
+  const uint8_t* tables[3] = {view_->sigma_p, view_->sigma_n, view_->sigma_c};
+  uint8_t* payload = scratch_->payload;
+  for (int t = 0; t < 3; ++t) {
+    const size_t per = class_bytes(view_->header.version, t);
+    const uint32_t most = static_cast<uint32_t>((kMaxPayload - kClassesHeaderBytes) / per);
+    while (classes_sent_[t] < need[t]) {
+      ClassesPiece c;
+      c.table = static_cast<uint8_t>(t);
+      c.first = classes_sent_[t];
+      c.count = static_cast<uint16_t>(need[t] - c.first < most ? need[t] - c.first : most);
+      write_classes_header(c, payload);
+      for (uint32_t k = 0; k < c.count; ++k) {
+        const uint32_t from = classes_ != nullptr ? classes_->from_sent(t, c.first + k) : c.first + k;
+        for (size_t b = 0; b < per; ++b) payload[kClassesHeaderBytes + per * k + b] = tables[t][per * from + b];
+      }
+      if (!send(MessageType::kClasses, payload, kClassesHeaderBytes + per * c.count, sink, context)) return false;
+      classes_sent_[t] = static_cast<uint16_t>(c.first + c.count);
+    }
+  }
+  return true;
+}
+
+bool StreamSender::send_drops(const uint32_t* ids, uint32_t count, FrameSink sink, void* context) {
+  uint8_t* payload = scratch_->payload;
+  for (uint32_t done = 0; done < count;) {
+    const uint32_t n = count - done < kDropsPerFrame ? count - done : kDropsPerFrame;
+    store_u32le(payload, n);
+    for (uint32_t i = 0; i < n; ++i) store_u32le(payload + 4 + 4 * size_t{i}, ids[done + i]);
+    if (!send(MessageType::kDrop, payload, 4 + 4 * size_t{n}, sink, context)) return false;
+    done += n;
+  }
+  return true;
+}
+
+bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink sink, void* context) {
+  if (pieces_ && !send_classes(order, count, sink, context)) return false;
+  uint8_t* payload = scratch_->payload;
+  const size_t stride = node_entry_bytes(reduced_record_bytes_);
+  store_u32le(payload, count);
+  for (uint32_t i = 0; i < count; ++i) {
+    const uint32_t id = ~static_cast<uint32_t>(order[i]);
+    uint8_t* entry = payload + 4 + size_t{i} * stride;
+    store_u32le(entry, id);
+    entry[4] = cut_.points(NodeId{id});
+    reduce(view_->records + size_t{id} * view_->record_bytes, entry + 5);
+  }
+  return send(MessageType::kNodes, payload, 4 + size_t{count} * stride, sink, context);
+}
+
+namespace {
+
+// Where `id` is in ascending ids[0 .. n), or n.
+uint32_t find_id(const uint32_t* ids, uint32_t n, uint32_t id) {
+  uint32_t lo = 0, hi = n;
+  while (lo < hi) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (ids[mid] < id) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < n && ids[lo] == id ? lo : n;
+}
+
+bool find_node(const NodeId* ids, uint32_t n, uint32_t id) {
+  uint32_t lo = 0, hi = n;
+  while (lo < hi) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (index_of(ids[mid]) < id) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < n && index_of(ids[lo]) == id;
+}
+
+constexpr uint32_t kNoGroup = 0xFFFFFFFFu;
+
+}  // namespace
+
+bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp, FrameSink sink, void* context) {
+  const SenderScratch& s = *scratch_;
+  const uint32_t entering = cut_.entered_count(), leaving = cut_.left_count();
+  if (pieces_) {
+    uint8_t begin[kUpdateBeginBytes];
+    write_update_begin(UpdateBegin{sequence, entering, leaving, parts_after}, begin);
+    if (!send(MessageType::kUpdateBegin, begin, kUpdateBeginBytes, sink, context)) return false;
+  }
+  const size_t stride = node_entry_bytes(reduced_record_bytes_);
+  const uint32_t per_frame = static_cast<uint32_t>((kNodeBatchBytes - 4) / stride);
+  uint64_t* order = s.order;
+  uint32_t* left = s.left;
+  uint32_t* waiting = s.waiting;
+  const uint32_t held_before = cut_.sent_count() - entering + leaving;
+  // Entering nodes by projected size, largest first (ties: smaller id).
+  // Without sizes (an incremental cut) or room, they keep the id order.
+  const bool sized = cut_.sent_size_q4() != nullptr && entering <= s.order_capacity && leaving <= s.order_capacity;
+  if (!sized) {
+    // The plain order: every drop, then the nodes in id order.
+    uint32_t ids[1024];
+    for (uint32_t done = 0; done < leaving;) {
+      const uint32_t n = leaving - done < 1024 ? leaving - done : 1024;
+      for (uint32_t i = 0; i < n; ++i) ids[i] = index_of(cut_.left()[done + i]);
+      if (!send_drops(ids, n, sink, context)) return false;
+      done += n;
+    }
+    uint64_t batch[1024];
+    const uint32_t most = per_frame < 1024 ? per_frame : 1024;
+    for (uint32_t done = 0; done < entering;) {
+      const uint32_t n = entering - done < most ? entering - done : most;
+      for (uint32_t i = 0; i < n; ++i) batch[i] = ~index_of(cut_.entered()[done + i]);
+      if (!send_nodes(batch, n, sink, context)) return false;
+      done += n;
+    }
+    return true;
+  }
+  {
+    const NodeId* sent = cut_.sent();
+    const uint32_t* size = cut_.sent_size_q4();
+    for (uint32_t i = 0, k = 0; i < entering; ++i) {
+      const uint32_t id = index_of(cut_.entered()[i]);
+      while (index_of(sent[k]) < id) ++k;  // entered is a subset of sent, both ascending
+      order[i] = (uint64_t{size[k]} << 32) | (~id & 0xFFFFFFFFu);
+    }
+  }
+  for (uint32_t i = 0; i < leaving; ++i) {
+    left[i] = index_of(cut_.left()[i]);
+    waiting[i] = 0;
+  }
+  const bool sorted_left = [&] {
+    for (uint32_t i = 1; i < leaving; ++i)
+      if (left[i - 1] >= left[i]) return false;
+    return true;
+  }();
+  if (!sorted_left) std::sort(left, left + leaving);
+  std::sort(order, order + entering, [](uint64_t a, uint64_t b) { return a > b; });
+  // Which node that left each entering node refines (its nearest ancestor
+  // among them), kept in the order's high word in place of the size.
+  for (uint32_t i = 0; i < entering; ++i) {
+    uint32_t group = kNoGroup;
+    for (uint32_t a = ~static_cast<uint32_t>(order[i]); a != 0 && leaving > 0;) {
+      a = index_of(cut_.parent(NodeId{a}));
+      if (a < left[0]) break;
+      const uint32_t j = find_id(left, leaving, a);
+      if (j < leaving) {
+        group = j;
+        ++waiting[j];
+        break;
+      }
+    }
+    order[i] = (uint64_t{group} << 32) | (order[i] & 0xFFFFFFFFu);
+  }
+  // A cache that cannot hold both what it has and what comes: drops first.
+  const bool room = uint64_t{held_before} + entering <= capacity_;
+  uint32_t* ready = s.ready;
+  uint32_t ready_count = 0, late = 0;
+  if (!room) {
+    if (!send_drops(left, leaving, sink, context)) return false;
+  } else {
+    // Left nodes nothing entering refines: gone from view (drop now), or
+    // merged into an entering ancestor (drop once it is sent: at the end).
+    for (uint32_t j = 0; j < leaving; ++j) {
+      if (waiting[j] != 0) continue;
+      bool merged = false;
+      for (uint32_t a = left[j]; a != 0 && !merged;) {
+        a = index_of(cut_.parent(NodeId{a}));
+        merged = find_node(cut_.entered(), entering, a);
+      }
+      if (merged) waiting[j] = kNoGroup;  // dropped last
+      else ready[ready_count++] = left[j];
+    }
+    if (!send_drops(ready, ready_count, sink, context)) return false;
+    ready_count = 0;
+  }
+  // A client that holds nothing gets its first nodes in small batches, so
+  // the first of them (and the classes they use) arrive soonest.
+  for (uint32_t done = 0, batch = 0; done < entering; ++batch) {
+    const uint32_t most = ramp && batch < 3 && (16u << (2 * batch)) < per_frame ? 16u << (2 * batch) : per_frame;
+    const uint32_t n = entering - done < most ? entering - done : most;
+    if (!send_nodes(order + done, n, sink, context)) return false;
+    if (room) {
+      for (uint32_t i = done; i < done + n; ++i) {
+        const uint32_t g = static_cast<uint32_t>(order[i] >> 32);
+        if (g != kNoGroup && --waiting[g] == 0) ready[ready_count++] = left[g];
+      }
+      if (!send_drops(ready, ready_count, sink, context)) return false;
+      ready_count = 0;
+    }
+    done += n;
+  }
+  if (room) {
+    for (uint32_t j = 0; j < leaving; ++j)
+      if (waiting[j] == kNoGroup) ready[late++] = left[j];
+    if (!send_drops(ready, late, sink, context)) return false;
+  }
+  return true;
 }
 
 const char* receive_status_text(ReceiveStatus s) {
@@ -194,6 +482,8 @@ void StreamReceiver::init(NodeCache* cache, uint8_t* reader_storage, size_t byte
   cache_status_ = CacheStatus::kOk;
   fault_ = Fault{};
   has_update_end_ = false;
+  part_ = UpdateBegin{};
+  part_nodes_ = 0;
   bytes_ = nodes_ = 0;  // startup_crc_ stays: it is the cache's, which init keeps
   frames_ = 0;
 }
@@ -212,6 +502,28 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
       has_update_end_ = false;
       return ReceiveStatus::kOk;
     }
+    case MessageType::kModel: {
+      if (f.payload_bytes < kModelTagBytes) return ReceiveStatus::kBadMessage;
+      const CacheStatus s = cache_->load_model(f.payload + kModelTagBytes, f.payload_bytes - kModelTagBytes);
+      if (s != CacheStatus::kOk) return refused(s);
+      startup_crc_ = load_u32le(f.payload);
+      has_update_end_ = false;
+      part_ = UpdateBegin{};
+      return ReceiveStatus::kOk;
+    }
+    case MessageType::kClasses: {
+      ClassesPiece c;
+      if (!cache_->ready() || !parse_classes(f.payload, f.payload_bytes, &c)) return ReceiveStatus::kBadMessage;
+      const CacheStatus s = cache_->add_classes(c.table, c.first, c.count, c.values, c.value_bytes);
+      return s == CacheStatus::kOk ? ReceiveStatus::kOk : refused(s);
+    }
+    case MessageType::kUpdateBegin: {
+      UpdateBegin u;
+      if (!cache_->ready() || !parse_update_begin(f.payload, f.payload_bytes, &u)) return ReceiveStatus::kBadMessage;
+      part_ = u;
+      part_nodes_ = 0;
+      return ReceiveStatus::kOk;
+    }
     case MessageType::kNodes: {
       NodeBatch b;
       if (!cache_->ready() ||
@@ -222,6 +534,7 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
         if (s != CacheStatus::kOk) return refused(s);
       }
       nodes_ += b.count;
+      part_nodes_ += b.count;
       return ReceiveStatus::kOk;
     }
     case MessageType::kDrop: {

@@ -32,9 +32,31 @@ SpgHeader reduced_header(const SpgHeader& full, uint8_t attributes);
 // attributes: their fields are dropped, the others keep their values).
 void transcode_record(const RecordLayout& from, const RecordLayout& to, const uint8_t* in, uint8_t* out);
 
+// The classes of each table renumbered in the order a stream first needs
+// them: by the first node, breadth first, that uses each (coarse nodes
+// first), the unused ones last. A protocol 4 stream sends its class tables
+// in this order as prefixes, so a coarse cut needs a short prefix; records
+// are renumbered to match as they are sent. Built once per model over
+// caller storage, shared read-only by every client's sender.
+class ClassOrder {
+ public:
+  static size_t bytes(const SpgHeader& header);
+  // `view` from spg_parse (its records are read during init only).
+  [[nodiscard]] bool init(const SpgView& view, void* storage, size_t bytes);
+  uint16_t to_sent(int table, uint32_t c) const { return to_sent_[table][c]; }
+  uint16_t from_sent(int table, uint32_t k) const { return from_sent_[table][k]; }
+
+ private:
+  uint16_t* to_sent_[3] = {};
+  uint16_t* from_sent_[3] = {};
+};
+
 // Writes the reduced startup message (header and the wanted class tables)
 // into out[0 .. capacity); returns its length or 0 when it does not fit.
-size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity);
+// With `order`, the tables are in its order; `spare` (as large as the
+// message) is then worked in.
+size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity,
+                             const ClassOrder* order = nullptr, uint8_t* spare = nullptr);
 
 // Where a sender's frames go: called with each whole frame (a transport's
 // write, a queue); false stops the update (the link is gone).
@@ -50,10 +72,20 @@ struct SenderScratch {
   CutScratch cut;
   uint8_t* payload = nullptr;  // kMaxPayload
   uint8_t* frame = nullptr;    // kMaxFrameBytes
+  // The order a change is sent in (StreamSender::update), for changes of up
+  // to `order_capacity` nodes each way: 24 bytes a node.
+  uint64_t* order = nullptr;    // entering nodes: (projected size << 32 | ~id), then the left node each refines
+  uint32_t* left = nullptr;     // the nodes that left, ascending
+  uint32_t* waiting = nullptr;  // per left node: its entering descendants not yet sent
+  uint32_t* ready = nullptr;    // left nodes whose replacements are all sent, to drop
+  uint32_t order_capacity = 0;
 };
 
 class StreamSender {
  public:
+  // A cold start's first cut: small enough to cross a 115,200-baud line
+  // well within a second, large enough to be a whole silhouette.
+  static constexpr uint32_t kCoarseNodes = 128;
   // One block for a client that may see the whole tree: its state and a
   // scratch of its own.
   static size_t storage_bytes(const SpgHeader& header);
@@ -65,6 +97,9 @@ class StreamSender {
   [[nodiscard]] bool init(const SpgView& view, const CutBounds& bounds, void* state, size_t state_bytes,
                           const SenderScratch* scratch);
   void use_scratch(const SenderScratch* scratch);
+  // The model's class order (protocol 4 streams; null: the file's order).
+  // Must outlive the sender.
+  void use_class_order(const ClassOrder* order) { classes_ = order; }
   // Moves the cut's state to larger storage (ViewCut::relocate).
   [[nodiscard]] bool relocate(void* state, size_t state_bytes) { return cut_.relocate(state, state_bytes); }
   // The client's hello: sends the reduced startup. False for a hello the
@@ -73,11 +108,21 @@ class StreamSender {
   // One camera update: the cut's change as drop and node batches, then an
   // update-end. Returns false when the sink refused a frame, or when the
   // cut outgrew its storage (cut_status() is then kStorageTooSmall and
-  // nothing was sent: grow the scratch or the state, and update again).
+  // nothing more was sent: grow the scratch or the state, and update again).
+  //
+  // Coarse to fine (docs/protocol.md "Order"): a client that holds nothing
+  // first gets a coarse cut of at most kCoarseNodes nodes (a whole
+  // silhouette), then the rest. Entering nodes go largest projected size
+  // first; a node that left is dropped as soon as every entering node that
+  // refines it has been sent (a picture without holes), one that no longer
+  // shows before the nodes, and one that a coarser entering node replaces
+  // after them — unless the client's cache could not hold both, when every
+  // drop goes first.
   [[nodiscard]] bool update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context);
   // The tag a resuming client names its model by: the CRC-32 of the startup
-  // payload a client asking for `attributes` receives (0 when none).
-  uint32_t model_tag(uint8_t attributes) const;
+  // payload a client of protocol `version` asking for `attributes` receives
+  // (version 4: would hold, with every class; 0 when none).
+  uint32_t model_tag(uint8_t attributes, uint16_t version = kProtocolVersion) const;
   // A resumed stream (protocol 3): no startup; the client holds `held`
   // (ascending ids) from an earlier stream of this model, so the first
   // update sends only what it lacks. Sends kResumed. False when the hello
@@ -101,6 +146,13 @@ class StreamSender {
 
  private:
   uint8_t adopt_hello(const Hello& hello);  // the reduced layout and capacity; the attributes wanted
+  // The cut's last change, in the order above, announced (protocol 4) as
+  // a part of camera `sequence` with `parts_after` parts to follow.
+  bool send_change(uint32_t sequence, uint8_t parts_after, bool ramp, FrameSink sink, void* context);
+  bool send_classes(const uint64_t* order, uint32_t count, FrameSink sink, void* context);  // what the nodes lack
+  void reduce(const uint8_t* record, uint8_t* out) const;  // to the reduced layout and the class order
+  bool send_drops(const uint32_t* ids, uint32_t count, FrameSink sink, void* context);
+  bool send_nodes(const uint64_t* order, uint32_t count, FrameSink sink, void* context);  // ids in the low words, inverted
   const SpgView* view_ = nullptr;
   ViewCut cut_;
   SenderScratch own_scratch_;  // with the one-block init
@@ -109,6 +161,9 @@ class StreamSender {
   size_t reduced_record_bytes_ = 0;
   bool same_layout_ = true;  // the client takes every attribute: records are copied as they are
   uint32_t capacity_ = 0;
+  const ClassOrder* classes_ = nullptr;
+  bool pieces_ = false;         // protocol 4: class tables in pieces, records in the class order
+  uint16_t classes_sent_[3] = {};  // the prefix of each table the client holds
   uint16_t sequence_ = 0;
   uint64_t bytes_sent_ = 0;
   CutStatus cut_status_ = CutStatus::kOk;
@@ -142,8 +197,13 @@ class StreamReceiver {
   uint64_t bytes_received() const { return bytes_; }
   uint32_t frames() const { return frames_; }
   uint64_t nodes_received() const { return nodes_; }  // node entries in node batches
+  // Progress (protocol 4): the part of an update being received (its
+  // camera, the nodes entering in it, the parts after it) and how many of its
+  // nodes have come.
+  const UpdateBegin& part() const { return part_; }
+  uint32_t part_nodes() const { return part_nodes_; }
   // The CRC-32 of the last startup payload taken (what a resume names the
-  // model by), 0 before any.
+  // model by; protocol 4: the model's tag), 0 before any.
   uint32_t startup_crc() const { return startup_crc_; }
   // The sequence the next frame must carry.
   uint16_t expected_sequence() const { return reader_.expected_sequence(); }
@@ -162,6 +222,8 @@ class StreamReceiver {
   uint64_t bytes_ = 0, nodes_ = 0;
   uint32_t frames_ = 0;
   uint32_t startup_crc_ = 0;
+  UpdateBegin part_{};
+  uint32_t part_nodes_ = 0;
 };
 
 }  // namespace stipple

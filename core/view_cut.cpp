@@ -277,6 +277,19 @@ bool ViewCut::adopt_sent(const NodeId* ids, uint32_t count) {
 
 uint8_t ViewCut::points(NodeId id) const { return bounds_[index_of(id)].points; }
 
+NodeId ViewCut::parent(NodeId id) const {
+  // The last node before `id` whose first child is at or before it: nodes
+  // after the parent (leaves or not) have their first child past `id`.
+  const uint32_t x = index_of(id);
+  uint32_t lo = 0, hi = x;  // first_child(lo) <= x < first_child(hi)
+  while (hi - lo > 1) {
+    const uint32_t mid = lo + (hi - lo) / 2;
+    if (bounds_[mid].first_child <= x) lo = mid;
+    else hi = mid;
+  }
+  return NodeId{lo};
+}
+
 bool ViewCut::is_sent(NodeId id) const {
   IdReader r{state_};
   for (uint32_t i = 0; i < sent_count_; ++i) {

@@ -18,6 +18,7 @@ ClientStatus status_of(CacheStatus s) {
     case CacheStatus::kBadRecord: return ClientStatus::kBadRecord;
     case CacheStatus::kFull: return ClientStatus::kCacheFull;
     case CacheStatus::kUnknownNode: return ClientStatus::kUnknownNode;
+    case CacheStatus::kBadClasses: return ClientStatus::kBadStartup;
   }
   return ClientStatus::kBadConfig;
 }

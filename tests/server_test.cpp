@@ -197,13 +197,13 @@ TEST(Server, NetworkClientsAreSizedForTheStartupTheyReceive) {
   }
 }
 
-// A serial line too noisy for its rate (a bit error in 10^4: 800 bytes in a
-// million flipped): the startup's frames never arrive whole. The client
+// A serial line too noisy for its rate (10 % of its bytes flipped): not even
+// the model's 116-byte header frame (protocol 4) arrives whole. The client
 // gives up after its timeout saying what happened — bytes arrived, frames
 // damaged, resends asked — not only that there was no answer.
 TEST_F(ServerWithLog, ATooNoisyLineSaysWhatHappened) {
   LinkProfile down = kSerial115200;
-  down.flip_per_million = 800;
+  down.flip_per_million = 100000;
   down.seed = 11;
   ShapedPipe pipe(down, kSerial115200);
   server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "serial", true);
@@ -216,7 +216,7 @@ TEST_F(ServerWithLog, ATooNoisyLineSaysWhatHappened) {
   EXPECT_NE(error.find(" frames were damaged on the way and "), std::string::npos) << error;
   EXPECT_NE(error.find("the line is too noisy for its rate"), std::string::npos) << error;
   EXPECT_GT(remote.damaged(), 0u);
-  EXPECT_GT(remote.bytes_received(), 10000u);
+  EXPECT_GT(remote.bytes_received(), 500u);  // the header, again and again
   std::printf("%s\n", error.c_str());
 }
 
@@ -246,9 +246,11 @@ TEST(Server, AVanishedLinkSaysWhatHappened) {
   }
 }
 
-// A client that does not read: over a 4 KB loopback ring not even the
-// startup can be written out, so none of its 50 cameras is answered while it
-// stalls — then, once it reads, only the latest one.
+// A client that does not read: over a 4 KB loopback ring the model's header
+// and the start of camera 0's answer go out, and the rest of that answer
+// waits in its queue; of the 49 cameras that come while it stalls none is
+// answered — then, once it reads, camera 0's answer ends and only the latest
+// camera is answered after it.
 TEST(Server, AStalledClientKeepsOnlyItsLatestCamera) {
   Server server;
   std::string error;
@@ -278,7 +280,7 @@ TEST(Server, AStalledClientKeepsOnlyItsLatestCamera) {
     server.step(0);
   }
   ASSERT_EQ(server.report().size(), 1u);
-  EXPECT_EQ(server.report()[0].updates, 0u);
+  EXPECT_EQ(server.report()[0].updates, 1u);
   // Now it reads everything: the server answers camera 49, and stops.
   std::vector<uint8_t> storage(kMaxFrameBytes);
   FrameReader reader;
@@ -300,8 +302,8 @@ TEST(Server, AStalledClientKeepsOnlyItsLatestCamera) {
       }
     }
   }
-  EXPECT_EQ(answered, (std::vector<uint32_t>{49}));
-  EXPECT_EQ(server.report()[0].updates, 1u);
+  EXPECT_EQ(answered, (std::vector<uint32_t>{0, 49}));
+  EXPECT_EQ(server.report()[0].updates, 2u);
 }
 
 // A serial line (COBS framing) that loses bytes and flips bits both ways:
@@ -734,8 +736,8 @@ TEST_F(ServerWithLog, SerialResendsWhatIsKeptAndStartsOverWhenItIsNot) {
   write_camera_update(u, payload);
   send(MessageType::kCamera, payload, kCameraUpdateBytes);
   const auto first = received();
-  ASSERT_GE(first.size(), 4u);  // startup, batches, update-end
-  EXPECT_EQ(first.front().first, static_cast<uint8_t>(MessageType::kStartup));
+  ASSERT_GE(first.size(), 4u);  // model, classes, batches, update-end
+  EXPECT_EQ(first.front().first, static_cast<uint8_t>(MessageType::kModel));
   EXPECT_EQ(first.back().first, static_cast<uint8_t>(MessageType::kUpdateEnd));
   // Resend from frame 2: frames 2 .. last again, the same ones.
   write_sequence(2, payload);
@@ -752,7 +754,7 @@ TEST_F(ServerWithLog, SerialResendsWhatIsKeptAndStartsOverWhenItIsNot) {
   server.step(0);
   const auto over = received();
   ASSERT_GE(over.size(), 2u);
-  EXPECT_EQ(over.front(), std::make_pair(static_cast<uint8_t>(MessageType::kStartup), uint16_t{0}));
+  EXPECT_EQ(over.front(), std::make_pair(static_cast<uint8_t>(MessageType::kModel), uint16_t{0}));
   EXPECT_EQ(over.back().first, static_cast<uint8_t>(MessageType::kUpdateEnd));  // and the view again
   bool logged = false;
   for (const std::string& l : log) logged = logged || l.find("frame 2 asked again is no longer kept: starting over") != std::string::npos;

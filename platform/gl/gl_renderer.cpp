@@ -209,10 +209,6 @@ bool GlRenderer::init(const NodeCache& cache, const GlRenderOptions& options, st
   }
   glGenVertexArrays(1, &vao_);
   glGenBuffers(1, &instances_);
-  // The class sigmas as the decoder holds them (MU), one RGBA32F texel each.
-  std::vector<float> sigma(4 * size_t{std::max<uint16_t>(h.class_count[0], 1)}, 0.f);
-  for (uint16_t c = 0; c < h.class_count[0]; ++c)
-    for (int k = 0; k < 3; ++k) sigma[4 * size_t{c} + k] = static_cast<float>(cache.decoder().sigma_p_mu(ClassId{c})[k]);
   // The client's quasi-random Gaussian samples (core/gaussian_table.h).
   samples_ = options.samples;
   std::vector<Gaussian3Q12> g(samples_);
@@ -228,16 +224,30 @@ bool GlRenderer::init(const NodeCache& cache, const GlRenderOptions& options, st
     glBindTexture(GL_TEXTURE_BUFFER, *texture);
     glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, *buffer);
   };
-  texture_buffer(sigma, &sigma_buffer_, &sigma_texture_);
+  texture_buffer(std::vector<float>(4, 0.f), &sigma_buffer_, &sigma_texture_);
+  upload_sigmas(cache);
   texture_buffer(gauss, &gauss_buffer_, &gauss_texture_);
   const GLenum e = glGetError();
   if (e != GL_NO_ERROR) return error = "GL error " + std::to_string(e) + " setting up the renderer", false;
   return true;
 }
 
+void GlRenderer::upload_sigmas(const NodeCache& cache) {
+  // The class sigmas as the decoder holds them (MU), one RGBA32F texel each;
+  // again whenever classes arrive (protocol 4 sends them in pieces).
+  const uint16_t classes = cache.header().class_count[0];
+  std::vector<float> sigma(4 * size_t{std::max<uint16_t>(classes, 1)}, 0.f);
+  for (uint16_t c = 0; c < classes; ++c)
+    for (int k = 0; k < 3; ++k) sigma[4 * size_t{c} + k] = static_cast<float>(cache.decoder().sigma_p_mu(ClassId{c})[k]);
+  glBindBuffer(GL_TEXTURE_BUFFER, sigma_buffer_);
+  glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(sigma.size() * 4), sigma.data(), GL_STATIC_DRAW);
+  uploaded_classes_ = cache.classes_changed();
+}
+
 bool GlRenderer::draw(const NodeCache& cache, const Camera& camera, int width, int height, const GlRenderOptions& o,
                       GlFrameStats* stats, std::string& error) {
   GlFrameStats s;
+  if (cache.classes_changed() != uploaded_classes_) upload_sigmas(cache);
   const SpgHeader& h = cache.header();
   const uint32_t n = cache.count();
   const float focal = static_cast<float>(camera.focal_q4) / 16.f;

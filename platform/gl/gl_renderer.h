@@ -75,12 +75,14 @@ class GlRenderer {
 
  private:
   bool build_program(bool gpu, std::string& error);
+  void upload_sigmas(const NodeCache& cache);
 
   unsigned programs_[2] = {0, 0};  // CPU decode, GPU decode
   unsigned vao_ = 0, instances_ = 0;
   unsigned sigma_buffer_ = 0, sigma_texture_ = 0, gauss_buffer_ = 0, gauss_texture_ = 0;
   int field_offset_[18] = {}, field_bits_[18] = {};
   uint16_t samples_ = 0;
+  uint32_t uploaded_classes_ = 0;  // the cache's classes_changed() the sigma texture holds
   std::vector<uint8_t> staging_;  // instance data, bucket by bucket
   std::vector<uint32_t> order_;   // cache slots by bucket
   std::vector<uint16_t> counts_;  // per slot

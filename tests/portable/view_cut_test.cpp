@@ -124,6 +124,20 @@ TEST(ViewCut, UpdatedEqualsFreshOverARandomWalk) {
   }
 }
 
+TEST(ViewCut, ParentIsFoundForEveryNodeOfBothTrees) {
+  for (const char* file : {"tests/golden/bunny_v1.spg", "tests/data/sphere600_octree.spg"}) {
+    const Model m(file);
+    Cut cut(m);
+    EXPECT_EQ(index_of(cut.cut.parent(NodeId{0})), 0u);
+    uint32_t next = 1;
+    for (uint32_t i = 0; i < m.view.header.node_count; ++i) {
+      const uint32_t c = spg_child_count(m.view, i);
+      for (uint32_t k = next; k < next + c; ++k) ASSERT_EQ(index_of(cut.cut.parent(NodeId{k})), i) << file << " node " << k;
+      next += c;
+    }
+  }
+}
+
 TEST(ViewCut, BudgetRefinesWhereNodesAreLargest) {
   const Model& m = bunny();
   Cut cut(m);

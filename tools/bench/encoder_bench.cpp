@@ -566,6 +566,7 @@ void BM_LinkTime(benchmark::State& state) {
     if (!time_over_link(spg, link, link, c, cameras, t, error)) state.SkipWithError(error.c_str());
   state.counters["first_image_s"] = t.first_image_s;
   state.counters["converged_s"] = t.converged_s;
+  state.counters["silhouette90_s"] = t.silhouette_s;
   state.counters["orbit_step_s"] = t.orbit_step_s;
   state.counters["bytes"] = static_cast<double>(t.bytes_down);
   state.counters["cut_nodes"] = t.cut_nodes;

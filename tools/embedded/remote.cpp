@@ -180,7 +180,8 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
       continue;
     }
     const uint16_t sequence = load_u16le(p + 2);
-    if (p[0] == static_cast<uint8_t>(MessageType::kStartup) && sequence == 0 && receiver_.expected_sequence() != 0) {
+    const bool startup = p[0] == static_cast<uint8_t>(MessageType::kStartup) || p[0] == static_cast<uint8_t>(MessageType::kModel);
+    if (startup && sequence == 0 && receiver_.expected_sequence() != 0) {
       // The server started the stream over (it no longer had what we asked
       // for, or it answers a hello): a new cache from this startup, and the
       // view asked for again.
@@ -296,7 +297,7 @@ bool RemoteModel::link_again(std::string& error) {
 bool RemoteModel::receive_frame(const uint8_t* frame, size_t size, ReceiveStatus& status, std::string& error) {
   status = receiver_.receive(frame, size);
   if (status == ReceiveStatus::kCacheRefused && receiver_.cache_status() == CacheStatus::kStartupTooLarge &&
-      frame[0] == static_cast<uint8_t>(MessageType::kStartup)) {
+      (frame[0] == static_cast<uint8_t>(MessageType::kStartup) || frame[0] == static_cast<uint8_t>(MessageType::kModel))) {
     if (!fit_startup(frame, size, error)) return false;  // sized for it, then the same frame again
     status = receiver_.receive(frame, size);
   }
@@ -313,11 +314,15 @@ bool RemoteModel::fit_startup(const uint8_t* frame, size_t size, std::string& er
   std::vector<uint8_t> storage(kMaxFrameBytes);
   reader.init(storage.data(), storage.size());
   Frame f;
-  if (reader.feed(frame, size) == 0 || reader.next(&f) != FrameStatus::kOk || f.type != MessageType::kStartup)
+  if (reader.feed(frame, size) == 0 || reader.next(&f) != FrameStatus::kOk ||
+      (f.type != MessageType::kStartup && f.type != MessageType::kModel))
     return error = "the client refused the server's startup (too large) and it could not be read again", false;
   SpgView view;
   size_t used = 0;
-  if (!spg_parse_startup(f.payload, f.payload_bytes, &view, &used).ok())
+  const bool model = f.type == MessageType::kModel;  // protocol 4: the header alone, after the model's tag
+  if (model ? f.payload_bytes < kModelTagBytes ||
+                  !spg_parse_header(f.payload + kModelTagBytes, f.payload_bytes - kModelTagBytes, &view.header, &used).ok()
+            : !spg_parse_startup(f.payload, f.payload_bytes, &view, &used).ok())
     return error = "the client refused the server's startup: it does not validate", false;
   const SpgHeader& h = view.header;
   ClientConfig wide = config_;

@@ -1,6 +1,8 @@
 // stipple server — timing over an emulated link. See link_timing.h.
 #include "tools/server/link_timing.h"
 
+#include <algorithm>
+
 #include "core/protocol.h"
 #include "core/stream.h"
 #include "tools/embedded/remote.h"
@@ -29,10 +31,30 @@ bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, c
       at += moved;
     }
   };
+  // What the client draws, every 50 ms of link time until the first view
+  // converges: the pixels it covers (anything but the black background).
+  const RasterConfig& r = config.raster;
+  const size_t pixel_bytes = r.format == PixelFormat::kRgb565 ? 2 : 3;
+  const size_t stride = r.width * pixel_bytes;
+  std::vector<uint8_t> image(stride * r.height);
+  std::vector<std::vector<bool>> drawn;
+  bool sampling = true;
+  uint64_t next_sample_us = 0;
+  const auto covered = [&] {
+    std::vector<bool> mask(size_t{r.width} * r.height, false);
+    if (client.node_count() > 0 && client.render(cameras[0], image.data(), stride) == ClientStatus::kOk)
+      for (size_t i = 0; i < mask.size(); ++i)
+        for (size_t b = 0; b < pixel_bytes; ++b) mask[i] = mask[i] || image[i * pixel_bytes + b] != 0;
+    return mask;
+  };
   // Runs the loop in 100 us steps of simulated time until `done`.
   const auto run_until = [&](auto done, double limit_s) {
     uint8_t buf[4096];
     while (!done()) {
+      if (sampling && pipe.now_us() >= next_sample_us) {
+        drawn.push_back(covered());
+        next_sample_us += 50000;
+      }
       server.step(0);
       size_t got = 0;
       while (pipe.client().read(buf, sizeof buf, &got) == TransportStatus::kOk && got > 0)
@@ -54,6 +76,26 @@ bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, c
   out.first_image_s = static_cast<double>(pipe.now_us()) / 1e6;
   if (!run_until([&] { return receiver.converged(0); }, 3600)) return error = "the first view did not converge", false;
   out.converged_s = static_cast<double>(pipe.now_us()) / 1e6;
+  sampling = false;
+  {
+    const std::vector<bool> whole = covered();
+    const auto share = [&](const std::vector<bool>& m) {
+      size_t both = 0, all = 0;
+      for (size_t i = 0; i < whole.size(); ++i) {
+        all += whole[i];
+        both += whole[i] && m[i];
+      }
+      return all == 0 ? 1.0 : static_cast<double>(both) / static_cast<double>(all);
+    };
+    out.coverage.clear();
+    out.silhouette_s = out.converged_s;
+    bool whole_enough = false;
+    for (size_t k = 0; k < drawn.size(); ++k) {
+      out.coverage.push_back(share(drawn[k]));
+      if (!whole_enough && out.coverage.back() >= 0.9) out.silhouette_s = 0.05 * static_cast<double>(k);
+      whole_enough = whole_enough || out.coverage.back() >= 0.9;
+    }
+  }
   double steps = 0;
   for (uint32_t k = 1; k < cameras.size(); ++k) {
     const uint64_t start = pipe.now_us();

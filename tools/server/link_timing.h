@@ -16,10 +16,14 @@ namespace stipple {
 
 struct LinkTiming {
   double first_image_s = 0;  // from the hello to the first node batch applied (something to draw)
+  // To the first drawn frame (sampled every 50 ms of link time) covering at
+  // least 90 % of the pixels the converged frame covers: a whole silhouette.
+  double silhouette_s = 0;
   double converged_s = 0;    // to the update-end of the first camera (the whole cut)
   double orbit_step_s = 0;   // mean time from a camera update to its update-end, over the orbit
   uint64_t bytes_down = 0;   // server -> client, all of it
   uint32_t cut_nodes = 0;
+  std::vector<double> coverage;  // the share of the converged silhouette drawn, every 50 ms from the hello
 };
 
 // The first camera is `cameras[0]`; the rest are the orbit.

@@ -144,6 +144,9 @@ bool ServedModel::build(const uint8_t* data, size_t size, const ConeRule& cones,
   bounds_storage_.assign(CutBounds::bytes(view_.header) / 8 + 1, 0);
   if (bounds_.init(view_, decoder_, bounds_storage_.data(), bounds_storage_.size() * 8, cones) != CutStatus::kOk)
     return error = name_ + ": the cut's bounds could not be built", false;
+  class_order_storage_.assign(ClassOrder::bytes(view_.header) / 8 + 1, 0);
+  if (!class_order_.init(view_, class_order_storage_.data(), class_order_storage_.size() * 8))
+    return error = name_ + ": the class order could not be built", false;
   return true;
 }
 
@@ -214,6 +217,7 @@ void Server::add_client(std::unique_ptr<Transport> transport, int fd, const std:
     log(c->name + ": could not be set up");
     return;
   }
+  c->sender.use_class_order(&model_->class_order());
   log(c->name + ": connected");
   clients_.push_back(std::move(c));
 }
@@ -355,7 +359,7 @@ void Server::handle(Client& c, const Frame& f) {
                       std::to_string(c.resume_total));
       c.resuming = false;
       Hello h = c.hello_message;
-      const uint32_t tag = c.sender.model_tag(h.attributes);
+      const uint32_t tag = c.sender.model_tag(h.attributes, h.version);
       bool resumed = false;
       if (tag == c.resume_tag && tag != 0) {
         // It holds this model's nodes: it is sent only what it lacks.
