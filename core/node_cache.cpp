@@ -12,6 +12,7 @@ struct Layout {
   size_t decoder, records, ids, points, hash, total;
   size_t decoder_bytes, record_stride;
   uint32_t hash_entries;
+  size_t held;  // one bit a class a startup may have: which have come
 };
 
 // A hash entry holds a slot + 1 (0: empty): 16 bits where every slot's
@@ -52,6 +53,7 @@ Layout layout_of(const NodeCacheLimits& c) {
   l.ids = take(4 * size_t{c.node_capacity});
   l.points = take(size_t{c.node_capacity});
   l.hash = take(hash_entry_bytes(c) * size_t{l.hash_entries});
+  l.held = take((size_t{c.max_classes[0]} + c.max_classes[1] + c.max_classes[2] + 7) / 8);
   l.total = arena.total();
   return l;
 }
@@ -71,7 +73,8 @@ const char* cache_status_text(CacheStatus s) {
     case CacheStatus::kBadRecordSize: return "node record size differs from the startup message's";
     case CacheStatus::kBadRecord: return "node record has a class index beyond its table or nonzero padding";
     case CacheStatus::kFull: return "node cache is full";
-    case CacheStatus::kBadClasses: return "a class table piece that does not continue the classes held, or a bad value";
+    case CacheStatus::kBadClasses: return "a class beyond its table, or a bad class value";
+    case CacheStatus::kClassMissing: return "node record uses a class that has not come yet";
     case CacheStatus::kUnknownNode: return "node is not in the cache";
   }
   return "unknown status";
@@ -94,6 +97,7 @@ CacheStatus NodeCache::init(const NodeCacheLimits& limits, void* storage, size_t
   hash16_ = hash_entry_bytes(limits) == 2 ? reinterpret_cast<uint16_t*>(base + l.hash) : nullptr;
   hash32_ = hash16_ == nullptr ? reinterpret_cast<uint32_t*>(base + l.hash) : nullptr;
   hash_mask_ = l.hash_entries - 1;
+  held_ = base + l.held;
   ready_ = false;
   clear();
   return CacheStatus::kOk;
@@ -139,23 +143,34 @@ CacheStatus NodeCache::adopt(const SpgView& view) {
       if (h.layout.bits[static_cast<int>(theta) + k] > limits_.max_angle_bits) return CacheStatus::kStartupTooLarge;
   if (decoder_.init(view, decoder_storage_, decoder_bytes_) != DecodeStatus::kOk) return CacheStatus::kStartupTooLarge;
   header_ = h;
-  for (int c = 0; c < 3; ++c) header_.class_count[c] = decoder_.class_count(c);
   record_bytes_ = static_cast<size_t>(h.layout.record_bytes());
+  // Every class held (a whole startup), or none yet (a model header).
+  all_held_ = view.sigma_p != nullptr;
+  for (int t = 0; t < 3; ++t) held_count_[t] = all_held_ ? h.class_count[t] : 0;
+  const size_t bits = size_t{h.class_count[0]} + h.class_count[1] + h.class_count[2];
+  for (size_t i = 0; i < (bits + 7) / 8 && !all_held_; ++i) held_[i] = 0;
   ++classes_changed_;
   ready_ = true;
   return CacheStatus::kOk;
 }
 
-CacheStatus NodeCache::add_classes(int table, uint32_t first, uint32_t count, const uint8_t* values, size_t size) {
+bool NodeCache::class_held(int table, uint32_t index) const {
+  if (all_held_) return true;
+  const size_t bit = (table > 0 ? header_.class_count[0] : 0u) + (table > 1 ? header_.class_count[1] : 0u) + size_t{index};
+  return (held_[bit / 8] >> (bit % 8)) & 1u;
+}
+
+CacheStatus NodeCache::add_class(int table, uint32_t index, const uint8_t* values, size_t size) {
   if (!ready_) return CacheStatus::kNoStartup;
-  if (table < 0 || table > 2 || decoder_.full_class_count(table) == 0) return CacheStatus::kBadClasses;
-  const size_t per_class = (table == 1 ? 2 : 3) * spg_class_value_bytes(header_.version);
-  // The new classes continue those held (a piece may repeat some of them).
-  if (first > decoder_.class_count(table) || count > uint32_t{decoder_.full_class_count(table)} - first ||
-      size != per_class * count || !spg_check_class_values(header_.version, values, size).ok())
+  if (table < 0 || table > 2 || index >= header_.class_count[table] || size != class_value_bytes(table) ||
+      !spg_check_class_values(header_.version, values, size).ok())
     return CacheStatus::kBadClasses;
-  if (!decoder_.set_classes(table, first, count, values)) return CacheStatus::kBadClasses;
-  header_.class_count[table] = decoder_.class_count(table);
+  if (!decoder_.set_classes(table, index, 1, values)) return CacheStatus::kBadClasses;
+  if (!class_held(table, index)) {
+    const size_t bit = (table > 0 ? header_.class_count[0] : 0u) + (table > 1 ? header_.class_count[1] : 0u) + size_t{index};
+    held_[bit / 8] = static_cast<uint8_t>(held_[bit / 8] | (1u << (bit % 8)));
+    ++held_count_[table];
+  }
   ++classes_changed_;
   return CacheStatus::kOk;
 }
@@ -195,6 +210,9 @@ CacheStatus NodeCache::put(NodeId node, const uint8_t* record, size_t size, uint
   if (pad_bits > 0 && (record[record_bytes_ - 1] >> (8 - pad_bits)) != 0) return CacheStatus::kBadRecord;
   const NodeFields fields = decoder_.unpacker().unpack(record);
   if (!decoder_.classes_valid(fields)) return CacheStatus::kBadRecord;
+  if (!all_held_ && (!class_held(0, fields[Field::kSigmaP]) || (header_.has_normals() && !class_held(1, fields[Field::kSigmaN])) ||
+                     (header_.has_color() && !class_held(2, fields[Field::kSigmaC]))))
+    return CacheStatus::kClassMissing;
   const uint32_t id = index_of(node);
   const uint32_t at = find(id);
   uint32_t slot;

@@ -51,7 +51,8 @@ enum class CacheStatus : uint8_t {
   kBadRecord,         // put: class index beyond its table or nonzero padding
   kFull,              // put: node_capacity nodes already held
   kUnknownNode,       // drop: id not held
-  kBadClasses,        // add_classes: a piece that does not continue the classes held, or a bad value
+  kBadClasses,        // add_class: a class beyond its table, or a bad value
+  kClassMissing,      // put: a class the record uses has not come (a model header's cache)
 };
 
 const char* cache_status_text(CacheStatus s);
@@ -67,13 +68,15 @@ class NodeCache {
   // every node. What it needs is copied: the caller's buffer may go away.
   [[nodiscard]] CacheStatus load_startup(const uint8_t* data, size_t size);
   // The same from the fixed header alone (.spg §1, protocol version 4):
-  // the class tables come in pieces (add_classes) before the nodes that use
-  // them; header().class_count says how many of each are held.
+  // the classes come one by one (add_class) before the nodes that use them;
+  // a node whose class has not come is refused (kClassMissing).
   [[nodiscard]] CacheStatus load_model(const uint8_t* data, size_t size);
-  // `count` classes of table 0 (sigma_p), 1 (sigma_n) or 2 (sigma_c) from
-  // `first` on (at most the classes held: no gaps), values as in the header's
-  // version of .spg §2.
-  [[nodiscard]] CacheStatus add_classes(int table, uint32_t first, uint32_t count, const uint8_t* values, size_t size);
+  // Class `index` of table 0 (sigma_p), 1 (sigma_n) or 2 (sigma_c), its
+  // values as in the header's version of .spg §2 (class_value_bytes long).
+  [[nodiscard]] CacheStatus add_class(int table, uint32_t index, const uint8_t* values, size_t size);
+  size_t class_value_bytes(int table) const { return (table == 1 ? 2u : 3u) * spg_class_value_bytes(header_.version); }
+  bool class_held(int table, uint32_t index) const;
+  uint32_t classes_held(int table) const { return held_count_[table]; }
   // Rises whenever the class tables change (a GPU client re-uploads them).
   uint32_t classes_changed() const { return classes_changed_; }
   SpgResult startup_error() const { return startup_error_; }
@@ -133,6 +136,9 @@ class NodeCache {
   uint32_t hash_mask_ = 0;
   uint32_t count_ = 0;
   uint32_t classes_changed_ = 0;
+  uint8_t* held_ = nullptr;  // a bit a class, tables one after another (without all_held_)
+  bool all_held_ = false;
+  uint32_t held_count_[3] = {};
 };
 
 }  // namespace stipple

@@ -140,25 +140,27 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
     extent_mu_[a] = static_cast<int32_t>((axis_scale_q8_[a] + 128) >> 8);
   }
 
-  // Class tables, laid out for the header's counts: all of them now, or
-  // (without tables in the view) none until set_classes brings them.
+  // Class tables: all of them now, or (a view without tables) zeros until
+  // set_classes brings them.
   int32_t* sigmas = reinterpret_cast<int32_t*>(at);
   sigma_p_ = sigmas;
   sigma_n_ = sigma_p_ + 3u * header_.class_count[0];
   sigma_c_ = sigma_n_ + 2u * header_.class_count[1];
-  for (int t = 0; t < 3; ++t) {
-    full_classes_[t] = header_.class_count[t];
-    header_.class_count[t] = 0;
-  }
   const uint8_t* tables[3] = {view.sigma_p, view.sigma_n, view.sigma_c};
-  for (int t = 0; t < 3; ++t)
-    if (tables[t] != nullptr && full_classes_[t] > 0 && !set_classes(t, 0, full_classes_[t], tables[t]))
-      return DecodeStatus::kBadClass;
+  for (int t = 0; t < 3; ++t) {
+    if (header_.class_count[t] == 0) continue;
+    if (tables[t] != nullptr) {
+      if (!set_classes(t, 0, header_.class_count[t], tables[t])) return DecodeStatus::kBadClass;
+    } else {
+      int32_t* table = t == 0 ? sigma_p_ : t == 1 ? sigma_n_ : sigma_c_;
+      for (uint32_t i = 0; i < (t == 1 ? 2u : 3u) * header_.class_count[t]; ++i) table[i] = 0;
+    }
+  }
   return DecodeStatus::kOk;
 }
 
 bool NodeDecoder::set_classes(int table, uint32_t first, uint32_t count, const uint8_t* values) {
-  if (table < 0 || table > 2 || first > header_.class_count[table] || count > full_classes_[table] - first) return false;
+  if (table < 0 || table > 2 || first > header_.class_count[table] || count > header_.class_count[table] - first) return false;
   // sigma_p in MU, sigma_n and sigma_c in Q12 — converted from float32
   // (version 1) or read from the 16-bit codes (version 2, where sigma_p is
   // relative to E and sigma_n, sigma_c are Q12 already).
@@ -180,7 +182,6 @@ bool NodeDecoder::set_classes(int table, uint32_t first, uint32_t count, const u
     for (uint32_t i = 0; i < per_class * count; ++i)
       out[i] = floats ? f32_bits_to_fixed(load_u32le(values + 4 * i), 12, nullptr) : load_u16le(values + 2 * i);
   }
-  if (first + count > header_.class_count[table]) header_.class_count[table] = static_cast<uint16_t>(first + count);
   return true;
 }
 

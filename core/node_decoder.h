@@ -74,15 +74,12 @@ class NodeDecoder {
   [[nodiscard]] DecodeStatus init(const SpgView& view, void* storage, size_t bytes);
 
   // Class tables in pieces (a stream of protocol version 4): init over a view
-  // without tables (null sigma_p) holds no class; set_classes converts
-  // `count` classes of table 0 (sigma_p), 1 (sigma_n) or 2 (sigma_c) from
-  // `first` on, from values in the header's version (docs/format.md §2).
-  // False, and nothing set, when `first` is beyond the classes held (no
-  // gaps) or the range beyond the header's count. class_count() is what is
-  // held, and what decode accepts.
+  // without tables (null sigma_p) holds zeros for every class, and
+  // set_classes converts `count` classes of table 0 (sigma_p), 1 (sigma_n) or
+  // 2 (sigma_c) from `first` on, from values in the header's version
+  // (docs/format.md §2); false, and nothing set, beyond the header's count.
+  // Which classes have come is the node cache's to know.
   [[nodiscard]] bool set_classes(int table, uint32_t first, uint32_t count, const uint8_t* values);
-  uint16_t class_count(int table) const { return header_.class_count[table]; }
-  uint16_t full_class_count(int table) const { return full_classes_[table]; }
 
   // Decodes one packed record (view.record_bytes long).
   [[nodiscard]] DecodeStatus decode(const uint8_t* record, FixedNode* out) const;
@@ -142,7 +139,6 @@ class NodeDecoder {
   int32_t* sigma_p_ = nullptr;  // 3 per class, MU
   int32_t* sigma_n_ = nullptr;  // 2 per class, Q12 radians
   int32_t* sigma_c_ = nullptr;  // 3 per class, Q12
-  uint16_t full_classes_[3] = {};     // the header's counts (header_'s are those held)
 };
 
 }  // namespace stipple

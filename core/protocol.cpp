@@ -311,23 +311,34 @@ bool parse_update_end(const uint8_t* p, size_t size, UpdateEnd* out) {
   return true;
 }
 
-size_t write_classes_header(const ClassesPiece& c, uint8_t out[kClassesHeaderBytes]) {
-  out[0] = c.table;
+size_t write_classes_header(uint8_t table, uint16_t count, uint8_t out[kClassesHeaderBytes]) {
+  out[0] = table;
   out[1] = 0;
-  store_u16le(out + 2, c.first);
-  store_u16le(out + 4, c.count);
-  store_u16le(out + 6, 0);
+  store_u16le(out + 2, count);
   return kClassesHeaderBytes;
 }
 
 bool parse_classes(const uint8_t* p, size_t size, ClassesPiece* out) {
-  if (size <= kClassesHeaderBytes || p[0] > 2 || p[1] != 0 || load_u16le(p + 6) != 0) return false;
+  if (size <= kClassesHeaderBytes || p[0] > 2 || p[1] != 0) return false;
   out->table = p[0];
-  out->first = load_u16le(p + 2);
-  out->count = load_u16le(p + 4);
-  out->values = p + kClassesHeaderBytes;
-  out->value_bytes = size - kClassesHeaderBytes;
+  out->count = load_u16le(p + 2);
+  out->entries = p + kClassesHeaderBytes;
+  out->entries_bytes = size - kClassesHeaderBytes;
   return out->count > 0;
+}
+
+bool next_class_entry(const uint8_t** at, const uint8_t* end, size_t value_bytes, uint32_t* previous, uint32_t* index,
+                      const uint8_t** values) {
+  uint32_t id = 0;
+  switch (next_resume_id(at, end, previous, &id)) {  // the same ascending LEB128 differences
+    case ResumeId::kId: break;
+    default: return false;
+  }
+  if (id > 0xFFFF || static_cast<size_t>(end - *at) < value_bytes) return false;
+  *index = id;
+  *values = *at;
+  *at += value_bytes;
+  return true;
 }
 
 size_t write_update_begin(const UpdateBegin& u, uint8_t out[kUpdateBeginBytes]) {

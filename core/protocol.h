@@ -201,18 +201,25 @@ size_t write_update_end(const UpdateEnd& u, uint8_t out[kUpdateEndBytes]);
 // header of .spg §1 (the full tables' class counts).
 inline constexpr size_t kModelTagBytes = 4;
 
-// kClasses: u8 table (0 sigma_p, 1 sigma_n, 2 sigma_c), u8 0, u16 first
-// class, u16 count (>= 1), u16 0, then count classes' values as in .spg §2
-// for the header's version. The receiver checks the values' length.
-inline constexpr size_t kClassesHeaderBytes = 8;
+// kClasses: u8 table (0 sigma_p, 1 sigma_n, 2 sigma_c), u8 0, u16 count
+// (>= 1), then count entries, class indices ascending: the LEB128 of the
+// index's difference from the previous one (the first from -1; 0 names a
+// class twice), then the class's values as in .spg §2 for the header's
+// version (class_value_bytes each).
+inline constexpr size_t kClassesHeaderBytes = 4;
 struct ClassesPiece {
   uint8_t table = 0;
-  uint16_t first = 0, count = 0;
-  const uint8_t* values = nullptr;
-  size_t value_bytes = 0;
+  uint16_t count = 0;
+  const uint8_t* entries = nullptr;
+  size_t entries_bytes = 0;
 };
-size_t write_classes_header(const ClassesPiece& c, uint8_t out[kClassesHeaderBytes]);
+size_t write_classes_header(uint8_t table, uint16_t count, uint8_t out[kClassesHeaderBytes]);
 [[nodiscard]] bool parse_classes(const uint8_t* payload, size_t size, ClassesPiece* out);
+// The next entry of a piece: its class index and values (`value_bytes`
+// long); false at a malformed, repeated or truncated one. `*previous` starts
+// at 0xFFFFFFFF.
+[[nodiscard]] bool next_class_entry(const uint8_t** at, const uint8_t* end, size_t value_bytes, uint32_t* previous,
+                                    uint32_t* index, const uint8_t** values);
 
 // kUpdateBegin: u32 camera sequence, u32 nodes entering in this part, u32
 // nodes leaving in it, u8 parts of the update after this one, 3 zero bytes.

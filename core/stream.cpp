@@ -34,67 +34,18 @@ void transcode_record(const RecordLayout& from, const RecordLayout& to, const ui
   pack_record(to, f, out);
 }
 
-size_t ClassOrder::bytes(const SpgHeader& h) {
-  return align8(4 * (size_t{h.class_count[0]} + h.class_count[1] + h.class_count[2]));
-}
-
-bool ClassOrder::init(const SpgView& view, void* storage, size_t size) {
-  const SpgHeader& h = view.header;
-  if (size < bytes(h)) return false;
-  uint16_t* at = static_cast<uint16_t*>(storage);
-  for (int t = 0; t < 3; ++t) {
-    to_sent_[t] = at;
-    from_sent_[t] = at + h.class_count[t];
-    at += 2 * size_t{h.class_count[t]};
-    for (uint32_t c = 0; c < h.class_count[t]; ++c) to_sent_[t][c] = 0xFFFF;  // counts are below 0xFFFF
-  }
-  static constexpr Field kClassField[3] = {Field::kSigmaP, Field::kSigmaN, Field::kSigmaC};
-  uint32_t next[3] = {};
-  const auto take = [&](int t, uint32_t c) {
-    if (to_sent_[t][c] != 0xFFFF) return;
-    to_sent_[t][c] = static_cast<uint16_t>(next[t]);
-    from_sent_[t][next[t]++] = static_cast<uint16_t>(c);
-  };
-  for (uint32_t i = 0; i < h.node_count; ++i) {
-    const NodeFields f = unpack_record(h.layout, view.records + size_t{i} * view.record_bytes);
-    for (int t = 0; t < 3; ++t)
-      if (h.class_count[t] > 0 && f[kClassField[t]] < h.class_count[t]) take(t, f[kClassField[t]]);
-  }
-  for (int t = 0; t < 3; ++t)
-    for (uint32_t c = 0; c < h.class_count[t]; ++c) take(t, c);  // the unused ones, last
-  return true;
-}
-
 namespace {
 
 constexpr Field kClassField[3] = {Field::kSigmaP, Field::kSigmaN, Field::kSigmaC};
 
-// Bytes of one class's values in table t.
-size_t class_bytes(uint16_t version, int t) { return (t == 1 ? 2u : 3u) * spg_class_value_bytes(version); }
-
 }  // namespace
 
-size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity,
-                             const ClassOrder* order, uint8_t* spare) {
+size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity) {
   const SpgHeader h = reduced_header(view.header, attributes);
-  uint8_t* first = order != nullptr ? spare : out;
   size_t written = 0;
-  if (first == nullptr ||
-      spg_write_startup_le(h, view.sigma_p, h.class_count[1] ? view.sigma_n : nullptr,
-                           h.class_count[2] ? view.sigma_c : nullptr, first, capacity, &written) != SpgWriteStatus::kOk)
+  if (spg_write_startup_le(h, view.sigma_p, h.class_count[1] ? view.sigma_n : nullptr,
+                           h.class_count[2] ? view.sigma_c : nullptr, out, capacity, &written) != SpgWriteStatus::kOk)
     return 0;
-  if (order == nullptr) return written;
-  // The same header, each table's classes in the order's.
-  size_t at = spg_fixed_header_bytes(h.version);
-  for (size_t b = 0; b < at; ++b) out[b] = spare[b];
-  for (int t = 0; t < 3; ++t) {
-    const size_t per = class_bytes(h.version, t);
-    for (uint32_t k = 0; k < h.class_count[t]; ++k) {
-      const uint8_t* from = spare + at + per * order->from_sent(t, k);
-      for (size_t b = 0; b < per; ++b) out[at + per * k + b] = from[b];
-    }
-    at += per * h.class_count[t];
-  }
   return written;
 }
 
@@ -120,14 +71,17 @@ void SenderScratch::init(void* storage, size_t size) {
 }
 
 size_t StreamSender::storage_bytes(const SpgHeader& header) {
-  return view_cut_state_bytes(header.node_count) + SenderScratch::bytes(header.node_count);
+  return view_cut_state_bytes(header.node_count) + align8(class_bits_bytes(header)) + SenderScratch::bytes(header.node_count);
 }
 
 bool StreamSender::init(const SpgView& view, const CutBounds& bounds, void* storage, size_t bytes) {
   if (bytes < storage_bytes(view.header)) return false;
   const size_t state_bytes = view_cut_state_bytes(view.header.node_count);
-  own_scratch_.init(static_cast<uint8_t*>(storage) + state_bytes, bytes - state_bytes);
-  return init(view, bounds, storage, state_bytes, &own_scratch_);
+  const size_t bits = align8(class_bits_bytes(view.header));
+  own_scratch_.init(static_cast<uint8_t*>(storage) + state_bytes + bits, bytes - state_bytes - bits);
+  if (!init(view, bounds, storage, state_bytes, &own_scratch_)) return false;
+  use_class_bits(static_cast<uint8_t*>(storage) + state_bytes, bits);
+  return true;
 }
 
 bool StreamSender::init(const SpgView& view, const CutBounds& bounds, void* state, size_t state_bytes,
@@ -164,8 +118,8 @@ uint8_t StreamSender::adopt_hello(const Hello& hello) {
   same_layout_ = true;
   for (int f = 0; f < kFieldCount; ++f) same_layout_ = same_layout_ && reduced_.layout.bits[f] == view_->header.layout.bits[f];
   capacity_ = hello.cache_capacity;
-  pieces_ = hello.version >= 4;
-  for (uint16_t& c : classes_sent_) c = 0;
+  pieces_ = hello.version >= 4 && class_bits_ != nullptr && class_bits_bytes_ >= class_bits_bytes(reduced_);
+  for (size_t i = 0; pieces_ && i < class_bits_bytes(reduced_); ++i) class_bits_[i] = 0;
   return attributes;
 }
 
@@ -177,9 +131,8 @@ bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
   started_ = true;
   sequence_ = 0;  // a new stream (a serial client says hello again to resynchronise)
   if (pieces_) {
-    // The model: its tag and header; the classes follow the nodes' needs.
-    const size_t n = write_reduced_startup(*view_, attributes, payload + kModelTagBytes, kMaxPayload - kModelTagBytes,
-                                           classes_, scratch_->frame);
+    // The model: its tag and header; each class comes before its first node.
+    const size_t n = write_reduced_startup(*view_, attributes, payload + kModelTagBytes, kMaxPayload - kModelTagBytes);
     if (n == 0) return started_ = false;
     store_u32le(payload, crc32(payload + kModelTagBytes, n));
     return send(MessageType::kModel, payload, kModelTagBytes + spg_fixed_header_bytes(reduced_.version), sink, context);
@@ -189,12 +142,18 @@ bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
   return send(MessageType::kStartup, payload, n, sink, context);
 }
 
-uint32_t StreamSender::model_tag(uint8_t attributes, uint16_t version) const {
+uint32_t StreamSender::model_tag(uint8_t attributes) const {
   if (view_ == nullptr || scratch_ == nullptr) return 0;
-  const uint8_t wanted = static_cast<uint8_t>(attributes & ~kResuming);
-  const size_t n = version >= 4 ? write_reduced_startup(*view_, wanted, scratch_->payload, kMaxPayload, classes_, scratch_->frame)
-                                : write_reduced_startup(*view_, wanted, scratch_->payload, kMaxPayload);
+  const size_t n = write_reduced_startup(*view_, static_cast<uint8_t>(attributes & ~kResuming), scratch_->payload, kMaxPayload);
   return n == 0 ? 0 : crc32(scratch_->payload, n);
+}
+
+bool StreamSender::take_class(int table, uint32_t index) {
+  const size_t bit = (table > 0 ? reduced_.class_count[0] : 0u) + (table > 1 ? reduced_.class_count[1] : 0u) + size_t{index};
+  const uint8_t mask = static_cast<uint8_t>(1u << (bit % 8));
+  if (class_bits_[bit / 8] & mask) return false;
+  class_bits_[bit / 8] = static_cast<uint8_t>(class_bits_[bit / 8] | mask);
+  return true;
 }
 
 bool StreamSender::resume(const Hello& hello, const NodeId* held, uint32_t count, FrameSink sink, void* context) {
@@ -205,11 +164,8 @@ bool StreamSender::resume(const Hello& hello, const NodeId* held, uint32_t count
     // The client holds at least the classes its nodes use.
     for (uint32_t i = 0; i < count; ++i) {
       const NodeFields f = unpack_record(view_->header.layout, view_->records + size_t{index_of(held[i])} * view_->record_bytes);
-      for (int t = 0; t < 3; ++t) {
-        if (reduced_.class_count[t] == 0) continue;
-        const uint32_t k = (classes_ != nullptr ? classes_->to_sent(t, f[kClassField[t]]) : f[kClassField[t]]) + 1u;
-        if (k > classes_sent_[t]) classes_sent_[t] = static_cast<uint16_t>(k);
-      }
+      for (int t = 0; t < 3; ++t)
+        if (reduced_.class_count[t] > 0) (void)take_class(t, f[kClassField[t]]);
     }
   }
   started_ = true;
@@ -242,51 +198,33 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
   return send(MessageType::kUpdateEnd, buf, kUpdateEndBytes, sink, context);
 }
 
-void StreamSender::reduce(const uint8_t* record, uint8_t* out) const {
-  if (!pieces_ || classes_ == nullptr) {
-    if (same_layout_)
-      for (size_t b = 0; b < reduced_record_bytes_; ++b) out[b] = record[b];
-    else
-      transcode_record(view_->header.layout, reduced_.layout, record, out);
-    return;
-  }
-  NodeFields f = unpack_record(view_->header.layout, record);
-  for (int k = 0; k < kFieldCount; ++k)
-    if (reduced_.layout.bits[k] == 0) f.v[k] = 0;
-  for (int t = 0; t < 3; ++t)
-    if (reduced_.class_count[t] > 0) f.v[static_cast<int>(kClassField[t])] = classes_->to_sent(t, f[kClassField[t]]);
-  pack_record(reduced_.layout, f, out);
-}
-
 bool StreamSender::send_classes(const uint64_t* order, uint32_t count, FrameSink sink, void* context) {
-  uint32_t need[3] = {classes_sent_[0], classes_sent_[1], classes_sent_[2]};
-  for (uint32_t i = 0; i < count; ++i) {
+  // The classes these nodes use that have not been sent, by table.
+  constexpr uint32_t kMost = 2048;  // a batch's nodes at most (count <= per_frame)
+  uint16_t fresh[3][kMost];
+  uint32_t n[3] = {};
+  for (uint32_t i = 0; i < count && i < kMost; ++i) {
     const uint32_t id = ~static_cast<uint32_t>(order[i]);
     const NodeFields f = unpack_record(view_->header.layout, view_->records + size_t{id} * view_->record_bytes);
-    for (int t = 0; t < 3; ++t) {
-      if (reduced_.class_count[t] == 0) continue;
-      const uint32_t k = (classes_ != nullptr ? classes_->to_sent(t, f[kClassField[t]]) : f[kClassField[t]]) + 1u;
-      if (k > need[t]) need[t] = k;
-    }
+    for (int t = 0; t < 3; ++t)
+      if (reduced_.class_count[t] > 0 && take_class(t, f[kClassField[t]])) fresh[t][n[t]++] = static_cast<uint16_t>(f[kClassField[t]]);
   }
   const uint8_t* tables[3] = {view_->sigma_p, view_->sigma_n, view_->sigma_c};
   uint8_t* payload = scratch_->payload;
   for (int t = 0; t < 3; ++t) {
-    const size_t per = class_bytes(view_->header.version, t);
-    const uint32_t most = static_cast<uint32_t>((kMaxPayload - kClassesHeaderBytes) / per);
-    while (classes_sent_[t] < need[t]) {
-      ClassesPiece c;
-      c.table = static_cast<uint8_t>(t);
-      c.first = classes_sent_[t];
-      c.count = static_cast<uint16_t>(need[t] - c.first < most ? need[t] - c.first : most);
-      write_classes_header(c, payload);
-      for (uint32_t k = 0; k < c.count; ++k) {
-        const uint32_t from = classes_ != nullptr ? classes_->from_sent(t, c.first + k) : c.first + k;
-        for (size_t b = 0; b < per; ++b) payload[kClassesHeaderBytes + per * k + b] = tables[t][per * from + b];
-      }
-      if (!send(MessageType::kClasses, payload, kClassesHeaderBytes + per * c.count, sink, context)) return false;
-      classes_sent_[t] = static_cast<uint16_t>(c.first + c.count);
+    if (n[t] == 0) continue;
+    std::sort(fresh[t], fresh[t] + n[t]);
+    const size_t per = (t == 1 ? 2u : 3u) * spg_class_value_bytes(view_->header.version);
+    size_t at = kClassesHeaderBytes;
+    uint32_t previous = 0xFFFFFFFFu;
+    for (uint32_t k = 0; k < n[t]; ++k) {
+      at += store_leb128(payload + at, fresh[t][k] - previous);  // the first from -1
+      previous = fresh[t][k];
+      for (size_t b = 0; b < per; ++b) payload[at + b] = tables[t][per * fresh[t][k] + b];
+      at += per;
     }
+    write_classes_header(static_cast<uint8_t>(t), static_cast<uint16_t>(n[t]), payload);
+    if (!send(MessageType::kClasses, payload, at, sink, context)) return false;
   }
   return true;
 }
@@ -313,7 +251,11 @@ bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink s
     uint8_t* entry = payload + 4 + size_t{i} * stride;
     store_u32le(entry, id);
     entry[4] = cut_.points(NodeId{id});
-    reduce(view_->records + size_t{id} * view_->record_bytes, entry + 5);
+    const uint8_t* record = view_->records + size_t{id} * view_->record_bytes;
+    if (same_layout_)
+      for (size_t b = 0; b < reduced_record_bytes_; ++b) entry[5 + b] = record[b];
+    else
+      transcode_record(view_->header.layout, reduced_.layout, record, entry + 5);
   }
   return send(MessageType::kNodes, payload, 4 + size_t{count} * stride, sink, context);
 }
@@ -513,9 +455,20 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
     }
     case MessageType::kClasses: {
       ClassesPiece c;
-      if (!cache_->ready() || !parse_classes(f.payload, f.payload_bytes, &c)) return ReceiveStatus::kBadMessage;
-      const CacheStatus s = cache_->add_classes(c.table, c.first, c.count, c.values, c.value_bytes);
-      return s == CacheStatus::kOk ? ReceiveStatus::kOk : refused(s);
+      if (!cache_->ready() || !parse_classes(f.payload, f.payload_bytes, &c) || cache_->header().class_count[c.table] == 0)
+        return ReceiveStatus::kBadMessage;
+      const uint8_t* at = c.entries;
+      const uint8_t* end = c.entries + c.entries_bytes;
+      const size_t value_bytes = cache_->class_value_bytes(c.table);
+      uint32_t previous = 0xFFFFFFFFu;
+      for (uint32_t i = 0; i < c.count; ++i) {
+        uint32_t index = 0;
+        const uint8_t* values = nullptr;
+        if (!next_class_entry(&at, end, value_bytes, &previous, &index, &values)) return ReceiveStatus::kBadMessage;
+        const CacheStatus s = cache_->add_class(c.table, index, values, value_bytes);
+        if (s != CacheStatus::kOk) return refused(s);
+      }
+      return at == end ? ReceiveStatus::kOk : ReceiveStatus::kBadMessage;
     }
     case MessageType::kUpdateBegin: {
       UpdateBegin u;

@@ -32,31 +32,9 @@ SpgHeader reduced_header(const SpgHeader& full, uint8_t attributes);
 // attributes: their fields are dropped, the others keep their values).
 void transcode_record(const RecordLayout& from, const RecordLayout& to, const uint8_t* in, uint8_t* out);
 
-// The classes of each table renumbered in the order a stream first needs
-// them: by the first node, breadth first, that uses each (coarse nodes
-// first), the unused ones last. A protocol 4 stream sends its class tables
-// in this order as prefixes, so a coarse cut needs a short prefix; records
-// are renumbered to match as they are sent. Built once per model over
-// caller storage, shared read-only by every client's sender.
-class ClassOrder {
- public:
-  static size_t bytes(const SpgHeader& header);
-  // `view` from spg_parse (its records are read during init only).
-  [[nodiscard]] bool init(const SpgView& view, void* storage, size_t bytes);
-  uint16_t to_sent(int table, uint32_t c) const { return to_sent_[table][c]; }
-  uint16_t from_sent(int table, uint32_t k) const { return from_sent_[table][k]; }
-
- private:
-  uint16_t* to_sent_[3] = {};
-  uint16_t* from_sent_[3] = {};
-};
-
 // Writes the reduced startup message (header and the wanted class tables)
 // into out[0 .. capacity); returns its length or 0 when it does not fit.
-// With `order`, the tables are in its order; `spare` (as large as the
-// message) is then worked in.
-size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity,
-                             const ClassOrder* order = nullptr, uint8_t* spare = nullptr);
+size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity);
 
 // Where a sender's frames go: called with each whole frame (a transport's
 // write, a queue); false stops the update (the link is gone).
@@ -97,9 +75,17 @@ class StreamSender {
   [[nodiscard]] bool init(const SpgView& view, const CutBounds& bounds, void* state, size_t state_bytes,
                           const SenderScratch* scratch);
   void use_scratch(const SenderScratch* scratch);
-  // The model's class order (protocol 4 streams; null: the file's order).
-  // Must outlive the sender.
-  void use_class_order(const ClassOrder* order) { classes_ = order; }
+  // Protocol 4 sends each class just before the first node that uses it:
+  // the sender keeps which it has sent in `bits` (class_bits_bytes; the
+  // one-block init has its own). Without them, a protocol 4 client gets the
+  // whole startup, as older ones do. Must outlive the sender (or end()).
+  static size_t class_bits_bytes(const SpgHeader& header) {
+    return (size_t{header.class_count[0]} + header.class_count[1] + header.class_count[2] + 7) / 8;
+  }
+  void use_class_bits(uint8_t* bits, size_t bytes) {
+    class_bits_ = bits;
+    class_bits_bytes_ = bits == nullptr ? 0 : bytes;
+  }
   // Moves the cut's state to larger storage (ViewCut::relocate).
   [[nodiscard]] bool relocate(void* state, size_t state_bytes) { return cut_.relocate(state, state_bytes); }
   // The client's hello: sends the reduced startup. False for a hello the
@@ -120,9 +106,9 @@ class StreamSender {
   // drop goes first.
   [[nodiscard]] bool update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context);
   // The tag a resuming client names its model by: the CRC-32 of the startup
-  // payload a client of protocol `version` asking for `attributes` receives
-  // (version 4: would hold, with every class; 0 when none).
-  uint32_t model_tag(uint8_t attributes, uint16_t version = kProtocolVersion) const;
+  // payload a client asking for `attributes` receives (protocol 4: would
+  // receive, with every class: its model message carries it; 0 when none).
+  uint32_t model_tag(uint8_t attributes) const;
   // A resumed stream (protocol 3): no startup; the client holds `held`
   // (ascending ids) from an earlier stream of this model, so the first
   // update sends only what it lacks. Sends kResumed. False when the hello
@@ -150,7 +136,7 @@ class StreamSender {
   // a part of camera `sequence` with `parts_after` parts to follow.
   bool send_change(uint32_t sequence, uint8_t parts_after, bool ramp, FrameSink sink, void* context);
   bool send_classes(const uint64_t* order, uint32_t count, FrameSink sink, void* context);  // what the nodes lack
-  void reduce(const uint8_t* record, uint8_t* out) const;  // to the reduced layout and the class order
+  bool take_class(int table, uint32_t index);  // marks it sent; false if it was
   bool send_drops(const uint32_t* ids, uint32_t count, FrameSink sink, void* context);
   bool send_nodes(const uint64_t* order, uint32_t count, FrameSink sink, void* context);  // ids in the low words, inverted
   const SpgView* view_ = nullptr;
@@ -161,9 +147,9 @@ class StreamSender {
   size_t reduced_record_bytes_ = 0;
   bool same_layout_ = true;  // the client takes every attribute: records are copied as they are
   uint32_t capacity_ = 0;
-  const ClassOrder* classes_ = nullptr;
-  bool pieces_ = false;         // protocol 4: class tables in pieces, records in the class order
-  uint16_t classes_sent_[3] = {};  // the prefix of each table the client holds
+  bool pieces_ = false;         // protocol 4: each class before the first node that uses it
+  uint8_t* class_bits_ = nullptr;  // a bit a class of the reduced tables: sent
+  size_t class_bits_bytes_ = 0;
   uint16_t sequence_ = 0;
   uint64_t bytes_sent_ = 0;
   CutStatus cut_status_ = CutStatus::kOk;

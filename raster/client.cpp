@@ -19,6 +19,7 @@ ClientStatus status_of(CacheStatus s) {
     case CacheStatus::kFull: return ClientStatus::kCacheFull;
     case CacheStatus::kUnknownNode: return ClientStatus::kUnknownNode;
     case CacheStatus::kBadClasses: return ClientStatus::kBadStartup;
+    case CacheStatus::kClassMissing: return ClientStatus::kBadRecord;
   }
   return ClientStatus::kBadConfig;
 }

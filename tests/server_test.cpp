@@ -36,6 +36,7 @@
 #include "tools/embedded/embedded.h"
 #include "tools/embedded/remote.h"
 #include "tools/encoder/encoder.h"
+#include "tools/server/link_timing.h"
 #include "tools/server/server.h"
 
 namespace stipple {
@@ -96,6 +97,28 @@ struct Local {
     return out;
   }
 };
+
+// Over a 115,200-baud line (the link shaper's simulated clock, so the times
+// are exact) a cold client of the bunny draws its first node within 0.3 s —
+// the model's header and the classes of a first small batch, not the whole
+// class tables — and a picture covering 90 % of the converged silhouette
+// within 1 s (the coarse cut), and from then on the picture never loses
+// what it covers (a refined node stays until its replacements have come).
+TEST(Server, ASlowLinkDrawsACoarseWholeFirst) {
+  for (const char* file : {"tests/golden/bunny_v1.spg", "tests/golden/bunny_v2.spg"}) {
+    const Local local(test::fixture(file));
+    LinkTiming t;
+    std::string error;
+    ASSERT_TRUE(time_over_link(local.file, kSerial115200, kSerial115200, device(), {local.camera(30)}, t, error)) << error;
+    EXPECT_LE(t.first_image_s, 0.3) << file;
+    EXPECT_LE(t.silhouette_s, 1.0) << file;
+    EXPECT_LT(t.silhouette_s, t.converged_s / 4) << file;
+    const size_t whole = static_cast<size_t>(t.silhouette_s / 0.05);
+    for (size_t k = whole; k < t.coverage.size(); ++k) EXPECT_GE(t.coverage[k], 0.85) << file << " at " << 0.05 * static_cast<double>(k) << " s";
+    std::printf("%s: first node %.2f s, 90 %% silhouette %.2f s, converged %.2f s, %llu bytes\n", file, t.first_image_s,
+                t.silhouette_s, t.converged_s, static_cast<unsigned long long>(t.bytes_down));
+  }
+}
 
 // A client's options for a server in the same thread: it steps while waiting.
 RemoteModel::Options stepping(Server& server) {

@@ -28,14 +28,21 @@ struct Model {
   size_t startup_bytes = 0;
 };
 
+Model read_model(const char* file) {
+  Model out;
+  out.file = test::fixture(file);
+  EXPECT_TRUE(spg_parse(out.file.data(), out.file.size(), &out.view).ok());
+  out.startup_bytes = spg_startup_bytes(out.view.header.version, out.view.header.class_count);
+  return out;
+}
+
 const Model& bunny() {
-  static const Model m = [] {
-    Model out;
-    out.file = test::fixture("tests/golden/bunny_v1.spg");
-    EXPECT_TRUE(spg_parse(out.file.data(), out.file.size(), &out.view).ok());
-    out.startup_bytes = spg_startup_bytes(out.view.header.version, out.view.header.class_count);
-    return out;
-  }();
+  static const Model m = read_model("tests/golden/bunny_v1.spg");
+  return m;
+}
+
+const Model& bunny_v2() {
+  static const Model m = read_model("tests/golden/bunny_v2.spg");
   return m;
 }
 
@@ -657,6 +664,67 @@ TEST(NodeCache, ServesNodesWithoutARenderer) {
   const ClientConfig c = small_config();
   EXPECT_EQ(client_arena_bytes(c), ((node_cache_bytes(cache_limits(c)) + 7) & ~size_t{7}) +
                                        point_renderer_bytes(renderer_config(c)));
+}
+
+// Protocol 4's class tables in pieces: a cache loaded from the header alone
+// holds no class and refuses a node whose class has not come
+// (kClassMissing); a class beyond its table, of the wrong length or (version
+// 1) a NaN is refused with kBadClasses; once a node's classes have come
+// (in any order, some twice) it is taken and decodes exactly as from the
+// whole startup.
+TEST(NodeCache, ClassesOneByOneDecodeAsTheWholeStartup) {
+  const Model& m = bunny_v2();
+  const SpgView& v = m.view;
+  const auto rec = [&](uint32_t id) { return v.records + size_t{id} * v.record_bytes; };
+  NodeCacheLimits limits;
+  limits.node_capacity = 200;
+  std::vector<uint64_t> a(node_cache_bytes(limits) / 8 + 1), b(node_cache_bytes(limits) / 8 + 1);
+  NodeCache whole, pieces;
+  ASSERT_EQ(whole.init(limits, a.data(), a.size() * 8), CacheStatus::kOk);
+  ASSERT_EQ(pieces.init(limits, b.data(), b.size() * 8), CacheStatus::kOk);
+  ASSERT_EQ(whole.load_startup(m.file.data(), m.startup_bytes), CacheStatus::kOk);
+  const size_t header_bytes = spg_fixed_header_bytes(v.header.version);
+  EXPECT_EQ(pieces.load_model(m.file.data(), header_bytes - 1), CacheStatus::kBadStartup);
+  ASSERT_EQ(pieces.load_model(m.file.data(), header_bytes), CacheStatus::kOk);
+  for (int t = 0; t < 3; ++t) EXPECT_EQ(pieces.classes_held(t), 0u);
+  EXPECT_EQ(pieces.put(NodeId{0}, rec(0), v.record_bytes), CacheStatus::kClassMissing);
+  const uint8_t* tables[3] = {v.sigma_p, v.sigma_n, v.sigma_c};
+  const uint32_t changed = pieces.classes_changed();
+  EXPECT_EQ(pieces.add_class(2, 0, v.sigma_p, 6), CacheStatus::kBadClasses);  // a table the model lacks
+  EXPECT_EQ(pieces.add_class(0, v.header.class_count[0], v.sigma_p, 6), CacheStatus::kBadClasses);  // beyond
+  EXPECT_EQ(pieces.add_class(0, 0, v.sigma_p, 4), CacheStatus::kBadClasses);  // a wrong length
+  EXPECT_EQ(pieces.classes_changed(), changed);
+  static constexpr Field kField[2] = {Field::kSigmaP, Field::kSigmaN};
+  // Nodes 199 down to 0, each after its own classes (sent again if held).
+  for (uint32_t k = 0; k < 200; ++k) {
+    const uint32_t id = 199 - k;
+    const NodeFields f = unpack_record(v.header.layout, rec(id));
+    for (int t = 0; t < 2; ++t) {
+      const uint32_t c = f[kField[t]];
+      const size_t per = pieces.class_value_bytes(t);
+      ASSERT_EQ(pieces.add_class(t, c, tables[t] + per * c, per), CacheStatus::kOk);
+      EXPECT_TRUE(pieces.class_held(t, c));
+    }
+    ASSERT_EQ(pieces.put(NodeId{id}, rec(id), v.record_bytes), CacheStatus::kOk);
+    FixedNode got, want;
+    ASSERT_EQ(whole.decoder().decode(rec(id), &want), DecodeStatus::kOk);
+    ASSERT_TRUE(pieces.node_at(pieces.count() - 1, &got));
+    EXPECT_TRUE(std::memcmp(got.axis, want.axis, sizeof got.axis) == 0 && std::memcmp(got.mean, want.mean, sizeof got.mean) == 0 &&
+                std::memcmp(got.sigma_n, want.sigma_n, sizeof got.sigma_n) == 0)
+        << id;
+  }
+  EXPECT_GT(pieces.classes_held(0), 10u);
+  EXPECT_LT(pieces.classes_held(0), v.header.class_count[0]);
+  // Version 1's float32 values: a NaN is refused.
+  const Model& v1 = bunny();
+  NodeCache old;
+  std::vector<uint64_t> c(node_cache_bytes(limits) / 8 + 1);
+  ASSERT_EQ(old.init(limits, c.data(), c.size() * 8), CacheStatus::kOk);
+  ASSERT_EQ(old.load_model(v1.file.data(), spg_fixed_header_bytes(1)), CacheStatus::kOk);
+  std::vector<uint8_t> nan(v1.view.sigma_p, v1.view.sigma_p + 12);
+  nan[3] = 0x7F, nan[2] = 0xC0;
+  EXPECT_EQ(old.add_class(0, 0, nan.data(), 12), CacheStatus::kBadClasses);
+  EXPECT_EQ(old.add_class(0, 0, v1.view.sigma_p, 12), CacheStatus::kOk);
 }
 
 // The hash's entries are 16 bits up to 65,535 nodes and 32 above: either

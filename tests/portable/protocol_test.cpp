@@ -19,6 +19,15 @@
 namespace stipple {
 namespace {
 
+size_t store_leb128_for_test(uint8_t* p, uint32_t v) {
+  size_t n = 0;
+  do {
+    p[n++] = static_cast<uint8_t>((v & 0x7F) | (v >= 0x80 ? 0x80 : 0));
+    v >>= 7;
+  } while (v != 0);
+  return n;
+}
+
 void store_u32le_for_test(uint8_t* p, uint32_t v) {
   for (int i = 0; i < 4; ++i) p[i] = static_cast<uint8_t>(v >> (8 * i));
 }
@@ -264,6 +273,84 @@ TEST(Cobs, DeframerResynchronisesAfterNoise) {
 
 }  // namespace
 // Protocol 3's hello token: carried after the fixed fields, compared whole.
+// Protocol 4's messages: a class piece's entries (ascending indices as
+// LEB128 differences, each followed by its values) and an update-begin round
+// trip; a piece naming a table beyond sigma_c, with a nonzero reserved byte
+// or no classes, an entry naming a class twice, truncated values and an
+// update-begin of the wrong length or with nonzero padding are refused.
+TEST(Protocol, ClassPiecesAndUpdateBeginsRoundTripAndRefuseMalformed) {
+  std::vector<uint8_t> p(kClassesHeaderBytes);
+  ASSERT_EQ(write_classes_header(1, 3, p.data()), kClassesHeaderBytes);
+  const uint32_t indices[3] = {0, 5, 400};
+  uint32_t previous = 0xFFFFFFFFu;
+  for (uint32_t i : indices) {
+    uint8_t leb[5];
+    const size_t n = store_leb128_for_test(leb, i - previous);
+    p.insert(p.end(), leb, leb + n);
+    previous = i;
+    for (int b = 0; b < 4; ++b) p.push_back(static_cast<uint8_t>(i + b));  // sigma_n: 2 codes
+  }
+  ClassesPiece c;
+  ASSERT_TRUE(parse_classes(p.data(), p.size(), &c));
+  EXPECT_EQ(c.table, 1);
+  EXPECT_EQ(c.count, 3);
+  const uint8_t* at = c.entries;
+  const uint8_t* end = c.entries + c.entries_bytes;
+  previous = 0xFFFFFFFFu;
+  for (uint32_t want : indices) {
+    uint32_t index = 0;
+    const uint8_t* values = nullptr;
+    ASSERT_TRUE(next_class_entry(&at, end, 4, &previous, &index, &values));
+    EXPECT_EQ(index, want);
+    EXPECT_EQ(values[0], static_cast<uint8_t>(want));
+  }
+  EXPECT_EQ(at, end);
+  {  // truncated values
+    const uint8_t* t = c.entries;
+    previous = 0xFFFFFFFFu;
+    uint32_t index = 0;
+    const uint8_t* values = nullptr;
+    EXPECT_FALSE(next_class_entry(&t, c.entries + 3, 4, &previous, &index, &values));
+  }
+  {  // a class twice: a difference of 0
+    std::vector<uint8_t> twice = {1, 0, 2, 0, 1, 9, 9, 9, 9, 0, 9, 9, 9, 9};
+    ClassesPiece d;
+    ASSERT_TRUE(parse_classes(twice.data(), twice.size(), &d));
+    const uint8_t* t = d.entries;
+    previous = 0xFFFFFFFFu;
+    uint32_t index = 0;
+    const uint8_t* values = nullptr;
+    EXPECT_TRUE(next_class_entry(&t, d.entries + d.entries_bytes, 4, &previous, &index, &values));
+    EXPECT_FALSE(next_class_entry(&t, d.entries + d.entries_bytes, 4, &previous, &index, &values));
+  }
+  EXPECT_FALSE(parse_classes(p.data(), kClassesHeaderBytes, &c));  // no entries
+  for (size_t at_byte : {size_t{0}, size_t{1}}) {
+    std::vector<uint8_t> bad = p;
+    bad[at_byte] = at_byte == 0 ? 3 : 1;
+    EXPECT_FALSE(parse_classes(bad.data(), bad.size(), &c)) << at_byte;
+  }
+  std::vector<uint8_t> none = p;
+  none[2] = none[3] = 0;
+  EXPECT_FALSE(parse_classes(none.data(), none.size(), &c));
+
+  const UpdateBegin u{77, 14633, 128, 1};
+  uint8_t b[kUpdateBeginBytes + 1] = {};
+  ASSERT_EQ(write_update_begin(u, b), kUpdateBeginBytes);
+  UpdateBegin got;
+  ASSERT_TRUE(parse_update_begin(b, kUpdateBeginBytes, &got));
+  EXPECT_EQ(got.camera_sequence, 77u);
+  EXPECT_EQ(got.entering, 14633u);
+  EXPECT_EQ(got.leaving, 128u);
+  EXPECT_EQ(got.parts_after, 1);
+  EXPECT_FALSE(parse_update_begin(b, kUpdateBeginBytes - 1, &got));
+  EXPECT_FALSE(parse_update_begin(b, kUpdateBeginBytes + 1, &got));
+  b[15] = 1;
+  EXPECT_FALSE(parse_update_begin(b, kUpdateBeginBytes, &got));
+  EXPECT_STREQ(message_type_name(0x87), "model");
+  EXPECT_STREQ(message_type_name(0x88), "classes");
+  EXPECT_STREQ(message_type_name(0x89), "update-begin");
+}
+
 TEST(Protocol, HelloTokenIsCarriedAndComparedWhole) {
   Hello h;
   const char token[] = "correct horse battery staple";

@@ -43,6 +43,11 @@ const char kRenderHelpOutput[] =
     "                         bytes received per frame). On a local file the frames\n"
     "                         come through an in-process server over loopback, the\n"
     "                         same bytes as over TCP once each view has converged\n"
+    "  --at T1,T2,...         with --connect or --serial: -o names a folder of\n"
+    "                         at_T.png, the frame the client shows T seconds after\n"
+    "                         it began to connect (ascending, e.g. 0.5,1,2,5), and\n"
+    "                         at.log (nodes held, bytes received, the view's share);\n"
+    "                         a time after the view converged gets the converged frame\n"
     "output:\n"
     "  --reference            draw with the double-precision reference renderer instead\n"
     "  --psnr                 also render the reference and report PSNR against it\n"
@@ -112,11 +117,13 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
 // or from an in-process server over loopback for a local file (exactly one
 // of `model`, `connect`, `serial`).
 int render_stream(const std::string& model_path, const std::string& connect, const std::string& serial, uint32_t baud,
-                  const RenderOptions& o, uint32_t steps, bool folder, const std::string& output) {
+                  const RenderOptions& o, uint32_t steps, bool folder, const std::string& output,
+                  const std::vector<double>& at) {
   const bool remote = model_path.empty();
   const std::string source =
       !remote ? model_path : !connect.empty() ? connect : "serial:" + serial + "@" + std::to_string(baud);
   std::string error;
+  const double began = monotonic_seconds();
   ViewerSource src;
   if (!src.open(model_path, connect, serial, baud, o, error)) return cli::fail("render: " + error);
   RemoteModel& model = src.model();
@@ -130,6 +137,41 @@ int render_stream(const std::string& model_path, const std::string& connect, con
   const size_t stride = size_t{o.config.raster.width} * bytes_per_pixel(o.config.raster.format);
   std::vector<uint8_t> frame(stride * o.config.raster.height);
   Image image;
+  if (!at.empty()) {
+    // The first view as it builds: the frame shown at each time asked for.
+    Camera c;
+    if (!orbit_camera(orbit_view(extent, base), o.config.raster.width, o.config.raster.height, &c))
+      return cli::fail("render: the view is out of the camera's range");
+    if (!model.request(c, o.rule.max_size_q4, o.rule.window, error)) return cli::fail(source + ": " + error);
+    double converged_at = -1;
+    for (size_t next = 0; next < at.size();) {
+      const double now = monotonic_seconds() - began;
+      if (converged_at < 0 && model.converged()) converged_at = now;
+      if (now < at[next] && converged_at < 0) {
+        if (!model.service(static_cast<int>(std::clamp((at[next] - now) * 1e3, 1.0, 10.0)), error))
+          return cli::fail(source + ": " + error);
+        continue;
+      }
+      FrameStats stats;
+      if (!model.render(c, frame.data(), stride, &stats, error)) return cli::fail(source + ": " + error);
+      image_from_frame(frame.data(), stride, o.config.raster.width, o.config.raster.height, o.config.raster.format, image);
+      char name[48];
+      std::snprintf(name, sizeof name, "at_%gs.png", at[next]);
+      if (!write_png(output + "/" + name, image, error)) return cli::fail(error);
+      const RemoteModel::Progress p = model.progress();
+      char line[200];
+      std::snprintf(line, sizeof line, "%s at %.2f s: nodes %u points %u bytes_received %llu %s\n", name, at[next], stats.nodes,
+                    stats.points, static_cast<unsigned long long>(model.bytes_received()),
+                    converged_at >= 0 ? ("converged at " + std::to_string(converged_at).substr(0, 5) + " s").c_str()
+                    : p.known ? ((p.coarse ? "coarse part " : "view ") + std::to_string(static_cast<int>(100 * p.share)) + "%").c_str()
+                              : "waiting");
+      std::fputs(line, stdout);
+      log += line;
+      ++next;
+    }
+    if (!write_file_atomic(output + "/at.log", std::vector<uint8_t>(log.begin(), log.end()), error)) return cli::fail(error);
+    return 0;
+  }
   uint64_t received = model.bytes_received();
   for (uint32_t k = 0; k < steps; ++k) {
     ViewSpec s = base;
@@ -186,21 +228,38 @@ int cmd_render(int argc, char** argv) {
   if (!parse_render_options(args, o, error)) return cli::fail("render: " + error);
   std::string token_file;
   if (args.value("--token", token_file) && !cli::read_token(token_file, o.token, error)) return cli::fail("render: --token " + error);
+  std::string at_text;
+  std::vector<double> at;
+  if (args.value("--at", at_text)) {
+    for (size_t start = 0; start <= at_text.size();) {
+      const size_t comma = std::min(at_text.find(',', start), at_text.size());
+      double t = 0;
+      if (!cli::parse_double(at_text.substr(start, comma - start), t) || t < 0 || t > 3600 || (!at.empty() && t <= at.back()))
+        return cli::fail("render: --at: expected ascending times in seconds from 0 to 3600, as 0.5,1,2,5, got '" + at_text + "'");
+      at.push_back(t);
+      start = comma + 1;
+    }
+    if (!remote) return cli::fail("render: --at times a view coming over a link: give --connect HOST:PORT or --serial DEV");
+  }
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("render: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("render: " + args.unknown_option_message());
-  if (!has_path && !cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
+  if (!has_path && at.empty() && !cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
   if (remote || has_path) {
     unsigned long long steps = 1;
     if (has_path && (path.rfind("orbit:", 0) != 0 || !cli::parse_uint(path.substr(6), 100000, steps) || steps == 0))
       return cli::fail("render: --path: expected orbit:N with N in 1..100000, got '" + path + "'");
     if (remote != files.empty()) return cli::fail(remote ? "render: --connect takes no MODEL.spg" : "render: expected one model (.spg or a scan)");
-    if (output.empty()) return cli::fail(has_path ? "render: -o FOLDER is required with --path" : "render: -o IMAGE.png is required");
+    if (output.empty())
+      return cli::fail(has_path ? "render: -o FOLDER is required with --path"
+                       : !at.empty() ? "render: -o FOLDER is required with --at" : "render: -o IMAGE.png is required");
     std::error_code ec;
-    if (has_path && std::filesystem::exists(output, ec) && !std::filesystem::is_directory(output, ec))
-      return cli::fail("render: --path writes a folder of frames, but " + output + " is a file (name a folder with -o)");
+    if ((has_path || !at.empty()) && std::filesystem::exists(output, ec) && !std::filesystem::is_directory(output, ec))
+      return cli::fail(std::string("render: ") + (has_path ? "--path" : "--at") + " writes a folder of frames, but " + output +
+                       " is a file (name a folder with -o)");
+    if (has_path && !at.empty()) return cli::fail("render: --at takes the first view only: give it without --path");
     return render_stream(remote ? "" : files[0], over_serial ? "" : connect, serial_dev, static_cast<uint32_t>(baud), o,
-                         static_cast<uint32_t>(steps), has_path, output);
+                         static_cast<uint32_t>(steps), has_path || !at.empty(), output, at);
   }
   if (files.size() != 1) return cli::fail("render: expected one model, a .spg or a scan (see stipple render --help)");
   if (output.empty() && !psnr && frames == 1) return cli::fail("render: -o IMAGE.png is required");

@@ -388,11 +388,33 @@ bool RemoteModel::request(const Camera& camera, int32_t max_size_q4, const int32
   if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
   awaited_camera_ = camera_sequence_++;
   awaiting_ = Awaited::kUpdateEnd;
-  heard_ = std::chrono::steady_clock::now();
+  heard_ = requested_at_ = std::chrono::steady_clock::now();
+  bytes_at_request_ = bytes_received_;
   return true;
 }
 
 bool RemoteModel::converged() const { return done(Awaited::kUpdateEnd); }
+
+RemoteModel::Progress RemoteModel::progress() const {
+  Progress p;
+  if (converged()) {
+    p.known = true;
+    p.share = 1;
+    return p;
+  }
+  const UpdateBegin& part = receiver_.part();
+  if (!client_.cache().ready() || part.camera_sequence != awaited_camera_ || part.entering == 0) return p;
+  p.known = true;
+  p.coarse = part.parts_after > 0;
+  const uint32_t got = std::min(receiver_.part_nodes(), part.entering);
+  p.share = static_cast<double>(got) / part.entering;
+  // The rest of this part at the rate the bytes have come since the camera.
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - requested_at_).count();
+  const double rate = seconds > 0 ? static_cast<double>(bytes_received_ - bytes_at_request_) / seconds : 0;
+  const double entry = static_cast<double>(node_entry_bytes(client_.cache().record_bytes()));
+  if (rate > 0) p.seconds_left = static_cast<double>(part.entering - got) * entry / rate;
+  return p;
+}
 
 bool RemoteModel::render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats, std::string& error) {
   const ClientStatus s = client_.render(camera, frame, stride, stats);

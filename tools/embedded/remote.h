@@ -61,6 +61,17 @@ class RemoteModel {
   bool request(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error);
   bool service(int wait_ms, std::string& error);
   bool converged() const;
+  // How far the latest camera's answer has come (protocol 4's update-begin
+  // says how many nodes each part brings): a cold start's coarse part first,
+  // then the view; its share received, and the time left at the rate the
+  // bytes have come since the camera was sent. Converged: share 1, none left.
+  struct Progress {
+    bool known = false;   // an update-begin for the latest camera has come
+    bool coarse = false;  // its coarse first part (a whole picture, refined next)
+    double share = 0;     // of the part's nodes received
+    double seconds_left = 0;
+  };
+  Progress progress() const;
   bool render(const Camera& camera, uint8_t* frame, size_t stride, FrameStats* stats, std::string& error);
   // Says goodbye (a close frame, reason normal) so the server lets this
   // client go at once — over a serial line nothing else tells it.
@@ -116,6 +127,8 @@ class RemoteModel {
   CameraUpdate last_camera_;
   Awaited awaiting_ = Awaited::kStartup;
   std::chrono::steady_clock::time_point heard_;
+  std::chrono::steady_clock::time_point requested_at_{};  // the latest camera sent
+  uint64_t bytes_at_request_ = 0;
   std::chrono::steady_clock::time_point sent_at_{};  // our last frame (a keep-alive follows a long quiet)  // the last bytes from the server, or our last request
 };
 

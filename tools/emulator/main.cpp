@@ -189,7 +189,7 @@ int run(int argc, char** argv) {
     else if (controls.window()[0] < controls.window()[2]) outline(frame.data(), stride, r, controls.window());
     rates.frame(m.bytes_received());
     std::string line1, line2;
-    status_lines(rates.fps(), stats, m.bytes_received(), rates.bytes_per_s(), controls, m.converged(), line1, line2);
+    status_lines(rates.fps(), stats, m.bytes_received(), rates.bytes_per_s(), controls, m.progress(), line1, line2);
     display.set_status(line1, line2);
     if (!display.present(frame.data(), stride, r.width, r.height, r.format, error)) return fail(error);
     ++frame_number;

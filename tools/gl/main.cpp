@@ -202,7 +202,7 @@ int run(int argc, char** argv) {
       char title[160];
       std::snprintf(title, sizeof title, "stipple-gl  %.1f fps  %u nodes  %llu points  %llu KB%s", rates.fps(), stats.nodes,
                     static_cast<unsigned long long>(stats.points), static_cast<unsigned long long>(m.bytes_received() / 1024),
-                    m.converged() ? "" : "  ...");
+                    progress_text(m.progress()).empty() ? "" : ("  " + progress_text(m.progress())).c_str());
       window.set_title(title);
     }
     pace_frame(frame_start, 60);

@@ -35,6 +35,7 @@ struct Server::Client {
   std::string name;
   std::string address;  // the peer's address, for the per-address limit (empty: not a socket)
   std::vector<uint8_t> state;  // the cut's sent set (LEB128 differences): grows with the client's cut, never with the model
+  std::vector<uint8_t> class_bits;  // protocol 4: the classes sent, a bit each (from the hello)
   StreamSender sender;
   Reopen reopen;                // a serial line: how to open it again after a hang-up
   bool detached = false;        // a serial line that hung up, waiting for its device
@@ -144,9 +145,6 @@ bool ServedModel::build(const uint8_t* data, size_t size, const ConeRule& cones,
   bounds_storage_.assign(CutBounds::bytes(view_.header) / 8 + 1, 0);
   if (bounds_.init(view_, decoder_, bounds_storage_.data(), bounds_storage_.size() * 8, cones) != CutStatus::kOk)
     return error = name_ + ": the cut's bounds could not be built", false;
-  class_order_storage_.assign(ClassOrder::bytes(view_.header) / 8 + 1, 0);
-  if (!class_order_.init(view_, class_order_storage_.data(), class_order_storage_.size() * 8))
-    return error = name_ + ": the class order could not be built", false;
   return true;
 }
 
@@ -217,7 +215,6 @@ void Server::add_client(std::unique_ptr<Transport> transport, int fd, const std:
     log(c->name + ": could not be set up");
     return;
   }
-  c->sender.use_class_order(&model_->class_order());
   log(c->name + ": connected");
   clients_.push_back(std::move(c));
 }
@@ -246,7 +243,9 @@ void Server::end_session(Client& c) {
   c.out_at = 0;
   c.retained.clear();
   c.sender.end();
+  c.sender.use_class_bits(nullptr, 0);
   std::vector<uint8_t>().swap(c.state);  // its memory too (assigning {} keeps the capacity)
+  std::vector<uint8_t>().swap(c.class_bits);
   c.reader.reset();
 }
 
@@ -300,6 +299,9 @@ void Server::handle(Client& c, const Frame& f) {
                             h.token_bytes == 0 ? "a hello without the token this server needs"
                                                : "a hello with a wrong token");
       c.hello_message = h;
+      // Which classes it has been sent (protocol 4): a bit each, from now on.
+      c.class_bits.assign(StreamSender::class_bits_bytes(model_->view().header), 0);
+      c.sender.use_class_bits(c.class_bits.data(), c.class_bits.size());
       char line[160];
       std::snprintf(line, sizeof line, "%s: hello %ux%u %s, attributes%s%s, cache %u nodes%s", c.name.c_str(), h.width,
                     h.height, h.pixel_format ? "rgb888" : "rgb565", h.attributes & kWantNormals ? " normals" : "",
@@ -359,7 +361,7 @@ void Server::handle(Client& c, const Frame& f) {
                       std::to_string(c.resume_total));
       c.resuming = false;
       Hello h = c.hello_message;
-      const uint32_t tag = c.sender.model_tag(h.attributes, h.version);
+      const uint32_t tag = c.sender.model_tag(h.attributes);
       bool resumed = false;
       if (tag == c.resume_tag && tag != 0) {
         // It holds this model's nodes: it is sent only what it lacks.

@@ -55,12 +55,9 @@ class ServedModel {
   bool adopt(std::vector<uint8_t> file, const std::string& name, const ConeRule& cones, std::string& error);
   const SpgView& view() const { return view_; }
   const CutBounds& bounds() const { return bounds_; }
-  const ClassOrder& class_order() const { return class_order_; }
   const std::string& name() const { return name_; }
   size_t file_bytes() const { return size_; }
-  size_t table_bytes() const {
-    return decoder_storage_.size() * 4 + (bounds_storage_.size() + class_order_storage_.size()) * 8;
-  }
+  size_t table_bytes() const { return decoder_storage_.size() * 4 + bounds_storage_.size() * 8; }
 
  private:
   bool build(const uint8_t* data, size_t size, const ConeRule& cones, std::string& error);
@@ -73,8 +70,6 @@ class ServedModel {
   NodeDecoder decoder_;
   std::vector<uint64_t> bounds_storage_;
   CutBounds bounds_;
-  std::vector<uint64_t> class_order_storage_;
-  ClassOrder class_order_;
 };
 
 struct ServerOptions {

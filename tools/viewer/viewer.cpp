@@ -1,6 +1,7 @@
 // stipple tools — the desktop viewers' shared parts. See viewer.h.
 #include "tools/viewer/viewer.h"
 
+#include <cmath>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -312,13 +313,27 @@ bool service_for(RemoteModel& model, double budget, std::string& error) {
   return true;
 }
 
+std::string progress_text(const RemoteModel::Progress& p) {
+  if (!p.known) return "...";
+  char t[64];
+  if (p.share >= 1) return "";
+  if (p.coarse) std::snprintf(t, sizeof t, "coarse %d%%", static_cast<int>(100 * p.share));
+  else std::snprintf(t, sizeof t, "%d%%  %.0f s left", static_cast<int>(100 * p.share), std::ceil(p.seconds_left));
+  return t;
+}
+
 void status_lines(double fps, const FrameStats& stats, uint64_t bytes, double bytes_per_s, const ViewerControls& c,
-                  bool converged, std::string& line1, std::string& line2) {
-  char a[128], b[128];
+                  const RemoteModel::Progress& progress, std::string& line1, std::string& line2) {
+  char a[128], b[160];
   std::snprintf(a, sizeof a, "%4.1f fps  %u nodes  %u pts", fps, stats.nodes, stats.points);
-  std::snprintf(b, sizeof b, "%llu KB  %.1f KB/s  %s%s q%.2g%s", static_cast<unsigned long long>(bytes / 1024),
-                bytes_per_s / 1024, c.grey() ? "grey" : "colour", c.lighting() ? " lit" : "", c.quality_q8() / 256.0,
-                converged ? "" : "  ...");
+  // While a view comes: how much of it, and how long the rest will take;
+  // then the view's settings.
+  const std::string received = progress_text(progress);
+  char settings[64];
+  std::snprintf(settings, sizeof settings, "%s%s q%.2g", c.grey() ? "grey" : "colour", c.lighting() ? " lit" : "",
+                c.quality_q8() / 256.0);
+  std::snprintf(b, sizeof b, "%llu KB  %.1f KB/s  %s", static_cast<unsigned long long>(bytes / 1024), bytes_per_s / 1024,
+                received.empty() ? settings : received.c_str());
   line1 = a;
   line2 = b;
 }

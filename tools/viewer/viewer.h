@@ -136,8 +136,12 @@ void pace_frame(std::chrono::steady_clock::time_point start, double fps);
 // at least one read); false on a link failure.
 bool service_for(RemoteModel& model, double budget, std::string& error);
 
-// The status line's two lines.
+// What a view's progress reads as: "coarse 40%", "62%  12 s left", "..."
+// before the server says, "" once converged.
+std::string progress_text(const RemoteModel::Progress& progress);
+// The status line's two lines (the second shows the progress while a view
+// comes, then the view's settings).
 void status_lines(double fps, const FrameStats& stats, uint64_t bytes, double bytes_per_s, const ViewerControls& c,
-                  bool converged, std::string& line1, std::string& line2);
+                  const RemoteModel::Progress& progress, std::string& line1, std::string& line2);
 
 }  // namespace stipple
