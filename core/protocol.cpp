@@ -405,6 +405,49 @@ bool parse_nodes(const uint8_t* p, size_t size, size_t record_bytes, uint32_t no
   return true;
 }
 
+namespace {
+
+bool parse_compact(const uint8_t* p, size_t size, size_t record_bytes, uint32_t node_count, uint32_t most,
+                   CompactBatch* out) {
+  if (size < 4) return false;
+  CompactBatch b;
+  b.count = load_u32le(p);
+  b.record_bytes = record_bytes;
+  b.at = p + 4;
+  b.end = p + size;
+  if (b.count > most) return false;
+  const uint8_t* at = b.at;
+  uint32_t previous = 0xFFFFFFFFu, id = 0;
+  const size_t tail = record_bytes == 0 ? 0 : 1 + record_bytes;
+  for (uint32_t i = 0; i < b.count; ++i) {
+    if (next_resume_id(&at, b.end, &previous, &id) != ResumeId::kId || id >= node_count ||
+        static_cast<size_t>(b.end - at) < tail)
+      return false;
+    at += tail;
+  }
+  if (at != b.end) return false;
+  *out = b;
+  return true;
+}
+
+}  // namespace
+
+bool parse_compact_nodes(const uint8_t* p, size_t size, size_t record_bytes, uint32_t node_count, CompactBatch* out) {
+  return record_bytes > 0 && parse_compact(p, size, record_bytes, node_count, nodes_per_frame(record_bytes), out);
+}
+
+bool parse_compact_drop(const uint8_t* p, size_t size, uint32_t node_count, CompactBatch* out) {
+  return parse_compact(p, size, 0, node_count, kDropsPerFrame, out);
+}
+
+void next_compact(CompactBatch* b, uint32_t* id, uint8_t* points, const uint8_t** record) {
+  (void)next_resume_id(&b->at, b->end, &b->previous, id);  // checked by parse_compact_*
+  if (b->record_bytes == 0) return;
+  *points = *b->at;
+  *record = b->at + 1;
+  b->at += 1 + b->record_bytes;
+}
+
 bool parse_drop(const uint8_t* p, size_t size, uint32_t node_count, DropBatch* out) {
   if (size < 4) return false;
   const uint32_t count = load_u32le(p);

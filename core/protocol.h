@@ -293,4 +293,33 @@ struct DropBatch {
 };
 [[nodiscard]] bool parse_drop(const uint8_t* payload, size_t size, uint32_t node_count, DropBatch* out);
 
+// Protocol 4's compact batches (a stream that began with kModel): ids
+// ascending, each as the LEB128 of its difference from the one before (the
+// first from -1; 0 names a node twice). kNodes: u32 count, then count x (id,
+// u8 points, record); kDrop: u32 count, then count ids. parse_compact_*
+// checks the whole payload (every id below node_count, the length exact);
+// next_compact_* then walks it.
+struct CompactBatch {
+  uint32_t count = 0;
+  size_t record_bytes = 0;  // 0: a drop batch
+  const uint8_t* at = nullptr;
+  const uint8_t* end = nullptr;
+  uint32_t previous = 0xFFFFFFFFu;
+};
+[[nodiscard]] bool parse_compact_nodes(const uint8_t* payload, size_t size, size_t record_bytes, uint32_t node_count,
+                                       CompactBatch* out);
+[[nodiscard]] bool parse_compact_drop(const uint8_t* payload, size_t size, uint32_t node_count, CompactBatch* out);
+// The next entry of a parsed batch: its id and (nodes) points and record.
+void next_compact(CompactBatch* batch, uint32_t* id, uint8_t* points, const uint8_t** record);
+// Bytes of one compact entry after `previous` (ids ascending).
+inline size_t compact_id_bytes(uint32_t previous, uint32_t id) {
+  uint32_t gap = id - previous;  // from -1: the first id + 1
+  size_t n = 1;
+  while (gap >= 0x80) {
+    gap >>= 7;
+    ++n;
+  }
+  return n;
+}
+
 }  // namespace stipple

@@ -229,13 +229,26 @@ bool StreamSender::send_classes(const uint64_t* order, uint32_t count, FrameSink
   return true;
 }
 
-bool StreamSender::send_drops(const uint32_t* ids, uint32_t count, FrameSink sink, void* context) {
+size_t StreamSender::put_id(uint8_t* out, uint32_t id, uint32_t previous) const {
+  if (pieces_) return store_leb128(out, id - previous);  // from -1 for the first: id + 1
+  store_u32le(out, id);
+  return 4;
+}
+
+bool StreamSender::send_drops(uint32_t* ids, uint32_t count, FrameSink sink, void* context) {
   uint8_t* payload = scratch_->payload;
+  if (pieces_) std::sort(ids, ids + count);  // compact: ascending differences
   for (uint32_t done = 0; done < count;) {
     const uint32_t n = count - done < kDropsPerFrame ? count - done : kDropsPerFrame;
     store_u32le(payload, n);
-    for (uint32_t i = 0; i < n; ++i) store_u32le(payload + 4 + 4 * size_t{i}, ids[done + i]);
-    if (!send(MessageType::kDrop, payload, 4 + 4 * size_t{n}, sink, context)) return false;
+    size_t at = 4;
+    uint32_t previous = 0xFFFFFFFFu;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t id = ids[done + i];
+      at += put_id(payload + at, id, previous);
+      previous = id;
+    }
+    if (!send(MessageType::kDrop, payload, at, sink, context)) return false;
     done += n;
   }
   return true;
@@ -244,20 +257,28 @@ bool StreamSender::send_drops(const uint32_t* ids, uint32_t count, FrameSink sin
 bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink sink, void* context) {
   if (pieces_ && !send_classes(order, count, sink, context)) return false;
   uint8_t* payload = scratch_->payload;
-  const size_t stride = node_entry_bytes(reduced_record_bytes_);
+  // Compact batches go in id order (the order within a batch draws nothing
+  // different: a batch is applied whole).
+  uint32_t ids[2048];
+  if (count > 2048) return false;  // batches hold at most kNodeBatchBytes
+  for (uint32_t i = 0; i < count; ++i) ids[i] = ~static_cast<uint32_t>(order[i]);
+  if (pieces_) std::sort(ids, ids + count);
   store_u32le(payload, count);
+  size_t at = 4;
+  uint32_t previous = 0xFFFFFFFFu;
   for (uint32_t i = 0; i < count; ++i) {
-    const uint32_t id = ~static_cast<uint32_t>(order[i]);
-    uint8_t* entry = payload + 4 + size_t{i} * stride;
-    store_u32le(entry, id);
-    entry[4] = cut_.points(NodeId{id});
+    const uint32_t id = ids[i];
+    at += put_id(payload + at, id, previous);
+    previous = id;
+    payload[at++] = cut_.points(NodeId{id});
     const uint8_t* record = view_->records + size_t{id} * view_->record_bytes;
     if (same_layout_)
-      for (size_t b = 0; b < reduced_record_bytes_; ++b) entry[5 + b] = record[b];
+      for (size_t b = 0; b < reduced_record_bytes_; ++b) payload[at + b] = record[b];
     else
-      transcode_record(view_->header.layout, reduced_.layout, record, entry + 5);
+      transcode_record(view_->header.layout, reduced_.layout, record, payload + at);
+    at += reduced_record_bytes_;
   }
-  return send(MessageType::kNodes, payload, 4 + size_t{count} * stride, sink, context);
+  return send(MessageType::kNodes, payload, at, sink, context);
 }
 
 namespace {
@@ -441,6 +462,7 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
       const CacheStatus s = cache_->load_startup(f.payload, f.payload_bytes);
       if (s != CacheStatus::kOk) return refused(s);
       startup_crc_ = crc32(f.payload, f.payload_bytes);
+      compact_ = false;
       has_update_end_ = false;
       return ReceiveStatus::kOk;
     }
@@ -449,6 +471,7 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
       const CacheStatus s = cache_->load_model(f.payload + kModelTagBytes, f.payload_bytes - kModelTagBytes);
       if (s != CacheStatus::kOk) return refused(s);
       startup_crc_ = load_u32le(f.payload);
+      compact_ = true;
       has_update_end_ = false;
       part_ = UpdateBegin{};
       return ReceiveStatus::kOk;
@@ -478,6 +501,23 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
       return ReceiveStatus::kOk;
     }
     case MessageType::kNodes: {
+      if (compact_) {
+        CompactBatch b;
+        if (!cache_->ready() ||
+            !parse_compact_nodes(f.payload, f.payload_bytes, cache_->record_bytes(), cache_->header().node_count, &b))
+          return ReceiveStatus::kBadMessage;
+        for (uint32_t i = 0; i < b.count; ++i) {
+          uint32_t id = 0;
+          uint8_t points = 0;
+          const uint8_t* record = nullptr;
+          next_compact(&b, &id, &points, &record);
+          const CacheStatus s = cache_->put(NodeId{id}, record, b.record_bytes, points);
+          if (s != CacheStatus::kOk) return refused(s);
+        }
+        nodes_ += b.count;
+        part_nodes_ += b.count;
+        return ReceiveStatus::kOk;
+      }
       NodeBatch b;
       if (!cache_->ready() ||
           !parse_nodes(f.payload, f.payload_bytes, cache_->record_bytes(), cache_->header().node_count, &b))
@@ -491,6 +531,18 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
       return ReceiveStatus::kOk;
     }
     case MessageType::kDrop: {
+      if (compact_) {
+        CompactBatch b;
+        if (!cache_->ready() || !parse_compact_drop(f.payload, f.payload_bytes, cache_->header().node_count, &b))
+          return ReceiveStatus::kBadMessage;
+        for (uint32_t i = 0; i < b.count; ++i) {
+          uint32_t id = 0;
+          next_compact(&b, &id, nullptr, nullptr);
+          const CacheStatus s = cache_->drop(NodeId{id});
+          if (s != CacheStatus::kOk) return refused(s);
+        }
+        return ReceiveStatus::kOk;
+      }
       DropBatch b;
       if (!cache_->ready() || !parse_drop(f.payload, f.payload_bytes, cache_->header().node_count, &b))
         return ReceiveStatus::kBadMessage;

@@ -137,7 +137,8 @@ class StreamSender {
   bool send_change(uint32_t sequence, uint8_t parts_after, bool ramp, FrameSink sink, void* context);
   bool send_classes(const uint64_t* order, uint32_t count, FrameSink sink, void* context);  // what the nodes lack
   bool take_class(int table, uint32_t index);  // marks it sent; false if it was
-  bool send_drops(const uint32_t* ids, uint32_t count, FrameSink sink, void* context);
+  bool send_drops(uint32_t* ids, uint32_t count, FrameSink sink, void* context);  // sorts them (compact batches)
+  size_t put_id(uint8_t* out, uint32_t id, uint32_t previous) const;  // a batch's entry id: compact or u32
   bool send_nodes(const uint64_t* order, uint32_t count, FrameSink sink, void* context);  // ids in the low words, inverted
   const SpgView* view_ = nullptr;
   ViewCut cut_;
@@ -210,6 +211,7 @@ class StreamReceiver {
   uint32_t startup_crc_ = 0;
   UpdateBegin part_{};
   uint32_t part_nodes_ = 0;
+  bool compact_ = false;  // the stream began with a model (protocol 4): compact batches; kept across a resume, as the cache
 };
 
 }  // namespace stipple

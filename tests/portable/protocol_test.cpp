@@ -351,6 +351,59 @@ TEST(Protocol, ClassPiecesAndUpdateBeginsRoundTripAndRefuseMalformed) {
   EXPECT_STREQ(message_type_name(0x89), "update-begin");
 }
 
+// Protocol 4's compact batches: ids ascending as LEB128 differences round
+// trip with their points and records; a batch naming an id twice, an id
+// beyond the model, a truncated entry, bytes after the last entry or more
+// entries than a frame holds is refused whole, before any entry is applied.
+TEST(Protocol, CompactBatchesRoundTripAndRefuseMalformed) {
+  const size_t record_bytes = 3;
+  const uint32_t ids[4] = {0, 1, 200, 70000};
+  std::vector<uint8_t> nodes(4), drops(4);
+  store_u32le_for_test(nodes.data(), 4);
+  store_u32le_for_test(drops.data(), 4);
+  uint32_t previous = 0xFFFFFFFFu;
+  for (uint32_t id : ids) {
+    uint8_t leb[5];
+    const size_t n = store_leb128_for_test(leb, id - previous);
+    EXPECT_EQ(compact_id_bytes(previous, id), n);
+    previous = id;
+    nodes.insert(nodes.end(), leb, leb + n);
+    drops.insert(drops.end(), leb, leb + n);
+    nodes.push_back(static_cast<uint8_t>(id % 251));                  // points
+    for (size_t b = 0; b < record_bytes; ++b) nodes.push_back(static_cast<uint8_t>(id + b));  // record
+  }
+  CompactBatch b;
+  ASSERT_TRUE(parse_compact_nodes(nodes.data(), nodes.size(), record_bytes, 70001, &b));
+  ASSERT_EQ(b.count, 4u);
+  for (uint32_t want : ids) {
+    uint32_t id = 0;
+    uint8_t points = 0;
+    const uint8_t* record = nullptr;
+    next_compact(&b, &id, &points, &record);
+    EXPECT_EQ(id, want);
+    EXPECT_EQ(points, want % 251);
+    EXPECT_EQ(record[1], static_cast<uint8_t>(want + 1));
+  }
+  ASSERT_TRUE(parse_compact_drop(drops.data(), drops.size(), 70001, &b));
+  for (uint32_t want : ids) {
+    uint32_t id = 0;
+    next_compact(&b, &id, nullptr, nullptr);
+    EXPECT_EQ(id, want);
+  }
+  EXPECT_FALSE(parse_compact_nodes(nodes.data(), nodes.size(), record_bytes, 70000, &b));  // 70000 is beyond
+  EXPECT_FALSE(parse_compact_drop(drops.data(), drops.size(), 70000, &b));
+  EXPECT_FALSE(parse_compact_nodes(nodes.data(), nodes.size() - 1, record_bytes, 70001, &b));  // truncated
+  std::vector<uint8_t> longer = nodes;
+  longer.push_back(0);
+  EXPECT_FALSE(parse_compact_nodes(longer.data(), longer.size(), record_bytes, 70001, &b));  // a byte after
+  std::vector<uint8_t> twice = {2, 0, 0, 0, 5, 0};  // ids 4, then 4 again
+  EXPECT_FALSE(parse_compact_drop(twice.data(), twice.size(), 100, &b));
+  std::vector<uint8_t> many(4);
+  store_u32le_for_test(many.data(), kDropsPerFrame + 1);
+  EXPECT_FALSE(parse_compact_drop(many.data(), many.size(), 100, &b));
+  EXPECT_FALSE(parse_compact_drop(nodes.data(), 3, 100, &b));
+}
+
 TEST(Protocol, HelloTokenIsCarriedAndComparedWhole) {
   Hello h;
   const char token[] = "correct horse battery staple";
