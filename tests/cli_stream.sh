@@ -35,4 +35,19 @@ remote=$("$H" --connect "127.0.0.1:$port" --camera 90,20 --crc | grep '^crc32')
 wait $server
 local=$("$H" "$MODEL" --camera 90,20 --crc | grep '^crc32')
 [ "$remote" = "$local" ] || { echo "stipple-handheld --connect: $remote, from the file: $local"; exit 1; }
-echo "6 frames over TCP equal the loopback frames; server log complete; stipple-handheld --connect $remote"
+# The view as it comes: --at writes the frame shown at each time and a log;
+# over loopback the view has converged by 2 s, so that frame is the single
+# render's.
+"$S" serve "$MODEL" --tcp 127.0.0.1:0 --once >"$W/serve3.out" 2>"$W/serve3.err" &
+server=$!
+for _ in $(seq 100); do grep -q "serving on port" "$W/serve3.out" && break; sleep 0.05; done
+port=$(sed -n 's/.*serving on port \([0-9]*\)$/\1/p' "$W/serve3.out")
+"$S" render --connect "127.0.0.1:$port" --at 0,2 -o "$W/at" >/dev/null
+kill $server 2>/dev/null || true
+[ -f "$W/at/at_0s.png" ] && [ -f "$W/at/at_2s.png" ] || { echo "--at did not write at_0s.png and at_2s.png"; ls "$W/at"; exit 1; }
+[ "$(wc -l <"$W/at/at.log")" -eq 2 ] || { echo "at.log should have 2 lines"; cat "$W/at/at.log"; exit 1; }
+grep -q "^at_2s.png at 2.00 s: nodes [0-9]* points [0-9]* bytes_received [0-9]* converged at " "$W/at/at.log" ||
+  { echo "at.log's second line should say when the view converged"; cat "$W/at/at.log"; exit 1; }
+"$S" image-diff "$W/single.png" "$W/at/at_2s.png" >/dev/null || { echo "the converged --at frame differs from stipple render"; exit 1; }
+echo "6 frames over TCP equal the loopback frames; server log complete; stipple-handheld --connect $remote; --at frames"
+

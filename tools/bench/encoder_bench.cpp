@@ -541,37 +541,51 @@ void BM_ViewCutUpdate(benchmark::State& state) {
 }
 BENCHMARK(BM_ViewCutUpdate)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
-// Time to the first image and to the converged view over an emulated link
+// Time to the first image, to a whole silhouette (90 % of the converged
+// one's pixels) and to the converged view over an emulated link
 // (platform/shaper, simulated clock: the figures are link time, not CPU
-// time), 240x320, then a 12-step orbit. Arg: 0 115,200-baud serial, 1 USB 1.1, 2 802.11b.
+// time), then a 12-step orbit of 30-degree steps and one of 3-degree steps.
+// Args: the link (0 115,200-baud serial, 1 USB 1.1, 2 802.11b), the screen
+// (0 240x320, 1 640x480). The scan: STIPPLE_BENCH_SCAN or the dragon.
 void BM_LinkTime(benchmark::State& state) {
   const std::vector<uint8_t>& spg = encoded_scan();
   const SpgView view = parsed_scan();
   std::vector<uint8_t> storage(node_decoder_bytes(view.header));
   NodeDecoder decoder;
   if (decoder.init(view, storage.data(), storage.size()) != DecodeStatus::kOk) std::abort();
-  std::vector<Camera> cameras(13);
-  for (size_t i = 0; i < cameras.size(); ++i) {
-    ViewSpec s;
-    s.yaw = 30 + 30.0 * static_cast<double>(i);
-    if (!orbit_camera(orbit_view(decoder.extent_mu(), s), 240, 320, &cameras[i])) std::abort();
-  }
+  const bool vga = state.range(1) == 1;
+  const uint16_t w = vga ? 640 : 240, h = vga ? 480 : 320;
+  const auto orbit = [&](double step, size_t n) {
+    std::vector<Camera> cameras(n);
+    for (size_t i = 0; i < cameras.size(); ++i) {
+      ViewSpec s;
+      s.yaw = 30 + step * static_cast<double>(i);
+      if (!orbit_camera(orbit_view(decoder.extent_mu(), s), w, h, &cameras[i])) std::abort();
+    }
+    return cameras;
+  };
   const LinkProfile links[] = {kSerial115200, kUsb11, k80211b};
   const LinkProfile link = links[state.range(0)];
   ClientConfig c;
-  c.raster = RasterConfig{240, 320, 5, PixelFormat::kRgb565, 200000};
-  LinkTiming t;
+  c.raster = RasterConfig{w, h, 5, PixelFormat::kRgb565, vga ? 600000u : 200000u};
+  c.node_capacity = 60000;
+  LinkTiming t, fine;
   std::string error;
   for (auto _ : state)
-    if (!time_over_link(spg, link, link, c, cameras, t, error)) state.SkipWithError(error.c_str());
+    if (!time_over_link(spg, link, link, c, orbit(30, 13), t, error) || !time_over_link(spg, link, link, c, orbit(3, 13), fine, error))
+      state.SkipWithError(error.c_str());
   state.counters["first_image_s"] = t.first_image_s;
-  state.counters["converged_s"] = t.converged_s;
   state.counters["silhouette90_s"] = t.silhouette_s;
-  state.counters["orbit_step_s"] = t.orbit_step_s;
-  state.counters["bytes"] = static_cast<double>(t.bytes_down);
+  state.counters["converged_s"] = t.converged_s;
+  state.counters["converged_bytes"] = static_cast<double>(t.converged_bytes);
+  state.counters["orbit30_step_s"] = t.orbit_step_s;
+  state.counters["orbit30_step_bytes"] = t.orbit_step_bytes;
+  state.counters["orbit3_step_bytes"] = fine.orbit_step_bytes;
   state.counters["cut_nodes"] = t.cut_nodes;
 }
-BENCHMARK(BM_LinkTime)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_LinkTime)
+    ->Args({0, 0})->Args({2, 0})->Args({0, 1})->Args({2, 1})->Args({1, 0})
+    ->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // One server core, N loopback clients each sending a camera per round (a
 // 120-step orbit each, staggered) and draining what comes back unread: the

@@ -76,6 +76,7 @@ bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, c
   out.first_image_s = static_cast<double>(pipe.now_us()) / 1e6;
   if (!run_until([&] { return receiver.converged(0); }, 3600)) return error = "the first view did not converge", false;
   out.converged_s = static_cast<double>(pipe.now_us()) / 1e6;
+  out.converged_bytes = receiver.bytes_received();
   sampling = false;
   {
     const std::vector<bool> whole = covered();
@@ -107,6 +108,9 @@ bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, c
     steps += static_cast<double>(pipe.now_us() - start) / 1e6;
   }
   out.orbit_step_s = cameras.size() > 1 ? steps / static_cast<double>(cameras.size() - 1) : 0;
+  out.orbit_step_bytes = cameras.size() > 1 ? static_cast<double>(receiver.bytes_received() - out.converged_bytes) /
+                                                  static_cast<double>(cameras.size() - 1)
+                                            : 0;
   out.bytes_down = receiver.bytes_received();
   out.cut_nodes = client.node_count();
   return true;

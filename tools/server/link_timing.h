@@ -22,6 +22,8 @@ struct LinkTiming {
   double converged_s = 0;    // to the update-end of the first camera (the whole cut)
   double orbit_step_s = 0;   // mean time from a camera update to its update-end, over the orbit
   uint64_t bytes_down = 0;   // server -> client, all of it
+  uint64_t converged_bytes = 0;   // to the first view's update-end
+  double orbit_step_bytes = 0;    // mean, per orbit step
   uint32_t cut_nodes = 0;
   std::vector<double> coverage;  // the share of the converged silhouette drawn, every 50 ms from the hello
 };
