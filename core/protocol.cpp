@@ -238,7 +238,7 @@ ResumeId next_resume_id(const uint8_t** at, const uint8_t* end, uint32_t* previo
   return ResumeId::kId;
 }
 
-size_t write_camera_update(const CameraUpdate& c, uint8_t out[kCameraUpdateBytes]) {
+size_t write_camera_update(const CameraUpdate& c, uint8_t* out) {
   uint8_t* at = out;
   store_u32le(at, c.sequence);
   at += 4;
@@ -256,11 +256,13 @@ size_t write_camera_update(const CameraUpdate& c, uint8_t out[kCameraUpdateBytes
   put(c.camera.far_mu);
   put(c.max_size_q4);
   for (int k = 0; k < 4; ++k) put(c.window[k]);
-  return kCameraUpdateBytes;
+  if (!c.accumulate) return kCameraUpdateBytes;
+  store_u32le(at, kCameraAccumulate);
+  return kCameraUpdateFlagsBytes;
 }
 
 bool parse_camera_update(const uint8_t* p, size_t size, CameraUpdate* out) {
-  if (size != kCameraUpdateBytes) return false;
+  if (size != kCameraUpdateBytes && size != kCameraUpdateFlagsBytes) return false;
   CameraUpdate c;
   const uint8_t* at = p;
   c.sequence = load_u32le(at);
@@ -294,6 +296,11 @@ bool parse_camera_update(const uint8_t* p, size_t size, CameraUpdate* out) {
   if (c.max_size_q4 < 1 || c.max_size_q4 > 16 * 4096) return false;
   for (int k = 0; k < 4; ++k)
     if (c.window[k] < 0 || c.window[k] > 4096) return false;
+  if (size == kCameraUpdateFlagsBytes) {
+    const uint32_t flags = load_u32le(at);
+    if ((flags & ~kCameraAccumulate) != 0) return false;
+    c.accumulate = (flags & kCameraAccumulate) != 0;
+  }
   *out = c;
   return true;
 }

@@ -181,9 +181,16 @@ struct CameraUpdate {
   Camera camera;
   int32_t max_size_q4 = 32;
   int32_t window[4] = {0, 0, 0, 0};  // refinement window, px; empty: everywhere
+  // (4) With a window: keep the refinements of earlier windows (CutParams::accumulate).
+  bool accumulate = false;
 };
 inline constexpr size_t kCameraUpdateBytes = 4 + 17 * 4 + 4 + 16;
-size_t write_camera_update(const CameraUpdate& c, uint8_t out[kCameraUpdateBytes]);
+// Version 4: a camera may end with u32 flags (bit 0: accumulate; no other).
+inline constexpr size_t kCameraUpdateFlagsBytes = kCameraUpdateBytes + 4;
+inline constexpr uint32_t kCameraAccumulate = 1;
+// Writes the camera message (92 bytes; 96 with accumulate) into `out`,
+// which holds kCameraUpdateFlagsBytes; returns its length.
+size_t write_camera_update(const CameraUpdate& c, uint8_t* out);
 // Checks the camera's ranges as the client's renderer would (focal length,
 // near/far, eye); false when a field is out of range.
 [[nodiscard]] bool parse_camera_update(const uint8_t* payload, size_t size, CameraUpdate* out);

@@ -182,6 +182,7 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
   p.max_nodes = capacity_;
   p.cull_frustum = p.cull_backfaces = cull;
   for (int k = 0; k < 4; ++k) p.window[k] = camera.window[k];
+  p.accumulate = camera.accumulate;
   const bool cold = cut_.sent_count() == 0;
   if (cold && capacity_ > kCoarseNodes) {
     // A cold start: a whole coarse picture first, then its refinement.

@@ -317,7 +317,7 @@ struct ViewCut::Frame {
   int64_t rotation[3][3];
   int64_t offset[3];
   int64_t eye[3], focal, cx, cy, near, max_size;  // the camera's and parameters' values, widened
-  bool cull_frustum, cull_backfaces, window;
+  bool cull_frustum, cull_backfaces, window, accumulate;
   // Incremental mode: the clock deadlines are set on, and the motion a clock
   // unit (kClockUnit ticks) stands for.
   uint32_t clock;
@@ -397,9 +397,36 @@ struct ViewCut::Frame {
     const int64_t sx = f.cx + f.focal * x / z, sy = f.cy + f.focal * y / z;
     e.split = sx + size >= int64_t{p.window[0]} * 16 && sx - size < int64_t{p.window[2]} * 16 &&
               sy + size >= int64_t{p.window[1]} * 16 && sy - size < int64_t{p.window[3]} * 16;
+    if (!e.split && f.accumulate) e.split = above_previous(id);
   }
   if (!e.split || f.split_sizes) e.size = projected();
   return e;
+}
+
+bool ViewCut::above_previous(uint32_t id) const {
+  // The node's descendants, level by level, are one id range each: from the
+  // first child of the range's first node to that of the node after its
+  // last (first children rise with the id; a leaf's is where its children
+  // would start).
+  const auto first_child = [&](uint32_t x) { return x < node_count_ ? bounds_[x].first_child : node_count_; };
+  uint32_t lo = first_child(id), hi = first_child(id + 1);
+  while (lo < hi) {
+    const uint32_t* at = previous_;
+    uint32_t n = previous_count_;
+    while (n > 0) {  // the first previous id at or above lo
+      const uint32_t half = n / 2;
+      if (at[half] < lo) {
+        at += half + 1;
+        n -= half + 1;
+      } else {
+        n = half;
+      }
+    }
+    if (at < previous_ + previous_count_ && *at < hi) return true;
+    lo = first_child(lo);
+    hi = first_child(hi);
+  }
+  return false;
 }
 
 void ViewCut::heap_push(uint32_t size, uint32_t node) {
@@ -448,6 +475,7 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
               params.cull_frustum,
               params.cull_backfaces && normals_,
               params.window[0] < params.window[2],
+              params.accumulate && params.window[0] < params.window[2],
               0,
               1,
               1,
@@ -476,6 +504,15 @@ CutStatus ViewCut::update(const Camera& camera, const CutParams& params) {
   left_ = entered_ + capacity;
   cut_ = left_ + capacity;
   sent_size_ = reinterpret_cast<uint32_t*>(cut_ + 2 * size_t{capacity});
+  if (frame.accumulate) {
+    // The previous sent set, decoded for binary searches, in the scratch's
+    // last 4 bytes a node (no other list uses them).
+    uint32_t* previous = sent_size_ + capacity;
+    IdReader r{state_};
+    for (uint32_t i = 0; i < sent_count_; ++i) previous[i] = r.read();
+    previous_ = previous;
+    previous_count_ = sent_count_;
+  }
   evaluated_ = 0;
   last_incremental_ = false;
   CutStatus status;

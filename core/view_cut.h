@@ -63,6 +63,11 @@ struct CutParams {
   // On-demand refinement (TOG05 §8.1): only nodes whose projected circle
   // meets [x0, x1) x [y0, y1) (px) are split; empty (x0 >= x1): everywhere.
   int32_t window[4] = {0, 0, 0, 0};
+  // With a window, on-demand accumulation (TOG05 §8.1): a node above a node
+  // the previous update sent stays split (where the rule splits it), inside
+  // the window or not — the refinements of earlier windows are kept, and the
+  // change is only what the new window adds.
+  bool accumulate = false;
 };
 
 // The normal cones back faces are culled by, fixed per model (CutBounds).
@@ -216,6 +221,7 @@ class ViewCut {
   struct Frame;  // one update's camera, parameters and what follows from them
   struct Due;
   Eval evaluate(const Frame& f, uint32_t node, bool inside) const;
+  bool above_previous(uint32_t node) const;  // a node the previous update sent lies below it (accumulation)
   CutStatus derive(Frame& frame, const CutParams& params);  // from the root
   CutStatus keep_sent(const NodeId* fresh, uint32_t fresh_count);
   Due evaluate_due(const Frame& f, uint32_t node) const;
@@ -239,6 +245,8 @@ class ViewCut {
   NodeId* entered_ = nullptr;
   NodeId* left_ = nullptr;
   uint64_t* heap_ = nullptr;  // (size << 32 | ~id): the largest size first, then the smallest id
+  const uint32_t* previous_ = nullptr;  // accumulation: the previous sent set, decoded (the scratch's last 4 bytes a node)
+  uint32_t previous_count_ = 0;
   uint32_t heap_count_ = 0;
   uint32_t cut_count_ = 0, sent_count_ = 0, entered_count_ = 0, left_count_ = 0, visited_ = 0, needed_ = 0;
   // Incremental mode: the front (ids ascending), the clock its deadlines

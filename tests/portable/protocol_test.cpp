@@ -404,6 +404,27 @@ TEST(Protocol, CompactBatchesRoundTripAndRefuseMalformed) {
   EXPECT_FALSE(parse_compact_drop(nodes.data(), 3, 100, &b));
 }
 
+// Version 4's camera flags: a camera with accumulate is 96 bytes and round
+// trips; 92 bytes still parse (no flags); an unknown flag is refused.
+TEST(Protocol, CameraFlagsCarryAccumulation) {
+  CameraUpdate u;
+  ASSERT_TRUE(orbit_camera(OrbitView{}, 240, 320, &u.camera));
+  u.window[0] = 1, u.window[2] = 9;
+  uint8_t buf[kCameraUpdateFlagsBytes];
+  ASSERT_EQ(write_camera_update(u, buf), kCameraUpdateBytes);
+  CameraUpdate back;
+  ASSERT_TRUE(parse_camera_update(buf, kCameraUpdateBytes, &back));
+  EXPECT_FALSE(back.accumulate);
+  u.accumulate = true;
+  ASSERT_EQ(write_camera_update(u, buf), kCameraUpdateFlagsBytes);
+  ASSERT_TRUE(parse_camera_update(buf, kCameraUpdateFlagsBytes, &back));
+  EXPECT_TRUE(back.accumulate);
+  EXPECT_EQ(back.window[2], 9);
+  buf[kCameraUpdateBytes] = 3;
+  EXPECT_FALSE(parse_camera_update(buf, kCameraUpdateFlagsBytes, &back));
+  EXPECT_FALSE(parse_camera_update(buf, kCameraUpdateBytes + 2, &back));
+}
+
 TEST(Protocol, HelloTokenIsCarriedAndComparedWhole) {
   Hello h;
   const char token[] = "correct horse battery staple";

@@ -299,6 +299,55 @@ TEST(ViewCut, WindowRefinesOnlyInside) {
   EXPECT_LT(window.cut.sent_count(), full.cut.sent_count());
 }
 
+// On-demand accumulation (TOG05 §8.1): with the camera still, a second
+// window with `accumulate` keeps what the first refined — every node that
+// leaves is split, none merged — and the cut holds at least the refinement
+// of each window alone; without it the first window's refinement is merged
+// away. Through a shared scratch, as a server's cuts are.
+TEST(ViewCut, AccumulationKeepsWhatEarlierWindowsRefined) {
+  const Model& m = bunny();
+  const Camera c = camera(m, 30, 20, 1.2);
+  CutParams a = no_culling(), b = no_culling();
+  a.window[0] = 40, a.window[1] = 80, a.window[2] = 110, a.window[3] = 160;
+  b.window[0] = 130, b.window[1] = 160, b.window[2] = 200, b.window[3] = 240;
+  const auto ancestor = [&](const ViewCut& cut, uint32_t above, uint32_t below) {
+    while (below > above) below = index_of(cut.parent(NodeId{below}));
+    return below == above;
+  };
+  Cut alone_a(m), alone_b(m);
+  ASSERT_EQ(alone_a.cut.update(c, a), CutStatus::kOk);
+  ASSERT_EQ(alone_b.cut.update(c, b), CutStatus::kOk);
+  for (bool accumulate : {false, true}) {
+    Cut cut(m);
+    ASSERT_EQ(cut.cut.update(c, a), CutStatus::kOk);
+    const std::vector<uint32_t> first = cut.sent();
+    b.accumulate = accumulate;
+    ASSERT_EQ(cut.cut.update(c, b), CutStatus::kOk);
+    uint32_t merged = 0;
+    for (uint32_t i = 0; i < cut.cut.left_count(); ++i) {
+      const uint32_t l = index_of(cut.cut.left()[i]);
+      bool split = false;
+      for (uint32_t k = 0; k < cut.cut.entered_count() && !split; ++k) split = ancestor(cut.cut, l, index_of(cut.cut.entered()[k]));
+      merged += !split;
+    }
+    expect_antichain_cover(m, cut.cut);
+    if (!accumulate) {
+      EXPECT_GT(merged, 0u);  // the first window's refinement went
+      EXPECT_EQ(cut.sent(), alone_b.sent());
+      continue;
+    }
+    EXPECT_EQ(merged, 0u);
+    EXPECT_GT(cut.cut.entered_count(), 0u);
+    // As fine as either window alone, everywhere: no node of either lone cut
+    // lies below a node of the accumulated one.
+    const std::vector<uint32_t> now = cut.sent();
+    for (const Cut* alone : {&alone_a, &alone_b})
+      for (uint32_t x : alone->sent())
+        for (uint32_t y : now) ASSERT_FALSE(y != x && ancestor(cut.cut, y, x)) << y << " above " << x;
+    std::printf("window A %zu nodes, B alone %zu, A then B accumulated %zu\n", first.size(), alone_b.sent().size(), now.size());
+  }
+}
+
 TEST(ViewCut, RefusesBeforeInitAndSmallStorage) {
   ViewCut cut;
   Camera c;

@@ -191,9 +191,8 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
       if (!receive_frame(p, n, r, error)) return false;
       if (r != ReceiveStatus::kOk) return fail(r);
       if (has_camera_) {
-        uint8_t payload[kCameraUpdateBytes];
-        write_camera_update(last_camera_, payload);
-        if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
+        uint8_t payload[kCameraUpdateFlagsBytes];
+        if (!send(MessageType::kCamera, payload, write_camera_update(last_camera_, payload), error)) return false;
       }
       continue;
     }
@@ -228,7 +227,7 @@ bool RemoteModel::lost(std::string& error) {
 
 bool RemoteModel::ask_again(std::string& error) {
   ++resyncs_;
-  uint8_t payload[kCameraUpdateBytes];
+  uint8_t payload[kCameraUpdateFlagsBytes];
   if (receiver_.expected_sequence() == 0) {  // not even the startup came: the hello may be lost
     uint8_t hello[kHelloMaxBytes];
     return send(MessageType::kHello, hello, write_hello(hello_, hello), error);
@@ -236,8 +235,7 @@ bool RemoteModel::ask_again(std::string& error) {
   write_sequence(receiver_.expected_sequence(), payload);
   if (!send(MessageType::kResend, payload, kSequenceBytes, error)) return false;
   if (!has_camera_) return true;
-  write_camera_update(last_camera_, payload);  // cameras are idempotent
-  return send(MessageType::kCamera, payload, kCameraUpdateBytes, error);
+  return send(MessageType::kCamera, payload, write_camera_update(last_camera_, payload), error);  // cameras are idempotent
 }
 
 bool RemoteModel::reconnect(std::string& error) {
@@ -286,10 +284,9 @@ bool RemoteModel::link_again(std::string& error) {
     } while (at < held.size());
     ++resumes_;
   }
-  uint8_t payload[kCameraUpdateBytes];
+  uint8_t payload[kCameraUpdateFlagsBytes];
   if (has_camera_) {
-    write_camera_update(last_camera_, payload);
-    if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
+    if (!send(MessageType::kCamera, payload, write_camera_update(last_camera_, payload), error)) return false;
   }
   return true;
 }
@@ -375,17 +372,18 @@ bool RemoteModel::view(const Camera& camera, int32_t max_size_q4, const int32_t 
   return request(camera, max_size_q4, window, error) && wait(Awaited::kUpdateEnd, error);
 }
 
-bool RemoteModel::request(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error) {
+bool RemoteModel::request(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error,
+                          bool accumulate) {
   CameraUpdate u;
   u.sequence = camera_sequence_;
   u.camera = camera;
   u.max_size_q4 = max_size_q4;
   for (int k = 0; k < 4; ++k) u.window[k] = window[k];
+  u.accumulate = accumulate && window[0] < window[2] && hello_.version >= 4;
   last_camera_ = u;
   has_camera_ = true;
-  uint8_t payload[kCameraUpdateBytes];
-  write_camera_update(u, payload);
-  if (!send(MessageType::kCamera, payload, kCameraUpdateBytes, error)) return false;
+  uint8_t payload[kCameraUpdateFlagsBytes];
+  if (!send(MessageType::kCamera, payload, write_camera_update(u, payload), error)) return false;
   awaited_camera_ = camera_sequence_++;
   awaiting_ = Awaited::kUpdateEnd;
   heard_ = requested_at_ = std::chrono::steady_clock::now();

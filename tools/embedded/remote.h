@@ -58,7 +58,11 @@ class RemoteModel {
   // link has now — waiting at most `wait_ms` for it — and applies it, so the
   // cache fills while frames are drawn; converged() says when the latest
   // camera's update-end has come.
-  bool request(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error);
+  // With a window and `accumulate` (protocol 4, on-demand refinement), the
+  // server keeps the refinements of earlier windows: the cache keeps what it
+  // received and only what the new window adds comes.
+  bool request(const Camera& camera, int32_t max_size_q4, const int32_t window[4], std::string& error,
+               bool accumulate = false);
   bool service(int wait_ms, std::string& error);
   bool converged() const;
   // How far the latest camera's answer has come (protocol 4's update-begin

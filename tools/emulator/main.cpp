@@ -31,7 +31,9 @@ const char kUsage[] =
     "                       Enter or Space (select) held, up/down dolly\n"
     "  C, L, Q              colour, lighting, quality (1, 1/2, 1/4, 2)\n"
     "  mouse drag           the stylus: draws the refinement window (only nodes\n"
-    "                       there are refined); a tap clears it\n"
+    "                       there are refined; another window adds to what the\n"
+    "                       earlier ones refined, TOG05's on-demand mode, over\n"
+    "                       a protocol 4 server); a tap clears it\n"
     "  Escape               quit\n"
     "\n"
     "program:\n"
@@ -152,6 +154,7 @@ int run(int argc, char** argv) {
   FrameStats stats;
   RateMeter rates;
   Image shot;
+  bool had_window = false;  // the last camera sent had a refinement window
   while (!controls.quit()) {
     const auto frame_start = std::chrono::steady_clock::now();
     for (; next_step < script.size() && script[next_step].frame <= frame_number; ++next_step) {
@@ -179,7 +182,11 @@ int run(int argc, char** argv) {
                            controls.grey(), controls.quality_q8()))
         return fail("the view's options were refused");
       if (!controls.camera(r.width, r.height, &camera)) return fail("the camera left its range");
-      if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(source.name() + ": " + error);
+      // A window after a window keeps what the earlier ones refined.
+      const bool windowed = controls.window()[0] < controls.window()[2];
+      if (!m.request(camera, o.rule.max_size_q4, controls.window(), error, windowed && had_window))
+        return fail(source.name() + ": " + error);
+      had_window = windowed;
     }
     // What the link has, for at most 10 ms of this frame.
     if (!service_for(m, 0.010, error)) return fail(source.name() + ": " + error);
