@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
 
 #include <filesystem>
 #include <fstream>
@@ -209,6 +211,44 @@ TEST(Encoder, SampledLeavesReproduceTheSurface) {
   // Coarser cuts are worse: PSNR falls with the level.
   const CloudMetrics coarse = compare_clouds(original, sample_cut(m, level_cut(m, 4), 0));
   EXPECT_LT(coarse.psnr_one_sided, leaf_metrics.psnr_one_sided);
+}
+
+// An error bound (encode --tolerance): the leaves' points regenerated lie
+// within it (RMS, both ways, of the bounding box's diagonal), the variance
+// stop makes every leaf of two points or more at most that wide, and the
+// position fields are narrowed to cells of half of it — a coarser bound, a
+// smaller file.
+TEST(Encoder, ToleranceBoundsTheErrorAndFitsTheWidths) {
+  const PointCloud original = test::sphere_cloud(20000);
+  size_t bytes_before = ~size_t{0};
+  for (double share : {0.002, 0.01, 0.03}) {
+    EncodeOptions o;
+    o.tolerance = share;
+    o.tolerance_relative = true;
+    o.tree.leaf_size = 2;
+    const std::vector<uint8_t> file = test::encode(original, o);
+    const DecodedModel m = test::decode(file);
+    const CloudMetrics leaves = compare_clouds(original, sample_cut(m, leaf_cut(m), 0));
+    const double diagonal = leaves.diagonal;
+    EXPECT_LE(leaves.original_to_generated.rms, share * diagonal) << share;
+    EXPECT_LE(leaves.generated_to_original.rms, share * diagonal) << share;
+    SpgView view;
+    ASSERT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
+    for (int a = 0; a < 3; ++a) {
+      float lo, hi;
+      std::memcpy(&lo, &view.header.bbox_bits[a], 4);
+      std::memcpy(&hi, &view.header.bbox_bits[3 + a], 4);
+      const double extent = double(hi) - lo;
+      const int bits = view.header.layout.bits[a];
+      EXPECT_LE(extent / std::ldexp(1.0, bits), share * diagonal / 2 * 1.01) << share;  // a cell at most half the bound
+      EXPECT_GT(extent / std::ldexp(1.0, bits - 1), share * diagonal / 2 * 0.99) << share;  // and no finer than that needs
+    }
+    EXPECT_LT(file.size(), bytes_before) << share;
+    bytes_before = file.size();
+    std::printf("tolerance %.1f %% of the diagonal: %u nodes, %zu bytes, position %u/%u/%u bits, RMS %.4f / %.4f\n",
+                100 * share, view.header.node_count, file.size(), view.header.layout.bits[0], view.header.layout.bits[1],
+                view.header.layout.bits[2], leaves.original_to_generated.rms, leaves.generated_to_original.rms);
+  }
 }
 
 TEST(Metrics, KnownDistances) {

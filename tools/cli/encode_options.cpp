@@ -23,9 +23,37 @@ namespace stipple {
 bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& json, std::string& error) {
   std::string v;
   unsigned long long u;
-  if (args.value("--leaf-size", v)) {
+  const bool leaf_size = args.value("--leaf-size", v);
+  if (leaf_size) {
     if (!cli::parse_uint(v, 1u << 20, u) || u < 2) return error = "--leaf-size: expected an integer >= 2, got '" + v + "'", false;
     o.tree.leaf_size = static_cast<uint32_t>(u);
+  }
+  if (args.value("--tolerance", v)) {
+    // A length in the scan's units, one with a unit (the scan in metres),
+    // or a percentage of the bounding box's diagonal.
+    struct Unit {
+      const char* suffix;
+      double scale;
+    };
+    static constexpr Unit kUnits[] = {{"um", 1e-6}, {"mm", 1e-3}, {"cm", 1e-2}, {"m", 1.0}, {"%", 1e-2}};
+    double scale = 1;
+    std::string number = v;
+    bool relative = false;
+    for (const Unit& unit : kUnits) {
+      const size_t n = std::char_traits<char>::length(unit.suffix);
+      if (number.size() > n && number.compare(number.size() - n, n, unit.suffix) == 0) {
+        number.resize(number.size() - n);
+        scale = unit.scale;
+        relative = unit.suffix[0] == '%';
+        break;
+      }
+    }
+    double t = 0;
+    if (!cli::parse_double(number, t) || !(t > 0) || (relative && t > 100))
+      return error = "--tolerance: expected a length (0.002, 2mm, 0.5cm) or a share of the diagonal (0.3%), got '" + v + "'", false;
+    o.tolerance = t * scale;
+    o.tolerance_relative = relative;
+    if (!leaf_size) o.tree.leaf_size = 2;  // the variance stop decides where leaves are
   }
   if (args.value("--classes", v)) {
     unsigned long long c[3];

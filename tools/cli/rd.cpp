@@ -41,12 +41,23 @@ const char kRdHelp[] =
     "  classes-256    256 of each\n"
     "  no-normals     positions only: no normals, no colour (9-byte records)\n"
     "  float-tables   the defaults in format version 1 (float32 class tables,\n"
-    "                 twice the startup of version 2's 16-bit codes)\n";
+    "                 twice the startup of version 2's 16-bit codes)\n"
+    "  tolerance-1%   encode --tolerance 1% (the variance stop and position widths\n"
+    "                 of an error bound of 1 % of the diagonal)\n"
+    "  tolerance-0.5% the same at 0.5 %\n"
+    "  tolerance-0.3% the same at 0.3 %\n";
 
 struct RdSetting {
   const char* name;
   void (*apply)(EncodeOptions&);
 };
+// What encode --tolerance D% sets.
+void tolerance(EncodeOptions& o, double share) {
+  o.tolerance = share;
+  o.tolerance_relative = true;
+  o.tree.leaf_size = 2;
+}
+
 const RdSetting kSettings[] = {
     {"default", [](EncodeOptions&) {}},
     {"leaf-4", [](EncodeOptions& o) { o.tree.leaf_size = 4; }},
@@ -55,6 +66,9 @@ const RdSetting kSettings[] = {
     {"classes-256", [](EncodeOptions& o) { o.classes_p = o.classes_n = 256; }},
     {"no-normals", [](EncodeOptions& o) { o.normals = o.colors = false; }},
     {"float-tables", [](EncodeOptions& o) { o.format_version = 1; }},
+    {"tolerance-1%", [](EncodeOptions& o) { tolerance(o, 0.01); }},
+    {"tolerance-0.5%", [](EncodeOptions& o) { tolerance(o, 0.005); }},
+    {"tolerance-0.3%", [](EncodeOptions& o) { tolerance(o, 0.003); }},
 };
 
 }  // namespace

@@ -21,6 +21,13 @@ struct EncodeOptions {
   // and sigma_n (a small scan does not need 4096 classes of 12 bytes each),
   // 64 for sigma_c.
   int classes_p = 0, classes_n = 0, classes_c = 0;
+  // An error bound (docs/encoder.md "Tolerance"): the variance stop at it
+  // (leaves of sigma1 at most `tolerance`) and position fields wide enough
+  // that a cell is at most half of it (up to 16 bits); in the scan's units,
+  // or with `tolerance_relative` a fraction of the bounding box's diagonal.
+  // 0: none (the paper's 11/11/10-bit positions, leaves by point count).
+  double tolerance = 0;
+  bool tolerance_relative = false;
   bool normals = true;  // store normals (computed when the scan has none)
   bool colors = true;   // store colours when the scan has them
   int normal_neighbours = 12;

@@ -278,7 +278,8 @@ Tree build(std::vector<Vec3> positions, std::vector<Vec3> normals, const PointCl
         NormalSpread spread;
         if (nrm) spread = node_normal_spread(nrm, count, position.frame.col(2), threads);
         node.stats = finish_stats(count, position, nrm ? &spread : nullptr, o.stats);
-        if (count < o.leaf_size || node.stats.position.sigma[0] <= o.stats.sigma_floor || node.depth >= o.max_depth)
+        if (count < o.leaf_size || node.stats.position.sigma[0] <= o.stats.sigma_floor ||
+            node.stats.position.sigma[0] <= o.leaf_sigma || node.depth >= o.max_depth)
           return;
         if (!o.octree) {
           results[k] = split_binary(p, nrm, ids, count, node.stats.position, o, threads, labels, scratch);

@@ -3,8 +3,8 @@
 //
 // Top-down, level by level, so nodes come out in breadth-first order with
 // siblings adjacent — the order of the `.spg` file. A node splits unless it
-// holds fewer than `leaf_size` points, its sigma1 is at the variance floor, or
-// it sits at `max_depth`.
+// holds fewer than `leaf_size` points, its sigma1 is at the variance floor or
+// at most `leaf_sigma` (the variance stop), or it sits at `max_depth`.
 //
 // Binary split by 2-means: centres mean +- `init_step` * sigma1 * f1; assign
 // each point to the nearer centre by Mahalanobis distance ||S T (q - mu)||
@@ -33,6 +33,7 @@ namespace stipple {
 
 struct TreeOptions {
   uint32_t leaf_size = 16;  // nodes with fewer points are leaves
+  double leaf_sigma = 0;    // and those whose sigma1 is at most this (TOG05's variance stop; 0: none)
   double balance = 0.3;     // balance band [balance, 1 - balance]
   bool octree = false;
   int max_iterations = 30;

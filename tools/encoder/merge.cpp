@@ -249,7 +249,9 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
   int thin = 0;  // the thinnest axis gets 10 position bits
   for (int a = 1; a < 3; ++a)
     if (double(bmax[a]) - bmin[a] < double(bmax[thin]) - bmin[thin]) thin = a;
-  const RecordLayout layout = paper_layout(normals, colors, thin);
+  RecordLayout layout = paper_layout(normals, colors, thin);
+  for (int a = 0; a < 3; ++a)  // a tolerance's widths
+    if (plan.position_bits[a] != 0) layout.bits[a] = plan.position_bits[a];
   SpgHeader header;
   header.version = static_cast<uint16_t>(plan.version);
   header.flags = static_cast<uint16_t>((normals ? kAttrNormals : 0) | (colors ? kAttrColor : 0));

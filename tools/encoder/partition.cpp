@@ -28,7 +28,8 @@ constexpr uint64_t kJobBytesPerPoint = 256;
 constexpr uint64_t kSampleSize = uint64_t{1} << 20;
 // More partitions than this is a memory budget too small for the scan.
 constexpr uint32_t kMaxPartitions = 4096;
-constexpr char kPlanMagic[8] = {'S', 'P', 'G', 'P', 'L', 'A', 'N', '1'};
+// 2: the variance stop and the position widths (a tolerance).
+constexpr char kPlanMagic[8] = {'S', 'P', 'G', 'P', 'L', 'A', 'N', '2'};
 constexpr char kNodesMagic[8] = {'S', 'P', 'G', 'N', 'O', 'D', 'E', '1'};
 constexpr size_t kStatsDoubles = 41;
 
@@ -232,6 +233,7 @@ bool check_encode_options(const EncodeOptions& o, std::string& error) {
   if (o.format_version < kSpgOldestVersion || o.format_version > kSpgVersion)
     return error = "--format-version: expected " + std::to_string(kSpgOldestVersion) + " or " + std::to_string(kSpgVersion), false;
   if (o.tree.leaf_size < 2) return error = "--leaf-size must be at least 2", false;
+  if (!(o.tolerance >= 0) || !std::isfinite(o.tolerance)) return error = "--tolerance must be a positive length", false;
   if (!(o.tree.balance >= 0 && o.tree.balance <= 0.5)) return error = "--balance must be in [0, 0.5]", false;
   return true;
 }
@@ -331,6 +333,18 @@ bool finish_plan(PlanSampler& sampler, const ScanFacts& facts, const EncodeOptio
   plan.tree.stats.normals = plan.normals;
   plan.tree.stats.colors = plan.colors;
   plan.tree.stats.sigma_floor = 1e-15 * std::max(diag, 1e-30);
+  if (o.tolerance > 0) {
+    // The variance stop at the tolerance, and a position cell at most half
+    // of it along each axis (docs/encoder.md "Tolerance").
+    const double tolerance = o.tolerance_relative ? o.tolerance * diag : o.tolerance;
+    plan.tree.leaf_sigma = tolerance;
+    for (int a = 0; a < 3; ++a) {
+      const double extent = double(plan.bmax[a]) - plan.bmin[a];
+      int bits = 1;
+      while (bits < kMaxFieldBits && extent / std::ldexp(1.0, bits) > tolerance / 2) ++bits;
+      plan.position_bits[a] = static_cast<uint8_t>(bits);
+    }
+  }
 
   // The top tree, breadth-first: a node splits while its share of the
   // sample stands for more than `limit` points.
@@ -405,6 +419,8 @@ bool write_plan(const PartitionPlan& p, const std::string& dir, std::string& err
   out.str(f.reason);
   const TreeOptions& t = p.tree;
   out.put(t.leaf_size);
+  out.put(t.leaf_sigma);
+  for (uint8_t b : p.position_bits) out.put(b);
   out.put(t.balance);
   out.put(static_cast<uint8_t>(t.octree));
   out.put(static_cast<int32_t>(t.max_iterations));
@@ -450,8 +466,10 @@ bool read_plan(const std::string& dir, PartitionPlan& p, std::string& error) {
   const std::string path = (std::filesystem::path(dir) / "plan.bin").string();
   std::vector<uint8_t> bytes;
   if (!read_file(path, bytes, error, uint64_t{1} << 30)) return false;
+  if (bytes.size() >= 8 && std::memcmp(bytes.data(), "SPGPLAN1", 8) == 0)
+    return error = path + ": a plan of an older stipple (SPGPLAN1; this one reads SPGPLAN2): plan the scan again", false;
   if (bytes.size() < 12 || std::memcmp(bytes.data(), kPlanMagic, 8) != 0)
-    return error = path + ": not a stipple encode plan (no SPGPLAN1 at byte 0)", false;
+    return error = path + ": not a stipple encode plan (no SPGPLAN2 at byte 0)", false;
   if (load_u32le(bytes.data() + bytes.size() - 4) != crc32(bytes.data(), bytes.size() - 4))
     return error = path + ": CRC-32 mismatch: the plan is corrupt or was cut short", false;
   In in(bytes.data() + 8, bytes.size() - 12);
@@ -483,6 +501,8 @@ bool read_plan(const std::string& dir, PartitionPlan& p, std::string& error) {
   f.reason = in.str();
   TreeOptions& t = p.tree;
   t.leaf_size = in.get<uint32_t>();
+  t.leaf_sigma = in.get<double>();
+  for (uint8_t& b : p.position_bits) b = in.get<uint8_t>();
   t.balance = in.get<double>();
   t.octree = in.get<uint8_t>();
   t.max_iterations = in.get<int32_t>();

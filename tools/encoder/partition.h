@@ -69,6 +69,7 @@ struct PartitionPlan {
   uint64_t class_sample = uint64_t{1} << 21;  // EncodeOptions::class_sample
   ScanFrame frame;
   TreeOptions tree;            // stats: sigma floor, normals, colours set for the scan
+  uint8_t position_bits[3] = {0, 0, 0};  // the mean's field widths from a tolerance; 0: the paper's
   Vec3 origin = Vec3::Zero();
   float bmin[3] = {0, 0, 0}, bmax[3] = {0, 0, 0};
   double halo = 0;             // distance from a plane within which a point joins the other side's halo
