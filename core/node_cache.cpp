@@ -108,26 +108,20 @@ void NodeCache::clear() {
   for (uint32_t i = 0; i <= hash_mask_; ++i) set_entry(i, 0);
 }
 
-CacheStatus NodeCache::load_startup(const uint8_t* data, size_t size) {
+CacheStatus NodeCache::load_startup(const uint8_t* data, size_t size) { return load(data, size, true); }
+
+CacheStatus NodeCache::load_model(const uint8_t* data, size_t size) { return load(data, size, false); }
+
+CacheStatus NodeCache::load(const uint8_t* data, size_t size, bool tables) {
   if (records_ == nullptr) return CacheStatus::kBadLimits;
   ready_ = false;
   clear();
   SpgView view;
   size_t used = 0;
-  startup_error_ = spg_parse_startup(data, size, &view, &used);
+  // Without tables (a model header): the decoder holds no class yet.
+  startup_error_ = tables ? spg_parse_startup(data, size, &view, &used) : spg_parse_header(data, size, &view.header, &used);
   if (!startup_error_.ok()) return CacheStatus::kBadStartup;
   return adopt(view);
-}
-
-CacheStatus NodeCache::load_model(const uint8_t* data, size_t size) {
-  if (records_ == nullptr) return CacheStatus::kBadLimits;
-  ready_ = false;
-  clear();
-  SpgView view;
-  size_t used = 0;
-  startup_error_ = spg_parse_header(data, size, &view.header, &used);
-  if (!startup_error_.ok()) return CacheStatus::kBadStartup;
-  return adopt(view);  // no tables: the decoder holds no class yet
 }
 
 CacheStatus NodeCache::adopt(const SpgView& view) {

@@ -109,6 +109,7 @@ class NodeCache {
   bool decoded() const { return limits_.decoded; }
 
  private:
+  CacheStatus load(const uint8_t* data, size_t size, bool tables);  // a startup, or (without tables) a header
   CacheStatus adopt(const SpgView& view);  // a parsed startup or header
   uint32_t find(uint32_t id) const;  // id's hash entry, or the empty one ending its probe sequence
   uint32_t home_slot(uint32_t id) const;  // where id's probe sequence starts

@@ -384,7 +384,7 @@ bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp
   // A cache that cannot hold both what it has and what comes: drops first.
   const bool room = uint64_t{held_before} + entering <= capacity_;
   uint32_t* ready = s.ready;
-  uint32_t ready_count = 0, late = 0;
+  uint32_t ready_count = 0;
   if (!room) {
     if (!send_drops(left, leaving, sink, context)) return false;
   } else {
@@ -421,8 +421,8 @@ bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp
   }
   if (room) {
     for (uint32_t j = 0; j < leaving; ++j)
-      if (waiting[j] == kNoGroup) ready[late++] = left[j];
-    if (!send_drops(ready, late, sink, context)) return false;
+      if (waiting[j] == kNoGroup) ready[ready_count++] = left[j];
+    if (!send_drops(ready, ready_count, sink, context)) return false;
   }
   return true;
 }
