@@ -45,7 +45,8 @@ const char kRdHelp[] =
     "  tolerance-1%   encode --tolerance 1% (the variance stop and position widths\n"
     "                 of an error bound of 1 % of the diagonal)\n"
     "  tolerance-0.5% the same at 0.5 %\n"
-    "  tolerance-0.3% the same at 0.3 %\n";
+    "  tolerance-0.3% the same at 0.3 %\n"
+    "  tolerance-0.1% the same at 0.1 %\n";
 
 struct RdSetting {
   const char* name;
@@ -69,6 +70,7 @@ const RdSetting kSettings[] = {
     {"tolerance-1%", [](EncodeOptions& o) { tolerance(o, 0.01); }},
     {"tolerance-0.5%", [](EncodeOptions& o) { tolerance(o, 0.005); }},
     {"tolerance-0.3%", [](EncodeOptions& o) { tolerance(o, 0.003); }},
+    {"tolerance-0.1%", [](EncodeOptions& o) { tolerance(o, 0.001); }},
 };
 
 }  // namespace
