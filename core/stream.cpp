@@ -284,25 +284,22 @@ bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink s
 
 namespace {
 
-// Where `id` is in ascending ids[0 .. n), or n.
-uint32_t find_id(const uint32_t* ids, uint32_t n, uint32_t id) {
-  uint32_t lo = 0, hi = n;
-  while (lo < hi) {
-    const uint32_t mid = lo + (hi - lo) / 2;
-    if (ids[mid] < id) lo = mid + 1;
-    else hi = mid;
+// The first index of ascending ids[0 .. n) at or above `id` (n: none).
+uint32_t id_of(uint32_t id) { return id; }
+uint32_t id_of(NodeId id) { return index_of(id); }
+template <typename Id>
+uint32_t first_at_or_above(const Id* ids, uint32_t n, uint32_t id) {
+  uint32_t lo = 0;
+  while (n > 0) {
+    const uint32_t half = n / 2;
+    if (id_of(ids[lo + half]) < id) {
+      lo += half + 1;
+      n -= half + 1;
+    } else {
+      n = half;
+    }
   }
-  return lo < n && ids[lo] == id ? lo : n;
-}
-
-bool find_node(const NodeId* ids, uint32_t n, uint32_t id) {
-  uint32_t lo = 0, hi = n;
-  while (lo < hi) {
-    const uint32_t mid = lo + (hi - lo) / 2;
-    if (index_of(ids[mid]) < id) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo < n && index_of(ids[lo]) == id;
+  return lo;
 }
 
 constexpr uint32_t kNoGroup = 0xFFFFFFFFu;
@@ -364,22 +361,41 @@ bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp
     return true;
   }();
   if (!sorted_left) std::sort(left, left + leaving);
-  std::sort(order, order + entering, [](uint64_t a, uint64_t b) { return a > b; });
-  // Which node that left each entering node refines (its nearest ancestor
-  // among them), kept in the order's high word in place of the size.
-  for (uint32_t i = 0; i < entering; ++i) {
-    uint32_t group = kNoGroup;
-    for (uint32_t a = ~static_cast<uint32_t>(order[i]); a != 0 && leaving > 0;) {
-      a = index_of(cut_.parent(NodeId{a}));
-      if (a < left[0]) break;
-      const uint32_t j = find_id(left, leaving, a);
-      if (j < leaving) {
-        group = j;
-        ++waiting[j];
-        break;
-      }
+  // Which node that left each entering node refines: the old cut and the
+  // new are antichains, so an entering node lies below at most one node that
+  // left, and a node's descendants are one id range a level — two binary
+  // searches of the (ascending) entering ids a level below each node that
+  // left. `ready` holds each entering node's group until the order is made.
+  const NodeId* entered = cut_.entered();
+  uint32_t* group_of = s.ready;
+  for (uint32_t i = 0; i < entering; ++i) group_of[i] = kNoGroup;
+  uint32_t unrefined = 0;
+  for (uint32_t j = 0; j < leaving; ++j) {
+    for (uint32_t lo = cut_.first_child(left[j]), hi = cut_.first_child(left[j] + 1); lo < hi;
+         lo = cut_.first_child(lo), hi = cut_.first_child(hi)) {
+      const uint32_t from = first_at_or_above(entered, entering, lo), to = first_at_or_above(entered, entering, hi);
+      for (uint32_t i = from; i < to; ++i) group_of[i] = j;
+      waiting[j] += to - from;
     }
-    order[i] = (uint64_t{group} << 32) | (order[i] & 0xFFFFFFFFu);
+    unrefined += waiting[j] == 0;
+  }
+  // Nodes that left with nothing below them entering: merged into an
+  // entering ancestor (dropped after the nodes: kNoGroup), or gone from view.
+  for (uint32_t i = 0; i < entering && unrefined > 0; ++i) {
+    const uint32_t e = index_of(entered[i]);
+    for (uint32_t lo = cut_.first_child(e), hi = cut_.first_child(e + 1); lo < hi;
+         lo = cut_.first_child(lo), hi = cut_.first_child(hi))
+      for (uint32_t j = first_at_or_above(left, leaving, lo); j < leaving && left[j] < hi; ++j)
+        if (waiting[j] == 0) {
+          waiting[j] = kNoGroup;
+          --unrefined;
+        }
+  }
+  std::sort(order, order + entering, [](uint64_t a, uint64_t b) { return a > b; });
+  // The order's high word holds the group now, in place of the size.
+  for (uint32_t k = 0; k < entering; ++k) {
+    const uint32_t low = static_cast<uint32_t>(order[k]);
+    order[k] = (uint64_t{group_of[first_at_or_above(entered, entering, ~low)]} << 32) | low;
   }
   // A cache that cannot hold both what it has and what comes: drops first.
   const bool room = uint64_t{held_before} + entering <= capacity_;
@@ -388,18 +404,9 @@ bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp
   if (!room) {
     if (!send_drops(left, leaving, sink, context)) return false;
   } else {
-    // Left nodes nothing entering refines: gone from view (drop now), or
-    // merged into an entering ancestor (drop once it is sent: at the end).
-    for (uint32_t j = 0; j < leaving; ++j) {
-      if (waiting[j] != 0) continue;
-      bool merged = false;
-      for (uint32_t a = left[j]; a != 0 && !merged;) {
-        a = index_of(cut_.parent(NodeId{a}));
-        merged = find_node(cut_.entered(), entering, a);
-      }
-      if (merged) waiting[j] = kNoGroup;  // dropped last
-      else ready[ready_count++] = left[j];
-    }
+    // Nodes that left gone from view go now; merged ones at the end.
+    for (uint32_t j = 0; j < leaving; ++j)
+      if (waiting[j] == 0) ready[ready_count++] = left[j];
     if (!send_drops(ready, ready_count, sink, context)) return false;
     ready_count = 0;
   }

@@ -277,19 +277,6 @@ bool ViewCut::adopt_sent(const NodeId* ids, uint32_t count) {
 
 uint8_t ViewCut::points(NodeId id) const { return bounds_[index_of(id)].points; }
 
-NodeId ViewCut::parent(NodeId id) const {
-  // The last node before `id` whose first child is at or before it: nodes
-  // after the parent (leaves or not) have their first child past `id`.
-  const uint32_t x = index_of(id);
-  uint32_t lo = 0, hi = x;  // first_child(lo) <= x < first_child(hi)
-  while (hi - lo > 1) {
-    const uint32_t mid = lo + (hi - lo) / 2;
-    if (bounds_[mid].first_child <= x) lo = mid;
-    else hi = mid;
-  }
-  return NodeId{lo};
-}
-
 bool ViewCut::is_sent(NodeId id) const {
   IdReader r{state_};
   for (uint32_t i = 0; i < sent_count_; ++i) {
@@ -403,12 +390,10 @@ struct ViewCut::Frame {
   return e;
 }
 
+uint32_t ViewCut::first_child(uint32_t id) const { return id < node_count_ ? bounds_[id].first_child : node_count_; }
+
 bool ViewCut::above_previous(uint32_t id) const {
-  // The node's descendants, level by level, are one id range each: from the
-  // first child of the range's first node to that of the node after its
-  // last (first children rise with the id; a leaf's is where its children
-  // would start).
-  const auto first_child = [&](uint32_t x) { return x < node_count_ ? bounds_[x].first_child : node_count_; };
+  // The node's descendants, level by level, are one id range each.
   uint32_t lo = first_child(id), hi = first_child(id + 1);
   while (lo < hi) {
     const uint32_t* at = previous_;

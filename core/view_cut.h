@@ -185,10 +185,11 @@ class ViewCut {
   // saturated at 255; 0 when the view had no leaf counts. `id` below the
   // node count.
   uint8_t points(NodeId id) const;
-  // The node's parent (the root's is the root): a binary search of the
-  // bounds' first children, which rise with the id (a leaf's is where its
-  // children would start). `id` below the node count.
-  NodeId parent(NodeId id) const;
+  // The id of the node's first child (a leaf's: where its children would
+  // start; node_count() for id == node_count()). A node's descendants at
+  // each level below it are one id range: from first_child(lo) to
+  // first_child(hi) for the range [lo, hi) above, starting from [id, id + 1).
+  uint32_t first_child(uint32_t id) const;
   // The sent set decoded, in the scratch: valid until the next update
   // through it (null before the first update, and after adopt_sent).
   const NodeId* sent() const { return sent_; }

@@ -124,17 +124,38 @@ TEST(ViewCut, UpdatedEqualsFreshOverARandomWalk) {
   }
 }
 
-TEST(ViewCut, ParentIsFoundForEveryNodeOfBothTrees) {
+// Whether `below` is a descendant of `above`, by the level ranges of
+// ViewCut::first_child.
+bool is_below(const ViewCut& cut, uint32_t above, uint32_t below) {
+  for (uint32_t lo = cut.first_child(above), hi = cut.first_child(above + 1); lo < hi;
+       lo = cut.first_child(lo), hi = cut.first_child(hi))
+    if (below >= lo && below < hi) return true;
+  return false;
+}
+
+// first_child names each node's children (adjacent), and a node's
+// descendants at each level are one id range (what the stream's order and
+// accumulation search), on a binary tree and an octree.
+TEST(ViewCut, FirstChildrenGiveEveryNodesDescendantsLevelByLevel) {
   for (const char* file : {"tests/golden/bunny_v1.spg", "tests/data/sphere600_octree.spg"}) {
     const Model m(file);
     Cut cut(m);
-    EXPECT_EQ(index_of(cut.cut.parent(NodeId{0})), 0u);
+    const uint32_t n = m.view.header.node_count;
+    std::vector<uint32_t> parent(n, 0);
     uint32_t next = 1;
-    for (uint32_t i = 0; i < m.view.header.node_count; ++i) {
+    for (uint32_t i = 0; i < n; ++i) {
       const uint32_t c = spg_child_count(m.view, i);
-      for (uint32_t k = next; k < next + c; ++k) ASSERT_EQ(index_of(cut.cut.parent(NodeId{k})), i) << file << " node " << k;
+      ASSERT_EQ(cut.cut.first_child(i), next) << file << " node " << i;
+      for (uint32_t k = next; k < next + c; ++k) parent[k] = i;
       next += c;
     }
+    EXPECT_EQ(cut.cut.first_child(n), n);
+    for (uint32_t x = 1; x < n; x += 7)
+      for (uint32_t y = 0; y < n; y += 13) {
+        bool below = false;
+        for (uint32_t a = x; a != 0 && !below;) below = (a = parent[a]) == y;
+        ASSERT_EQ(is_below(cut.cut, y, x), below) << file << ": " << x << " below " << y;
+      }
   }
 }
 
@@ -310,10 +331,7 @@ TEST(ViewCut, AccumulationKeepsWhatEarlierWindowsRefined) {
   CutParams a = no_culling(), b = no_culling();
   a.window[0] = 40, a.window[1] = 80, a.window[2] = 110, a.window[3] = 160;
   b.window[0] = 130, b.window[1] = 160, b.window[2] = 200, b.window[3] = 240;
-  const auto ancestor = [&](const ViewCut& cut, uint32_t above, uint32_t below) {
-    while (below > above) below = index_of(cut.parent(NodeId{below}));
-    return below == above;
-  };
+  const auto ancestor = [&](const ViewCut& cut, uint32_t above, uint32_t below) { return is_below(cut, above, below); };
   Cut alone_a(m), alone_b(m);
   ASSERT_EQ(alone_a.cut.update(c, a), CutStatus::kOk);
   ASSERT_EQ(alone_b.cut.update(c, b), CutStatus::kOk);
