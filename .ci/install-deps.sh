@@ -10,8 +10,8 @@ packages=(cmake ninja-build g++ pkg-config libeigen3-dev libgtest-dev libgmock-d
   help2man dpkg-dev  # man pages from --help; the .deb's library dependencies (dpkg-shlibdeps)
   libsdl2-dev libepoxy-dev libegl-dev libgl-dev libgl1-mesa-dri libegl-mesa0  # the emulator, the GL client (llvmpipe)
   xvfb xauth  # their windows in the tests
-  draco python3-minimal
-  python3-distributed)  # the encoder's jobs on a Dask cluster (tools/cluster/dask_encode.py and its test)  # Draco's rate against distortion beside ours (tools/draco_rd.sh)
+  draco python3-minimal  # Draco's rate against distortion beside ours (tools/draco_rd.sh); tools/bench/*.py
+  python3-distributed)  # the encoder's jobs on a Dask cluster (tools/cluster/dask_encode.py and its test)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
