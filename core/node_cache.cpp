@@ -150,7 +150,7 @@ CacheStatus NodeCache::adopt(const SpgView& view) {
 
 bool NodeCache::class_held(int table, uint32_t index) const {
   if (all_held_) return true;
-  const size_t bit = (table > 0 ? header_.class_count[0] : 0u) + (table > 1 ? header_.class_count[1] : 0u) + size_t{index};
+  const size_t bit = spg_class_bit(header_, table, index);
   return (held_[bit / 8] >> (bit % 8)) & 1u;
 }
 
@@ -161,7 +161,7 @@ CacheStatus NodeCache::add_class(int table, uint32_t index, const uint8_t* value
     return CacheStatus::kBadClasses;
   if (!decoder_.set_classes(table, index, 1, values)) return CacheStatus::kBadClasses;
   if (!class_held(table, index)) {
-    const size_t bit = (table > 0 ? header_.class_count[0] : 0u) + (table > 1 ? header_.class_count[1] : 0u) + size_t{index};
+    const size_t bit = spg_class_bit(header_, table, index);
     held_[bit / 8] = static_cast<uint8_t>(held_[bit / 8] | (1u << (bit % 8)));
     ++held_count_[table];
   }

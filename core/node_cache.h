@@ -74,7 +74,7 @@ class NodeCache {
   // Class `index` of table 0 (sigma_p), 1 (sigma_n) or 2 (sigma_c), its
   // values as in the header's version of .spg §2 (class_value_bytes long).
   [[nodiscard]] CacheStatus add_class(int table, uint32_t index, const uint8_t* values, size_t size);
-  size_t class_value_bytes(int table) const { return (table == 1 ? 2u : 3u) * spg_class_value_bytes(header_.version); }
+  size_t class_value_bytes(int table) const { return spg_class_values(table) * spg_class_value_bytes(header_.version); }
   bool class_held(int table, uint32_t index) const;
   uint32_t classes_held(int table) const { return held_count_[table]; }
   // Rises whenever the class tables change (a GPU client re-uploads them).

@@ -86,6 +86,16 @@ size_t frame_table_bytes(const RecordLayout& l, Field theta) {
   return bytes;
 }
 
+// The box's extent along one axis, and the largest, E (1 for a box that is
+// a point: every offset is 0 anyway).
+Dyadic axis_extent(const SpgHeader& h, int a) { return subtract(dyadic_of(h.bbox_bits[3 + a]), dyadic_of(h.bbox_bits[a])); }
+Dyadic largest_extent(const SpgHeader& h) {
+  Dyadic largest;
+  for (int a = 0; a < 3; ++a)
+    if (greater(axis_extent(h, a), largest)) largest = axis_extent(h, a);
+  return largest.m <= 0 ? Dyadic{1, 0} : largest;
+}
+
 }  // namespace
 
 size_t node_decoder_bytes(const SpgHeader& h) {
@@ -129,14 +139,9 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
   build(Field::kFcTheta, AngleKind::kThetaHemisphere, fc_, euler_[2]);
 
   // Box: extents and the largest, E.
-  Dyadic extent[3], largest;
+  const Dyadic largest = largest_extent(header_);
   for (int a = 0; a < 3; ++a) {
-    extent[a] = subtract(dyadic_of(header_.bbox_bits[3 + a]), dyadic_of(header_.bbox_bits[a]));
-    if (greater(extent[a], largest)) largest = extent[a];
-  }
-  if (largest.m <= 0) largest = Dyadic{1, 0};  // a single point: every offset is 0 anyway
-  for (int a = 0; a < 3; ++a) {
-    axis_scale_q8_[a] = ratio(extent[a], largest, kModelUnitBits + 8, int64_t{1} << (kModelUnitBits + 8));
+    axis_scale_q8_[a] = ratio(axis_extent(header_, a), largest, kModelUnitBits + 8, int64_t{1} << (kModelUnitBits + 8));
     extent_mu_[a] = static_cast<int32_t>((axis_scale_q8_[a] + 128) >> 8);
   }
 
@@ -153,7 +158,7 @@ DecodeStatus NodeDecoder::init(const SpgView& view, void* storage, size_t bytes)
       if (!set_classes(t, 0, header_.class_count[t], tables[t])) return DecodeStatus::kBadClass;
     } else {
       int32_t* table = t == 0 ? sigma_p_ : t == 1 ? sigma_n_ : sigma_c_;
-      for (uint32_t i = 0; i < (t == 1 ? 2u : 3u) * header_.class_count[t]; ++i) table[i] = 0;
+      for (uint32_t i = 0; i < spg_class_values(t) * header_.class_count[t]; ++i) table[i] = 0;
     }
   }
   return DecodeStatus::kOk;
@@ -165,15 +170,10 @@ bool NodeDecoder::set_classes(int table, uint32_t first, uint32_t count, const u
   // (version 1) or read from the 16-bit codes (version 2, where sigma_p is
   // relative to E and sigma_n, sigma_c are Q12 already).
   const bool floats = spg_class_value_bytes(header_.version) == 4;
-  const uint32_t per_class = table == 1 ? 2 : 3;
+  const uint32_t per_class = spg_class_values(table);
   int32_t* out = (table == 0 ? sigma_p_ : table == 1 ? sigma_n_ : sigma_c_) + per_class * first;
   if (table == 0) {
-    Dyadic largest;
-    for (int a = 0; a < 3; ++a) {
-      const Dyadic extent = subtract(dyadic_of(header_.bbox_bits[3 + a]), dyadic_of(header_.bbox_bits[a]));
-      if (greater(extent, largest)) largest = extent;
-    }
-    if (largest.m <= 0) largest = Dyadic{1, 0};
+    const Dyadic largest = largest_extent(header_);
     const int64_t limit = int64_t{1} << 30;
     for (uint32_t i = 0; i < per_class * count; ++i)
       out[i] = floats ? static_cast<int32_t>(ratio(dyadic_of(load_u32le(values + 4 * i)), largest, kModelUnitBits, limit))

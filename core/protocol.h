@@ -305,7 +305,9 @@ struct DropBatch {
 // first from -1; 0 names a node twice). kNodes: u32 count, then count x (id,
 // u8 points, record); kDrop: u32 count, then count ids. parse_compact_*
 // checks the whole payload (every id below node_count, the length exact);
-// next_compact_* then walks it.
+// next_compact_* then walks it. A writer stores each id with store_leb128
+// (core/spg_writer.h) of its difference from the one before (id + 1 for the
+// first).
 struct CompactBatch {
   uint32_t count = 0;
   size_t record_bytes = 0;  // 0: a drop batch
@@ -318,15 +320,6 @@ struct CompactBatch {
 [[nodiscard]] bool parse_compact_drop(const uint8_t* payload, size_t size, uint32_t node_count, CompactBatch* out);
 // The next entry of a parsed batch: its id and (nodes) points and record.
 void next_compact(CompactBatch* batch, uint32_t* id, uint8_t* points, const uint8_t** record);
-// Bytes of one compact entry after `previous` (ids ascending).
-inline size_t compact_id_bytes(uint32_t previous, uint32_t id) {
-  uint32_t gap = id - previous;  // from -1: the first id + 1
-  size_t n = 1;
-  while (gap >= 0x80) {
-    gap >>= 7;
-    ++n;
-  }
-  return n;
-}
+
 
 }  // namespace stipple

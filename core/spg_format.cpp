@@ -144,6 +144,15 @@ void spg_node_points(const SpgView& view, uint8_t* out, size_t stride) {
   }
 }
 
+SpgResult spg_check_class_values(uint16_t version, const uint8_t* values, size_t bytes) {
+  if (spg_class_value_bytes(version) == 4)
+    for (size_t i = 0; i + 4 <= bytes; i += 4) {
+      const uint32_t bits = load_u32le(values + i);
+      if (!f32_finite(bits) || f32_negative(bits)) return fail(SpgError::kBadFloat, i);
+    }
+  return SpgResult{};
+}
+
 namespace {
 
 // §1 fixed header and §2 class tables: the startup message. With
@@ -226,12 +235,8 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   view.sigma_p = data + in.pos;
   view.sigma_n = view.sigma_p + 3 * value_bytes * h.class_count[0];
   view.sigma_c = view.sigma_n + 2 * value_bytes * h.class_count[1];
-  if (value_bytes == 4) {
-    for (size_t i = 0; i < table_bytes; i += 4) {
-      const uint32_t bits = load_u32le(data + in.pos + i);
-      if (!f32_finite(bits) || f32_negative(bits)) return fail(SpgError::kBadFloat, in.pos + i);
-    }
-  }
+  if (const SpgResult r = spg_check_class_values(h.version, data + in.pos, table_bytes); !r.ok())
+    return fail(r.error, in.pos + r.offset);
   in.pos += table_bytes;
 
   return SpgResult{};
@@ -259,14 +264,6 @@ SpgResult spg_parse_header(const uint8_t* data, size_t size, SpgHeader* out, siz
   return r;
 }
 
-SpgResult spg_check_class_values(uint16_t version, const uint8_t* values, size_t bytes) {
-  if (spg_class_value_bytes(version) == 4)
-    for (size_t i = 0; i + 4 <= bytes; i += 4) {
-      const uint32_t bits = load_u32le(values + i);
-      if (!f32_finite(bits) || f32_negative(bits)) return fail(SpgError::kBadFloat, i);
-    }
-  return SpgResult{};
-}
 
 SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
   Cursor in{data, size, 0};

@@ -81,6 +81,8 @@ struct SpgViewHint {
 // Bytes of one class table value: a float32 in version 1, a 16-bit code
 // from version 2.
 inline size_t spg_class_value_bytes(uint16_t version) { return version == 1 ? 4 : 2; }
+// Values a class of table 0 (sigma_p: 3), 1 (sigma_n: 2) or 2 (sigma_c: 3) holds.
+inline uint32_t spg_class_values(int table) { return table == 1 ? 2 : 3; }
 
 // The startup message, defined once: the fixed header and the class tables
 // (§1-§2), the prefix a client needs before any node record. Its length for
@@ -147,6 +149,12 @@ struct SpgHeader {
   bool has_normals() const { return (flags & kAttrNormals) != 0; }
   bool has_color() const { return (flags & kAttrColor) != 0; }
 };
+
+// A class's bit where a bit set holds every class of a header's tables, one
+// table after another (which classes a stream has sent, or a cache holds).
+inline size_t spg_class_bit(const SpgHeader& h, int table, uint32_t index) {
+  return (table > 0 ? size_t{h.class_count[0]} : 0) + (table > 1 ? size_t{h.class_count[1]} : 0) + index;
+}
 
 // Views into a validated file. Pointers refer to the caller's buffer.
 struct SpgView {

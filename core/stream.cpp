@@ -149,7 +149,7 @@ uint32_t StreamSender::model_tag(uint8_t attributes) const {
 }
 
 bool StreamSender::take_class(int table, uint32_t index) {
-  const size_t bit = (table > 0 ? reduced_.class_count[0] : 0u) + (table > 1 ? reduced_.class_count[1] : 0u) + size_t{index};
+  const size_t bit = spg_class_bit(reduced_, table, index);
   const uint8_t mask = static_cast<uint8_t>(1u << (bit % 8));
   if (class_bits_[bit / 8] & mask) return false;
   class_bits_[bit / 8] = static_cast<uint8_t>(class_bits_[bit / 8] | mask);
@@ -215,7 +215,7 @@ bool StreamSender::send_classes(const uint64_t* order, uint32_t count, FrameSink
   for (int t = 0; t < 3; ++t) {
     if (n[t] == 0) continue;
     std::sort(fresh[t], fresh[t] + n[t]);
-    const size_t per = (t == 1 ? 2u : 3u) * spg_class_value_bytes(view_->header.version);
+    const size_t per = spg_class_values(t) * spg_class_value_bytes(view_->header.version);
     size_t at = kClassesHeaderBytes;
     uint32_t previous = 0xFFFFFFFFu;
     for (uint32_t k = 0; k < n[t]; ++k) {
@@ -285,21 +285,11 @@ bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink s
 namespace {
 
 // The first index of ascending ids[0 .. n) at or above `id` (n: none).
-uint32_t id_of(uint32_t id) { return id; }
-uint32_t id_of(NodeId id) { return index_of(id); }
-template <typename Id>
-uint32_t first_at_or_above(const Id* ids, uint32_t n, uint32_t id) {
-  uint32_t lo = 0;
-  while (n > 0) {
-    const uint32_t half = n / 2;
-    if (id_of(ids[lo + half]) < id) {
-      lo += half + 1;
-      n -= half + 1;
-    } else {
-      n = half;
-    }
-  }
-  return lo;
+uint32_t first_at_or_above(const uint32_t* ids, uint32_t n, uint32_t id) {
+  return static_cast<uint32_t>(std::lower_bound(ids, ids + n, id) - ids);
+}
+uint32_t first_at_or_above(const NodeId* ids, uint32_t n, uint32_t id) {
+  return static_cast<uint32_t>(std::lower_bound(ids, ids + n, id, [](NodeId a, uint32_t b) { return index_of(a) < b; }) - ids);
 }
 
 constexpr uint32_t kNoGroup = 0xFFFFFFFFu;
@@ -342,31 +332,27 @@ bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp
     }
     return true;
   }
+  // A cut with sizes came from the root: its change is in id order. The
+  // key's low word is the entering node's index, inverted (ties: the
+  // smaller id first, as the ids ascend with the index).
+  const NodeId* entered = cut_.entered();
   {
     const NodeId* sent = cut_.sent();
     const uint32_t* size = cut_.sent_size_q4();
     for (uint32_t i = 0, k = 0; i < entering; ++i) {
-      const uint32_t id = index_of(cut_.entered()[i]);
-      while (index_of(sent[k]) < id) ++k;  // entered is a subset of sent, both ascending
-      order[i] = (uint64_t{size[k]} << 32) | (~id & 0xFFFFFFFFu);
+      while (sent[k] != entered[i]) ++k;  // entered is a subset of sent, both ascending
+      order[i] = (uint64_t{size[k]} << 32) | (~i & 0xFFFFFFFFu);
     }
   }
   for (uint32_t i = 0; i < leaving; ++i) {
     left[i] = index_of(cut_.left()[i]);
     waiting[i] = 0;
   }
-  const bool sorted_left = [&] {
-    for (uint32_t i = 1; i < leaving; ++i)
-      if (left[i - 1] >= left[i]) return false;
-    return true;
-  }();
-  if (!sorted_left) std::sort(left, left + leaving);
   // Which node that left each entering node refines: the old cut and the
   // new are antichains, so an entering node lies below at most one node that
   // left, and a node's descendants are one id range a level — two binary
   // searches of the (ascending) entering ids a level below each node that
   // left. `ready` holds each entering node's group until the order is made.
-  const NodeId* entered = cut_.entered();
   uint32_t* group_of = s.ready;
   for (uint32_t i = 0; i < entering; ++i) group_of[i] = kNoGroup;
   uint32_t unrefined = 0;
@@ -392,10 +378,11 @@ bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp
         }
   }
   std::sort(order, order + entering, [](uint64_t a, uint64_t b) { return a > b; });
-  // The order's high word holds the group now, in place of the size.
+  // Then the order holds each node's group and id (inverted, as send_nodes
+  // takes them) in place of its size and index.
   for (uint32_t k = 0; k < entering; ++k) {
-    const uint32_t low = static_cast<uint32_t>(order[k]);
-    order[k] = (uint64_t{group_of[first_at_or_above(entered, entering, ~low)]} << 32) | low;
+    const uint32_t i = ~static_cast<uint32_t>(order[k]);
+    order[k] = (uint64_t{group_of[i]} << 32) | (~index_of(entered[i]) & 0xFFFFFFFFu);
   }
   // A cache that cannot hold both what it has and what comes: drops first.
   const bool room = uint64_t{held_before} + entering <= capacity_;

@@ -395,19 +395,10 @@ uint32_t ViewCut::first_child(uint32_t id) const { return id < node_count_ ? bou
 bool ViewCut::above_previous(uint32_t id) const {
   // The node's descendants, level by level, are one id range each.
   uint32_t lo = first_child(id), hi = first_child(id + 1);
+  const uint32_t* end = previous_ + previous_count_;
   while (lo < hi) {
-    const uint32_t* at = previous_;
-    uint32_t n = previous_count_;
-    while (n > 0) {  // the first previous id at or above lo
-      const uint32_t half = n / 2;
-      if (at[half] < lo) {
-        at += half + 1;
-        n -= half + 1;
-      } else {
-        n = half;
-      }
-    }
-    if (at < previous_ + previous_count_ && *at < hi) return true;
+    const uint32_t* at = std::lower_bound(previous_, end, lo);  // the first previous id at or above lo
+    if (at < end && *at < hi) return true;
     lo = first_child(lo);
     hi = first_child(hi);
   }

@@ -198,7 +198,8 @@ class ViewCut {
   uint32_t cut_count() const { return cut_count_; }
   const NodeId* cut() const { return cut_; }
   uint32_t culled_count() const { return cut_count_ - sent_count_; }
-  // The change since the previous update.
+  // The change since the previous update (in id order when the update came
+  // from the root: whenever sent_size_q4() is kept).
   uint32_t entered_count() const { return entered_count_; }
   const NodeId* entered() const { return entered_; }
   uint32_t left_count() const { return left_count_; }

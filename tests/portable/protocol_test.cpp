@@ -14,19 +14,11 @@
 #include "core/cobs.h"
 #include "core/protocol.h"
 #include "core/spg_format.h"
+#include "core/spg_writer.h"
 #include "tests/portable/test_files.h"
 
 namespace stipple {
 namespace {
-
-size_t store_leb128_for_test(uint8_t* p, uint32_t v) {
-  size_t n = 0;
-  do {
-    p[n++] = static_cast<uint8_t>((v & 0x7F) | (v >= 0x80 ? 0x80 : 0));
-    v >>= 7;
-  } while (v != 0);
-  return n;
-}
 
 void store_u32le_for_test(uint8_t* p, uint32_t v) {
   for (int i = 0; i < 4; ++i) p[i] = static_cast<uint8_t>(v >> (8 * i));
@@ -285,7 +277,7 @@ TEST(Protocol, ClassPiecesAndUpdateBeginsRoundTripAndRefuseMalformed) {
   uint32_t previous = 0xFFFFFFFFu;
   for (uint32_t i : indices) {
     uint8_t leb[5];
-    const size_t n = store_leb128_for_test(leb, i - previous);
+    const size_t n = store_leb128(leb, i - previous);
     p.insert(p.end(), leb, leb + n);
     previous = i;
     for (int b = 0; b < 4; ++b) p.push_back(static_cast<uint8_t>(i + b));  // sigma_n: 2 codes
@@ -364,8 +356,8 @@ TEST(Protocol, CompactBatchesRoundTripAndRefuseMalformed) {
   uint32_t previous = 0xFFFFFFFFu;
   for (uint32_t id : ids) {
     uint8_t leb[5];
-    const size_t n = store_leb128_for_test(leb, id - previous);
-    EXPECT_EQ(compact_id_bytes(previous, id), n);
+    const size_t n = store_leb128(leb, id - previous);
+    EXPECT_EQ(leb128_bytes(id - previous), n);
     previous = id;
     nodes.insert(nodes.end(), leb, leb + n);
     drops.insert(drops.end(), leb, leb + n);

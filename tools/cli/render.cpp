@@ -159,12 +159,12 @@ int render_stream(const std::string& model_path, const std::string& connect, con
       std::snprintf(name, sizeof name, "at_%gs.png", at[next]);
       if (!write_png(output + "/" + name, image, error)) return cli::fail(error);
       const RemoteModel::Progress p = model.progress();
+      char state[48] = "waiting";
+      if (converged_at >= 0) std::snprintf(state, sizeof state, "converged at %.2f s", converged_at);
+      else if (p.known) std::snprintf(state, sizeof state, "%s %d%%", p.coarse ? "coarse part" : "view", static_cast<int>(100 * p.share));
       char line[200];
       std::snprintf(line, sizeof line, "%s at %.2f s: nodes %u points %u bytes_received %llu %s\n", name, at[next], stats.nodes,
-                    stats.points, static_cast<unsigned long long>(model.bytes_received()),
-                    converged_at >= 0 ? ("converged at " + std::to_string(converged_at).substr(0, 5) + " s").c_str()
-                    : p.known ? ((p.coarse ? "coarse part " : "view ") + std::to_string(static_cast<int>(100 * p.share)) + "%").c_str()
-                              : "waiting");
+                    stats.points, static_cast<unsigned long long>(model.bytes_received()), state);
       std::fputs(line, stdout);
       log += line;
       ++next;

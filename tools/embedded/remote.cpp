@@ -387,7 +387,7 @@ bool RemoteModel::request(const Camera& camera, int32_t max_size_q4, const int32
   awaited_camera_ = camera_sequence_++;
   awaiting_ = Awaited::kUpdateEnd;
   heard_ = requested_at_ = std::chrono::steady_clock::now();
-  bytes_at_request_ = bytes_received_;
+  nodes_at_request_ = receiver_.nodes_received();
   return true;
 }
 
@@ -406,11 +406,13 @@ RemoteModel::Progress RemoteModel::progress() const {
   p.coarse = part.parts_after > 0;
   const uint32_t got = std::min(receiver_.part_nodes(), part.entering);
   p.share = static_cast<double>(got) / part.entering;
-  // The rest of this part at the rate the bytes have come since the camera.
+  // The rest of this part at the rate nodes have come since the camera
+  // (their classes and framing included).
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - requested_at_).count();
-  const double rate = seconds > 0 ? static_cast<double>(bytes_received_ - bytes_at_request_) / seconds : 0;
-  const double entry = static_cast<double>(node_entry_bytes(client_.cache().record_bytes()));
-  if (rate > 0) p.seconds_left = static_cast<double>(part.entering - got) * entry / rate;
+  const uint64_t now = receiver_.nodes_received();  // counted afresh after a reconnect
+  const uint64_t came = now >= nodes_at_request_ ? now - nodes_at_request_ : now;
+  const double rate = seconds > 0 ? static_cast<double>(came) / seconds : 0;
+  if (rate > 0) p.seconds_left = static_cast<double>(part.entering - got) / rate;
   return p;
 }
 

@@ -132,7 +132,7 @@ class RemoteModel {
   Awaited awaiting_ = Awaited::kStartup;
   std::chrono::steady_clock::time_point heard_;
   std::chrono::steady_clock::time_point requested_at_{};  // the latest camera sent
-  uint64_t bytes_at_request_ = 0;
+  uint64_t nodes_at_request_ = 0;
   std::chrono::steady_clock::time_point sent_at_{};  // our last frame (a keep-alive follows a long quiet)  // the last bytes from the server, or our last request
 };
 

@@ -89,13 +89,10 @@ bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, c
       return all == 0 ? 1.0 : static_cast<double>(both) / static_cast<double>(all);
     };
     out.coverage.clear();
-    out.silhouette_s = out.converged_s;
-    bool whole_enough = false;
-    for (size_t k = 0; k < drawn.size(); ++k) {
-      out.coverage.push_back(share(drawn[k]));
-      if (!whole_enough && out.coverage.back() >= 0.9) out.silhouette_s = 0.05 * static_cast<double>(k);
-      whole_enough = whole_enough || out.coverage.back() >= 0.9;
-    }
+    for (const std::vector<bool>& m : drawn) out.coverage.push_back(share(m));
+    const auto whole_enough = std::find_if(out.coverage.begin(), out.coverage.end(), [](double c) { return c >= 0.9; });
+    out.silhouette_s = whole_enough == out.coverage.end() ? out.converged_s
+                                                          : 0.05 * static_cast<double>(whole_enough - out.coverage.begin());
   }
   double steps = 0;
   for (uint32_t k = 1; k < cameras.size(); ++k) {
