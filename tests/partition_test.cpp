@@ -294,6 +294,15 @@ TEST(Partition, ACorruptMissingOrForeignPartIsNamed) {
   PartitionPlan broken;
   EXPECT_FALSE(read_plan(dir, broken, error));
   EXPECT_NE(error.find("plan.bin: CRC-32 mismatch"), std::string::npos) << error;
+
+  // A plan an older stipple made (before the tolerance's fields).
+  bytes[40] ^= 1;
+  bytes[7] = '1';
+  ASSERT_TRUE(write_file_atomic(plan_file, bytes, error));
+  EXPECT_FALSE(read_plan(dir, broken, error));
+  EXPECT_NE(error.find("plan.bin: a plan of an older stipple (SPGPLAN1; this one reads SPGPLAN2): plan the scan again"),
+            std::string::npos)
+      << error;
 }
 
 TEST(Partition, TheTemporaryFolderGoesAwayOnSuccessAndOnFailure) {
