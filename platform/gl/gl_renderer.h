@@ -25,6 +25,27 @@
 // point size; colour is the node's mean (or grey) times Lambert with
 // ambient per node; MSAA is the framebuffer's (GlOffscreen, or the window's).
 //
+// The software client's picture, on the GPU (docs/viewers.md, "The GL
+// client's picture"): surface normals (each point's normal turned by where
+// its sample lands, the rule of raster/point_renderer.h, in the vertex
+// shader) with Blinn specular; the point cap; and the screen-space resolve
+// (raster/resolve.h: fill, trim, 3 x 3 blend) as two full-screen passes over
+// an offscreen frame whose alpha is the coverage.
+//
+// EWA splatting (GlSplat::kEwa, TOG05 §8.4's quality mode): each node one
+// elliptical splat of its two main axes, in the three passes of Botsch,
+// Hornung, Zwicker and Kobbelt, "High-quality surface splatting on today's
+// GPUs" (PBG 2005): a visibility pass writes the splats' depth pushed back
+// by a fraction of their size; an attribute pass adds each fragment's
+// Gaussian weight w = exp(-r^2/2) times its shaded colour, and w, into a
+// floating-point target for the fragments within that depth; a
+// normalization pass divides. Each splat is a quad in the node's tangent
+// plane (perspective correct, the object-space formulation of Ren, Pfister
+// and Zwicker 2002), its radii widened to at least a pixel's footprint —
+// that paper's and Botsch et al.'s approximation of EWA's screen-space
+// low-pass filter — and cut at 2 sigma. Shading is per pixel: the normal
+// turned by the pixel's place in the splat as surface normals turn it.
+//
 // The GL context must be current for every call.
 #pragma once
 
@@ -38,8 +59,23 @@
 
 namespace stipple {
 
+enum class GlSplat : uint8_t {
+  kPoints,  // Gaussian samples drawn as squares (the software client's)
+  kEwa,     // one elliptical Gaussian splat a node, blended (TOG05 §8.4)
+};
+
 struct GlRenderOptions {
   bool gpu_decode = true;
+  GlSplat splat = GlSplat::kPoints;
+  // Each point's normal turned by where its sample lands (the software
+  // client's --shading surface); false: the node's mean normal.
+  bool surface_normals = true;
+  // The screen-space resolve (raster/resolve.h) after the points; the
+  // window's MSAA applies only without it (the resolve draws offscreen).
+  bool resolve = true;
+  uint8_t point_cap = 0;  // a node draws at most this times its original points (0: no cap)
+  float specular = 0.25f;  // Blinn highlight's strength (0: none) and shininess
+  float shininess = 16.f;
   uint8_t point_size = 2;      // px
   uint16_t quality_q8 = 256;   // points-per-node scale
   uint16_t samples = 1024;     // the Gaussian buffer: most points per node
@@ -74,11 +110,23 @@ class GlRenderer {
   static std::string describe();
 
  private:
-  bool build_program(bool gpu, std::string& error);
+  bool build_programs(std::string& error);
   void upload_sigmas(const NodeCache& cache);
+  bool size_targets(int width, int height, std::string& error);
+  void set_uniforms(unsigned program, const NodeCache& cache, const Camera& camera, int width, int height,
+                    const GlRenderOptions& o) const;
+  void full_screen(unsigned program, unsigned texture, const float clear_rgb[3]) const;
 
-  unsigned programs_[2] = {0, 0};  // CPU decode, GPU decode
-  unsigned vao_ = 0, instances_ = 0;
+  // [decode: CPU, GPU][kind: points, splats]; then the post passes.
+  unsigned programs_[2][2] = {{0, 0}, {0, 0}};
+  unsigned fill_program_ = 0, blend_program_ = 0, normalize_program_ = 0, pull_program_ = 0;
+  unsigned vao_ = 0, instances_ = 0, empty_vao_ = 0;
+  // Offscreen targets (sized on first use): the scene (RGBA8, alpha the
+  // coverage) and its depth, the filled frame, the half-resolution level of
+  // the hole filling, the splats' accumulation.
+  unsigned scene_fbo_ = 0, scene_tex_ = 0, depth_rb_ = 0, fill_fbo_ = 0, fill_tex_ = 0, accum_fbo_ = 0, accum_tex_ = 0;
+  unsigned coarse_fbo_ = 0, coarse_tex_ = 0;
+  int target_width_ = 0, target_height_ = 0;
   unsigned sigma_buffer_ = 0, sigma_texture_ = 0, gauss_buffer_ = 0, gauss_texture_ = 0;
   int field_offset_[18] = {}, field_bits_[18] = {};
   uint16_t samples_ = 0;
@@ -86,6 +134,8 @@ class GlRenderer {
   std::vector<uint8_t> staging_;  // instance data, bucket by bucket
   std::vector<uint32_t> order_;   // cache slots by bucket
   std::vector<uint16_t> counts_;  // per slot
+  std::vector<uint8_t> sizes_;    // per slot: point size, px
+  std::vector<uint8_t> buckets_;  // per slot: its bucket (kBuckets: a close-up's disc)
   std::vector<FixedNode> decoded_;  // per slot, CPU decode
 };
 

@@ -37,7 +37,11 @@ const char kUsage[] =
     "  --serial DEV         the same over a serial line; --baud N its rate (115200)\n"
     "  --decode gpu|cpu     records unpacked in the vertex shader (default) or by\n"
     "                       core's decoder on the CPU, for comparison\n"
-    "  --msaa N             multisampling, 0 (default), 2, 4 or 8 (the paper: 8)\n"
+    "  --splat points|ewa   the nodes' Gaussian samples as points (default; the\n"
+    "                       software client's picture: surface normals, the\n"
+    "                       resolve) or one elliptical splat a node, blended (EWA)\n"
+    "  --msaa N             multisampling, 0 (default), 2, 4 or 8 (the paper: 8);\n"
+    "                       with --resolve off (the resolve draws offscreen)\n"
     "  --headless -o F.png  no window (EGL, surfaceless or a pbuffer): draw the\n"
     "                       view once it has converged and write it\n"
     "  --frames N           with --headless: draw N frames and print the median\n"
@@ -51,9 +55,15 @@ int fail(const std::string& message) {
   return 1;
 }
 
-GlRenderOptions gl_options(const RenderOptions& o, bool gpu, const ViewerControls* c) {
+GlRenderOptions gl_options(const RenderOptions& o, bool gpu, GlSplat splat, const ViewerControls* c) {
   GlRenderOptions g;
   g.gpu_decode = gpu;
+  g.splat = splat;
+  g.surface_normals = o.config.shading != ShadingMode::kPerNode;
+  g.resolve = o.config.resolve;
+  g.point_cap = o.config.point_cap;
+  g.specular = static_cast<float>(o.config.lighting.specular_q8) / 256.f;
+  g.shininess = o.config.lighting.shininess;
   g.point_size = o.config.point_size;
   g.samples = o.config.samples;
   g.quality_q8 = c ? c->quality_q8() : o.config.quality_q8;
@@ -96,6 +106,10 @@ int run(int argc, char** argv) {
   if (args.value("--msaa", v) && (!cli::parse_uint(v, 8, msaa) || (msaa != 0 && msaa != 2 && msaa != 4 && msaa != 8)))
     return fail("--msaa: expected 0, 2, 4 or 8, got '" + v + "'");
   if (decode != "gpu" && decode != "cpu") return fail("--decode: expected gpu or cpu, got '" + decode + "'");
+  std::string splat_name = "points";
+  args.value("--splat", splat_name);
+  if (splat_name != "points" && splat_name != "ewa") return fail("--splat: expected points or ewa, got '" + splat_name + "'");
+  const GlSplat splat = splat_name == "ewa" ? GlSplat::kEwa : GlSplat::kPoints;
   ViewerOptions vo;
   if (!parse_viewer_options(args, vo, error)) return fail(error);
   RenderOptions& o = vo.render;
@@ -120,7 +134,7 @@ int run(int argc, char** argv) {
   RemoteModel& m = source.model();
   const NodeCache& cache = m.client().cache();
   GlRenderer renderer;
-  if (!renderer.init(cache, gl_options(o, gpu, nullptr), error)) return fail(error);
+  if (!renderer.init(cache, gl_options(o, gpu, splat, nullptr), error)) return fail(error);
   ViewerControls controls(o, m.header(), cache.decoder().extent_mu());
   Camera camera;
   if (!controls.camera(static_cast<uint16_t>(w), static_cast<uint16_t>(h), &camera))
@@ -136,7 +150,7 @@ int run(int argc, char** argv) {
     for (unsigned long long f = 0; f < std::max<unsigned long long>(frames, 1); ++f) {
       target.bind();
       const auto t = std::chrono::steady_clock::now();
-      if (!renderer.draw(cache, camera, w, h, gl_options(o, gpu, nullptr), &stats, error)) return fail(error);
+      if (!renderer.draw(cache, camera, w, h, gl_options(o, gpu, splat, nullptr), &stats, error)) return fail(error);
       glFinish();
       times.push_back(seconds_since(t));
     }
@@ -182,7 +196,7 @@ int run(int argc, char** argv) {
     // What the link has, for at most 10 ms of this frame.
     if (!service_for(m, 0.010, error)) return fail(source.name() + ": " + error);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    if (!renderer.draw(cache, camera, window.width(), window.height(), gl_options(o, gpu, &controls), &stats, error))
+    if (!renderer.draw(cache, camera, window.width(), window.height(), gl_options(o, gpu, splat, &controls), &stats, error))
       return fail(error);
     int32_t rect[4];
     if (controls.dragging(rect)) outline(window.height(), rect);
