@@ -29,22 +29,35 @@
 // client's picture"): surface normals (each point's normal turned by where
 // its sample lands, the rule of raster/point_renderer.h, in the vertex
 // shader) with Blinn specular; the point cap; and the screen-space resolve
-// (raster/resolve.h: fill, trim, 3 x 3 blend) as two full-screen passes over
-// an offscreen frame whose alpha is the coverage.
+// (raster/resolve.h: fill, trim, 3 x 3 blend) as full-screen passes over an
+// offscreen frame whose alpha is the coverage, with one more level for
+// holes wider than a pixel: a half-resolution fill pushed into the full
+// one (the pull-push of Grossman and Dally 1998, with the resolve's rule,
+// so silhouettes never grow).
 //
 // EWA splatting (GlSplat::kEwa, TOG05 §8.4's quality mode): each node one
-// elliptical splat of its two main axes, in the three passes of Botsch,
-// Hornung, Zwicker and Kobbelt, "High-quality surface splatting on today's
-// GPUs" (PBG 2005): a visibility pass writes the splats' depth pushed back
-// by a fraction of their size; an attribute pass adds each fragment's
-// Gaussian weight w = exp(-r^2/2) times its shaded colour, and w, into a
-// floating-point target for the fragments within that depth; a
-// normalization pass divides. Each splat is a quad in the node's tangent
-// plane (perspective correct, the object-space formulation of Ren, Pfister
-// and Zwicker 2002), its radii widened to at least a pixel's footprint —
-// that paper's and Botsch et al.'s approximation of EWA's screen-space
-// low-pass filter — and cut at 2 sigma. Shading is per pixel: the normal
-// turned by the pixel's place in the splat as surface normals turn it.
+// elliptical Gaussian splat of its two main axes, in the three passes of
+// Botsch, Hornung, Zwicker and Kobbelt, "High-quality surface splatting on
+// today's GPUs" (PBG 2005): a visibility pass writes the splats' depth —
+// each splat's core, pushed back by its radius, so a tail never hides a
+// neighbour's centre; an attribute pass adds each fragment's Gaussian
+// weight w = exp(-r^2/2) times its colour, and w, into a floating-point
+// target for the fragments within that depth; a normalization pass divides.
+// Each splat is a quad in the node's tangent plane (perspective correct:
+// the object-space formulation of Ren, Pfister and Zwicker 2002), its radii
+// widened to at least a pixel's footprint — their approximation of EWA's
+// screen-space low-pass filter — and cut at 3σ. Shading is per pixel, the
+// normal turned by the pixel's place in the splat as surface normals turn
+// it. Which pixels are covered comes from the points (drawn first, as in
+// the default mode) and the resolve: a Gaussian's own outline, at any one
+// cut radius, measured 1-2 dB worse at silhouettes on the bunny and the
+// dragon (docs/viewers.md).
+//
+// Close-ups: a node whose σ spans more than 8 px on screen is drawn as its
+// 3σ ellipse, opaque and shaded per pixel (by the splat program), in either
+// mode: its samples would be sparser than the pixels, and points cannot
+// grow past GL's size limit to close that. Smaller nodes that want more
+// points than the samples hold draw them larger.
 //
 // The GL context must be current for every call.
 #pragma once
