@@ -19,14 +19,21 @@
 
 namespace stipple {
 
-// What the user did, as a handheld has it: a D-pad, a few buttons, a stylus.
-enum class InputKind : uint8_t { kNone, kQuit, kButtonDown, kButtonUp, kStylusDown, kStylusMove, kStylusUp };
-enum class Button : uint8_t { kNone, kUp, kDown, kLeft, kRight, kSelect, kColor, kLighting, kQuality };
+// What the user did, as a handheld has it: a D-pad, a few buttons, a
+// stylus. The desktop viewers add what a mouse and keyboard do there: a
+// drag that orbits (kOrbit*, the left button), the wheel (kWheel: y notches,
+// positive away from the user, towards the screen) and three keys (reset,
+// screenshot, help) the device lacks.
+enum class InputKind : uint8_t {
+  kNone, kQuit, kButtonDown, kButtonUp, kStylusDown, kStylusMove, kStylusUp, kOrbitDown, kOrbitMove, kOrbitUp, kWheel
+};
+enum class Button : uint8_t { kNone, kUp, kDown, kLeft, kRight, kSelect, kColor, kLighting, kQuality, kReset, kScreenshot, kHelp };
+inline constexpr int kButtonCount = 12;
 
 struct InputEvent {
   InputKind kind = InputKind::kNone;
   Button button = Button::kNone;
-  int x = 0, y = 0;  // stylus position, frame pixels
+  int x = 0, y = 0;  // stylus or pointer position, frame pixels; kWheel: y notches
 };
 
 class Display {

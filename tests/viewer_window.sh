@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
 # A desktop viewer as a user sees it: a real window (SDL's X11 driver under
 # Xvfb; for stipple-gl an OpenGL context on Mesa's llvmpipe) driven by a
-# scripted input sequence — a few D-pad presses, a stylus drag — with screenshots
+# scripted input sequence — a few D-pad presses, a stylus drag, R, a mouse
+# drag, the wheel, the S key, a click on the lighting key — with screenshots
 # checked to be the window's size and to have changed as the input says:
 # nothing while nothing is pressed, the picture after the orbit, again after
-# the refinement window is drawn. Then the viewer fed by `stipple serve` over
-# TCP draws, headless, what it draws from the file: for the emulator the
-# golden image of the view itself.
+# the refinement window is drawn, back to the first after R, changed by the
+# drag and again by the wheel and by the click; S writes a PNG of the window
+# whose path it prints. Then the viewer fed by `stipple serve` over TCP
+# draws, headless, what it draws from the file: for the emulator the golden
+# image of the view itself.
 # usage: viewer_window.sh PROGRAM STIPPLE MODEL.spg WxH X0,Y0,X1,Y1 REFERENCE.png|- WORKDIR
 set -euo pipefail
 E=$1 S=$2 MODEL=$3 SIZE=$4 DRAG=$5 GOLDEN=$6 W=$7
@@ -24,20 +27,38 @@ cat >"$W/script" <<SCRIPT
 83 stylus-move $x1 $y1
 85 stylus-up $x1 $y1
 110 screenshot $W/window.png
-111 quit
+112 press reset
+140 screenshot $W/reset.png
+141 orbit-down $x0 $y0
+143 orbit-move $x1 $y0
+145 orbit-up $x1 $y1
+170 screenshot $W/drag.png
+171 wheel 3
+200 screenshot $W/wheel.png
+201 press screenshot
+210 click lighting
+230 screenshot $W/click.png
+231 quit
 SCRIPT
-xvfb-run -a -s "-screen 0 1024x1024x24" env SDL_VIDEODRIVER=x11 "$E" "$MODEL" --script "$W/script" >"$W/out" 2>"$W/err" ||
+(cd "$W" && xvfb-run -a -s "-screen 0 1024x1024x24" env SDL_VIDEODRIVER=x11 "$E" "$MODEL" --script "$W/script" >"$W/out" 2>"$W/err") ||
   { echo "the emulator failed under Xvfb"; cat "$W/out" "$W/err"; exit 1; }
 cat "$W/out"
 crc() { sed -n "s|.*screenshot $W/$1.png .*crc32 \([0-9a-f]*\)$|\1|p" "$W/out"; }
 size() { sed -n "s|.*screenshot $W/$1.png \([0-9]*x[0-9]*\),.*|\1|p" "$W/out"; }
-for s in idle1 idle2 orbit window; do
+for s in idle1 idle2 orbit window reset drag wheel click; do
   [ "$(size $s)" = "$SIZE" ] || { echo "screenshot $s is $(size $s), not $SIZE"; exit 1; }
   [ -s "$W/$s.png" ] || { echo "no $s.png"; exit 1; }
 done
 [ "$(crc idle1)" = "$(crc idle2)" ] || { echo "the screen changed while nothing was pressed"; exit 1; }
 [ "$(crc idle2)" != "$(crc orbit)" ] || { echo "the D-pad did not turn the view"; exit 1; }
 [ "$(crc orbit)" != "$(crc window)" ] || { echo "the stylus drew no refinement window"; exit 1; }
+[ "$(crc reset)" = "$(crc idle1)" ] || { echo "R did not return to the first view"; exit 1; }
+[ "$(crc reset)" != "$(crc drag)" ] || { echo "a mouse drag did not orbit"; exit 1; }
+[ "$(crc drag)" != "$(crc wheel)" ] || { echo "the wheel did not dolly"; exit 1; }
+[ "$(crc wheel)" != "$(crc click)" ] || { echo "a click on the lighting key changed nothing"; exit 1; }
+shot=$(sed -n 's|^screenshot \([^ ]*\.png\) ([0-9]*x[0-9]*)$|\1|p' "$W/out")
+[ -n "$shot" ] && [ -s "$W/$shot" ] || { echo "the S key wrote no screenshot"; exit 1; }
+"$S" image-crc "$W/$shot" >/dev/null
 
 "$S" serve "$MODEL" --tcp 127.0.0.1:0 --once >"$W/serve.out" 2>"$W/serve.err" &
 server=$!

@@ -6,7 +6,10 @@
 #include <SDL.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
+
+#include "platform/text.h"
 
 namespace stipple {
 namespace {
@@ -14,74 +17,20 @@ namespace {
 constexpr int kStatusHeight = 18;  // two 7-px lines and their gaps
 constexpr int kPadHeight = 30;     // the D-pad and the buttons
 
-constexpr uint32_t kBody = 0x2B2F36, kBezel = 0x111316, kText = 0x9FE0A0, kKey = 0x4A505B, kKeyText = 0xD0D4DA;
-
-// A 5x7 font for the status line and the button labels: rows top to
-// bottom, bit 4 the leftmost column. SDL draws no text and the line is a
-// few dozen characters of digits and words, so a table is all it takes (a
-// font library would add a dependency and a font file for it).
-struct Glyph {
-  char c;
-  uint8_t rows[7];
-};
-constexpr Glyph kFont[] = {
-    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}}, {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
-    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}}, {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
-    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}}, {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
-    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}}, {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
-    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}}, {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
-    {'A', {0x0E, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}}, {'B', {0x1E, 0x11, 0x11, 0x1E, 0x11, 0x11, 0x1E}},
-    {'C', {0x0E, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0E}}, {'D', {0x1C, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1C}},
-    {'E', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F}}, {'F', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x10}},
-    {'G', {0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F}}, {'H', {0x11, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}},
-    {'I', {0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E}}, {'J', {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0C}},
-    {'K', {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11}}, {'L', {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F}},
-    {'M', {0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11}}, {'N', {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11}},
-    {'O', {0x0E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}}, {'P', {0x1E, 0x11, 0x11, 0x1E, 0x10, 0x10, 0x10}},
-    {'Q', {0x0E, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0D}}, {'R', {0x1E, 0x11, 0x11, 0x1E, 0x14, 0x12, 0x11}},
-    {'S', {0x0F, 0x10, 0x10, 0x0E, 0x01, 0x01, 0x1E}}, {'T', {0x1F, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04}},
-    {'U', {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}}, {'V', {0x11, 0x11, 0x11, 0x11, 0x11, 0x0A, 0x04}},
-    {'W', {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0A}}, {'X', {0x11, 0x11, 0x0A, 0x04, 0x0A, 0x11, 0x11}},
-    {'Y', {0x11, 0x11, 0x11, 0x0A, 0x04, 0x04, 0x04}}, {'Z', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1F}},
-    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}}, {':', {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00}},
-    {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}}, {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}},
-    {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}}, {',', {0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08}},
-    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}}, {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
-};
-
-const Glyph* glyph(char c) {
-  if (c >= 'a' && c <= 'z') c = static_cast<char>(c - 'a' + 'A');
-  for (const Glyph& g : kFont)
-    if (g.c == c) return &g;
-  return nullptr;  // a space, or a character the font lacks: blank
-}
+constexpr uint32_t kBody = 0x2B2F36, kBezel = 0x111316, kText = 0x9FE0A0, kKey = 0x4A505B, kKeyText = 0xD0D4DA,
+                   kKeyLit = 0xF2C14E, kOverlay = 0x101418;
 
 struct Canvas {
   uint8_t* rgb;
   int w, h;
-  void fill(int x0, int y0, int x1, int y1, uint32_t color) {
-    for (int y = std::max(y0, 0); y < std::min(y1, h); ++y)
-      for (int x = std::max(x0, 0); x < std::min(x1, w); ++x) {
-        uint8_t* p = rgb + (static_cast<size_t>(y) * w + x) * 3;
-        p[0] = static_cast<uint8_t>(color >> 16);
-        p[1] = static_cast<uint8_t>(color >> 8);
-        p[2] = static_cast<uint8_t>(color);
-      }
-  }
-  void text(int x, int y, const std::string& s, uint32_t color) {
-    for (char c : s) {
-      if (const Glyph* g = glyph(c))
-        for (int r = 0; r < 7; ++r)
-          for (int k = 0; k < 5; ++k)
-            if ((g->rows[r] >> (4 - k)) & 1) fill(x + k, y + r, x + k + 1, y + r + 1, color);
-      x += 6;
-    }
-  }
-  void key(int x, int y, int kw, int kh, const char* label) {
-    fill(x + 1, y, x + kw - 1, y + kh, kKey);  // corners cut: a rounded look at this size
-    fill(x, y + 1, x + kw, y + kh - 1, kKey);
+  void fill(int x0, int y0, int x1, int y1, uint32_t color) { fill_rect(rgb, w, h, x0, y0, x1, y1, color); }
+  void text(int x, int y, const std::string& s, uint32_t color) { draw_text(rgb, w, h, x, y, s, color); }
+  void key(int x, int y, int kw, int kh, const char* label, bool lit) {
+    const uint32_t face = lit ? kKeyLit : kKey;
+    fill(x + 1, y, x + kw - 1, y + kh, face);  // corners cut: a rounded look at this size
+    fill(x, y + 1, x + kw, y + kh - 1, face);
     const int len = static_cast<int>(std::strlen(label));
-    text(x + (kw - 6 * len + 1) / 2, y + (kh - 7) / 2, label, kKeyText);
+    text(x + (kw - kGlyphAdvance * len + 1) / 2, y + (kh - kGlyphHeight) / 2, label, lit ? kBody : kKeyText);
   }
 };
 
@@ -95,19 +44,31 @@ SdlDisplay::~SdlDisplay() {
 }
 
 bool SdlDisplay::open(const SdlDisplayOptions& options, std::string& error) {
-  if (options.width < 16 || options.height < 16 || options.width > 4096 || options.height > 4096 || options.scale < 1 ||
+  if (options.width < 16 || options.height < 16 || options.width > 4096 || options.height > 4096 || options.scale < 0 ||
       options.scale > 4)
     return error = "the emulated screen must be 16..4096 px a side and the scale 1..4", false;
   options_ = options;
-  if (options.headless) SDL_SetHint(SDL_HINT_VIDEODRIVER, "offscreen");
-  if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0) return error = std::string("SDL: ") + SDL_GetError(), false;
+  if (!sdl_open_video(options.headless, error)) return false;
   sdl_ = true;
   device_w_ = options.width + 2 * kMargin;
   status_y_ = kMargin + options.height + 4;
   pad_y_ = status_y_ + kStatusHeight + 2;
   device_h_ = pad_y_ + kPadHeight + kMargin / 2;
   device_.assign(static_cast<size_t>(device_w_) * device_h_ * 3, 0);
-  const int ww = device_w_ * options.scale, wh = device_h_ * options.scale;
+  // The window fits the screen: the default scale (2) or the one asked for,
+  // made smaller while the window would be taller or wider than the
+  // display's usable area (a 1080-line screen less its panels).
+  const int asked = options.scale == 0 ? 2 : options.scale;
+  options_.scale = asked;
+  SDL_Rect usable;
+  if (!options.headless && SDL_GetDisplayUsableBounds(0, &usable) == 0 && usable.h > 0 && usable.w > 0) {
+    while (options_.scale > 1 && (device_h_ * options_.scale > usable.h || device_w_ * options_.scale > usable.w))
+      --options_.scale;
+    if (options_.scale < asked && options.scale != 0)
+      std::fprintf(stderr, "stipple: --scale %d would make the window %dx%d, larger than the screen's %dx%d: scale %d\n",
+                   asked, device_w_ * asked, device_h_ * asked, usable.w, usable.h, options_.scale);
+  }
+  const int ww = device_w_ * options_.scale, wh = device_h_ * options_.scale;
   window_ = SDL_CreateWindow(options.title.c_str(), SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED, ww, wh,
                              options.headless ? SDL_WINDOW_HIDDEN : SDL_WINDOW_SHOWN);
   if (window_ == nullptr) return error = std::string("SDL window: ") + SDL_GetError(), false;
@@ -129,6 +90,25 @@ void SdlDisplay::set_status(const std::string& line1, const std::string& line2) 
   status_[1] = line2;
 }
 
+int SdlDisplay::keys(KeyRect out[kKeys]) const {
+  // The D-pad on the left (four arms round a centre), the buttons on the right.
+  const int cx = kMargin + 14, cy = pad_y_ + kPadHeight / 2, s = 8;
+  out[0] = KeyRect{Button::kUp, cx - s / 2, cy - s / 2 - s, s, s, ""};
+  out[1] = KeyRect{Button::kDown, cx - s / 2, cy + s / 2, s, s, ""};
+  out[2] = KeyRect{Button::kLeft, cx - s / 2 - s, cy - s / 2, s, s, ""};
+  out[3] = KeyRect{Button::kRight, cx + s / 2, cy - s / 2, s, s, ""};
+  static const char* const labels[] = {"SEL", "C", "L", "Q"};
+  static const Button buttons[] = {Button::kSelect, Button::kColor, Button::kLighting, Button::kQuality};
+  int x = device_w_ - kMargin;
+  for (int k = 3; k >= 0; --k) {
+    const int bw = k == 0 ? 22 : 14;
+    x -= bw;
+    out[4 + k] = KeyRect{buttons[k], x, cy - 6, bw, 13, labels[k]};
+    x -= 4;
+  }
+  return kKeys;
+}
+
 void SdlDisplay::compose(const Image& screen) {
   Canvas c{device_.data(), device_w_, device_h_};
   c.fill(0, 0, device_w_, device_h_, kBody);
@@ -140,17 +120,17 @@ void SdlDisplay::compose(const Image& screen) {
   c.fill(kMargin - 2, status_y_ - 2, kMargin + options_.width + 2, status_y_ + kStatusHeight, kBezel);
   c.text(kMargin + 1, status_y_, status_[0], kText);
   c.text(kMargin + 1, status_y_ + 9, status_[1], kText);
-  // The D-pad on the left, the buttons on the right.
-  const int cx = kMargin + 14, cy = pad_y_ + kPadHeight / 2, s = 8;
-  c.fill(cx - s / 2, cy - s / 2 - s, cx + s / 2, cy + s / 2 + s, kKey);
-  c.fill(cx - s / 2 - s, cy - s / 2, cx + s / 2 + s, cy + s / 2, kKey);
-  static const char* const labels[] = {"SEL", "C", "L", "Q"};
-  int x = device_w_ - kMargin;
-  for (int k = 3; k >= 0; --k) {
-    const int bw = k == 0 ? 22 : 14;
-    x -= bw;
-    c.key(x, cy - 6, bw, 13, labels[k]);
-    x -= 4;
+  // The D-pad (its centre too) and the buttons, each lit while pressed.
+  KeyRect k[kKeys];
+  keys(k);
+  c.fill(k[2].x + k[2].w, k[0].y + k[0].h, k[3].x, k[1].y, kKey);
+  for (const KeyRect& key : k) c.key(key.x, key.y, key.w, key.h, key.label, lit_[static_cast<int>(key.button)]);
+  // The help, over the screen.
+  if (!overlay_.empty()) {
+    const int lines = static_cast<int>(overlay_.size()), box_h = lines * 9 + 6;
+    const int y0 = kMargin + std::max(0, (options_.height - box_h) / 2);
+    c.fill(kMargin + 4, y0, kMargin + options_.width - 4, y0 + box_h, kOverlay);
+    for (int i = 0; i < lines; ++i) c.text(kMargin + 8, y0 + 4 + 9 * i, overlay_[static_cast<size_t>(i)], kText);
   }
 }
 
@@ -182,9 +162,60 @@ bool SdlDisplay::screenshot(Image& out, std::string& error) {
 bool SdlDisplay::poll(InputEvent* event) {
   const SdlInputGeometry g{options_.scale, kMargin, options_.width, options_.height};
   SDL_Event e;
-  while (SDL_PollEvent(&e))
-    if (sdl_translate(e, g, &stylus_down_, event)) return true;
+  while (SDL_PollEvent(&e)) {
+    // The on-screen keys, pressed with the mouse.
+    if (e.type == SDL_MOUSEBUTTONDOWN && e.button.button == SDL_BUTTON_LEFT && mouse_key_ == Button::kNone) {
+      const int dx = e.button.x / options_.scale, dy = e.button.y / options_.scale;
+      KeyRect k[kKeys];
+      keys(k);
+      for (const KeyRect& key : k)
+        if (dx >= key.x && dx < key.x + key.w && dy >= key.y && dy < key.y + key.h) {
+          mouse_key_ = key.button;
+          lit_[static_cast<int>(key.button)] = true;
+          *event = InputEvent{InputKind::kButtonDown, key.button, 0, 0};
+          return true;
+        }
+    }
+    if (e.type == SDL_MOUSEBUTTONUP && e.button.button == SDL_BUTTON_LEFT && mouse_key_ != Button::kNone) {
+      lit_[static_cast<int>(mouse_key_)] = false;
+      *event = InputEvent{InputKind::kButtonUp, mouse_key_, 0, 0};
+      mouse_key_ = Button::kNone;
+      return true;
+    }
+    if (sdl_translate(e, g, &pointer_, event)) {
+      if (event->kind == InputKind::kButtonDown || event->kind == InputKind::kButtonUp)
+        lit_[static_cast<int>(event->button)] = event->kind == InputKind::kButtonDown;
+      return true;
+    }
+  }
   return false;
+}
+
+void SdlDisplay::set_overlay(const std::vector<std::string>& lines) { overlay_ = lines; }
+
+bool SdlDisplay::key_rect(Button b, int* x, int* y) const {
+  KeyRect k[kKeys];
+  keys(k);
+  for (const KeyRect& key : k)
+    if (key.button == b) {
+      *x = (key.x + key.w / 2) * options_.scale;
+      *y = (key.y + key.h / 2) * options_.scale;
+      return true;
+    }
+  return false;
+}
+
+bool SdlDisplay::click(Button b, bool down) {
+  int x = 0, y = 0;
+  if (!key_rect(b, &x, &y)) return false;
+  SDL_Event e;
+  std::memset(&e, 0, sizeof e);
+  e.type = down ? SDL_MOUSEBUTTONDOWN : SDL_MOUSEBUTTONUP;
+  e.button.button = SDL_BUTTON_LEFT;
+  e.button.state = down ? SDL_PRESSED : SDL_RELEASED;
+  e.button.x = x;
+  e.button.y = y;
+  return SDL_PushEvent(&e) == 1;
 }
 
 bool SdlDisplay::inject(const InputEvent& in) {

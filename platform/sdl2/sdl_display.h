@@ -5,10 +5,10 @@
 // composed at device resolution and scaled x1..x4 by SDL with nearest
 // filtering, so every device pixel is a crisp square.
 //
-// Input as on the device: arrow keys or WASD are the D-pad, Enter/Space is
-// select, C, L and Q the colour, lighting and quality buttons; the mouse is
-// the stylus (its position in screen pixels; presses outside the screen are
-// ignored); Escape or closing the window quits.
+// Input as platform/sdl2/sdl_input.h says (arrow keys the D-pad, a left
+// drag orbits, a right drag is the stylus, ...); besides, the device's keys
+// drawn under the screen are pressed with the mouse, and every key is lit
+// while it is held, from the mouse or the keyboard.
 //
 // `headless` opens SDL's offscreen video driver instead: no window, the same
 // composition (screenshot() reads it back). `inject` puts an input event
@@ -22,6 +22,7 @@
 
 #include "platform/display.h"
 #include "platform/image.h"
+#include "platform/sdl2/sdl_pointer.h"
 
 struct SDL_Window;
 struct SDL_Renderer;
@@ -31,7 +32,7 @@ namespace stipple {
 
 struct SdlDisplayOptions {
   uint16_t width = 240, height = 320;  // the device's screen, px
-  int scale = 2;                       // window pixels per device pixel, 1..4
+  int scale = 2;                       // window pixels per device pixel, 1..4; 0: 2, or less to fit the screen
   bool headless = false;               // SDL's offscreen driver: no window
   std::string title = "stipple";
 };
@@ -61,6 +62,11 @@ class SdlDisplay final : public Display {
   bool screenshot(Image& out, std::string& error);
   // Queues `event` as the SDL event a user would make (see above).
   bool inject(const InputEvent& event);
+  // Queues a mouse press (or release) on the on-screen key of `b`, as a
+  // user's click; false when the device has no such key.
+  bool click(Button b, bool down);
+  // Lines shown over the screen (the help); empty: none.
+  void set_overlay(const std::vector<std::string>& lines);
 
   // The device image's size (unscaled) and where the screen sits in it.
   int device_width() const { return device_w_; }
@@ -68,6 +74,14 @@ class SdlDisplay final : public Display {
   static constexpr int kMargin = 12;
 
  private:
+  struct KeyRect {
+    Button button;
+    int x, y, w, h;  // device pixels
+    const char* label;
+  };
+  static constexpr int kKeys = 8;  // the D-pad's four, select, colour, lighting, quality
+  int keys(KeyRect out[kKeys]) const;
+  bool key_rect(Button b, int* x, int* y) const;  // its centre, window pixels
   void compose(const Image& screen);
 
   SdlDisplayOptions options_;
@@ -79,7 +93,10 @@ class SdlDisplay final : public Display {
   std::vector<uint8_t> device_;  // device_w_ x device_h_ RGB888
   Image screen_;
   std::string status_[2];
-  bool stylus_down_ = false;
+  std::vector<std::string> overlay_;
+  SdlPointer pointer_;
+  bool lit_[kButtonCount] = {};
+  Button mouse_key_ = Button::kNone;  // the on-screen key the mouse holds
 };
 
 }  // namespace stipple

@@ -14,7 +14,7 @@ SdlGlWindow::~SdlGlWindow() {
 }
 
 bool SdlGlWindow::open(int width, int height, int msaa, const std::string& title, std::string& error) {
-  if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0) return error = std::string("SDL: ") + SDL_GetError(), false;
+  if (!sdl_open_video(false, error)) return false;
   sdl_ = true;
   SDL_GL_SetAttribute(SDL_GL_CONTEXT_MAJOR_VERSION, 3);
   SDL_GL_SetAttribute(SDL_GL_CONTEXT_MINOR_VERSION, 3);
@@ -39,7 +39,7 @@ bool SdlGlWindow::poll(InputEvent* event) {
   const SdlInputGeometry g{1, 0, width_, height_};
   SDL_Event e;
   while (SDL_PollEvent(&e))
-    if (sdl_translate(e, g, &stylus_down_, event)) return true;
+    if (sdl_translate(e, g, &pointer_, event)) return true;
   return false;
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "platform/display.h"
+#include "platform/sdl2/sdl_pointer.h"
 
 struct SDL_Window;
 
@@ -30,7 +31,8 @@ class SdlGlWindow {
  private:
   SDL_Window* window_ = nullptr;
   void* context_ = nullptr;
-  bool sdl_ = false, stylus_down_ = false;
+  bool sdl_ = false;
+  SdlPointer pointer_;
   int width_ = 0, height_ = 0;
 };
 

@@ -2,27 +2,29 @@
 #include "platform/sdl2/sdl_input.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 
 namespace stipple {
 namespace {
 
-// The keyboard as the device's buttons.
+// The keyboard as the device's buttons and the viewers' keys.
 Button button_of(SDL_Scancode s) {
   switch (s) {
-    case SDL_SCANCODE_UP:
-    case SDL_SCANCODE_W: return Button::kUp;
-    case SDL_SCANCODE_DOWN:
-    case SDL_SCANCODE_S: return Button::kDown;
-    case SDL_SCANCODE_LEFT:
-    case SDL_SCANCODE_A: return Button::kLeft;
-    case SDL_SCANCODE_RIGHT:
-    case SDL_SCANCODE_D: return Button::kRight;
+    case SDL_SCANCODE_UP: return Button::kUp;
+    case SDL_SCANCODE_DOWN: return Button::kDown;
+    case SDL_SCANCODE_LEFT: return Button::kLeft;
+    case SDL_SCANCODE_RIGHT: return Button::kRight;
     case SDL_SCANCODE_RETURN:
     case SDL_SCANCODE_SPACE: return Button::kSelect;
     case SDL_SCANCODE_C: return Button::kColor;
     case SDL_SCANCODE_L: return Button::kLighting;
     case SDL_SCANCODE_Q: return Button::kQuality;
+    case SDL_SCANCODE_R: return Button::kReset;
+    case SDL_SCANCODE_S:
+    case SDL_SCANCODE_F12: return Button::kScreenshot;
+    case SDL_SCANCODE_H:
+    case SDL_SCANCODE_F1: return Button::kHelp;
     default: return Button::kNone;
   }
 }
@@ -37,6 +39,9 @@ SDL_Scancode scancode_of(Button b) {
     case Button::kColor: return SDL_SCANCODE_C;
     case Button::kLighting: return SDL_SCANCODE_L;
     case Button::kQuality: return SDL_SCANCODE_Q;
+    case Button::kReset: return SDL_SCANCODE_R;
+    case Button::kScreenshot: return SDL_SCANCODE_S;
+    case Button::kHelp: return SDL_SCANCODE_H;
     case Button::kNone: break;
   }
   return SDL_SCANCODE_UNKNOWN;
@@ -44,7 +49,7 @@ SDL_Scancode scancode_of(Button b) {
 
 }  // namespace
 
-bool sdl_translate(const SDL_Event& e, const SdlInputGeometry& g, bool* stylus_down, InputEvent* event) {
+bool sdl_translate(const SDL_Event& e, const SdlInputGeometry& g, SdlPointer* pointer, InputEvent* event) {
   *event = InputEvent{};
   const auto to_screen = [&](int wx, int wy) {
     event->x = std::clamp(wx / g.scale - g.margin, 0, g.width - 1);
@@ -66,25 +71,37 @@ bool sdl_translate(const SDL_Event& e, const SdlInputGeometry& g, bool* stylus_d
       return true;
     }
     case SDL_MOUSEBUTTONDOWN: {
-      if (e.button.button != SDL_BUTTON_LEFT) return false;
+      if (pointer->gesture != SdlPointer::kNone) return false;
+      const bool left = e.button.button == SDL_BUTTON_LEFT, right = e.button.button == SDL_BUTTON_RIGHT;
+      if (!left && !right) return false;
       const int sx = e.button.x / g.scale - g.margin, sy = e.button.y / g.scale - g.margin;
       if (sx < 0 || sy < 0 || sx >= g.width || sy >= g.height) return false;  // off the screen
-      *stylus_down = true;
-      event->kind = InputKind::kStylusDown;
+      const bool stylus = right || (SDL_GetModState() & KMOD_SHIFT) != 0;
+      pointer->gesture = stylus ? SdlPointer::kStylus : SdlPointer::kOrbit;
+      event->kind = stylus ? InputKind::kStylusDown : InputKind::kOrbitDown;
       to_screen(e.button.x, e.button.y);
       return true;
     }
     case SDL_MOUSEMOTION:
-      if (!*stylus_down) return false;
-      event->kind = InputKind::kStylusMove;
+      if (pointer->gesture == SdlPointer::kNone) return false;
+      event->kind = pointer->gesture == SdlPointer::kStylus ? InputKind::kStylusMove : InputKind::kOrbitMove;
       to_screen(e.motion.x, e.motion.y);
       return true;
-    case SDL_MOUSEBUTTONUP:
-      if (e.button.button != SDL_BUTTON_LEFT || !*stylus_down) return false;
-      *stylus_down = false;
-      event->kind = InputKind::kStylusUp;
+    case SDL_MOUSEBUTTONUP: {
+      if (pointer->gesture == SdlPointer::kNone) return false;
+      if (e.button.button != SDL_BUTTON_LEFT && e.button.button != SDL_BUTTON_RIGHT) return false;
+      event->kind = pointer->gesture == SdlPointer::kStylus ? InputKind::kStylusUp : InputKind::kOrbitUp;
+      pointer->gesture = SdlPointer::kNone;
       to_screen(e.button.x, e.button.y);
       return true;
+    }
+    case SDL_MOUSEWHEEL: {
+      const int notches = e.wheel.direction == SDL_MOUSEWHEEL_FLIPPED ? -e.wheel.y : e.wheel.y;
+      if (notches == 0) return false;
+      event->kind = InputKind::kWheel;
+      event->y = notches;
+      return true;
+    }
     default: return false;
   }
 }
@@ -93,6 +110,19 @@ bool sdl_inject(const InputEvent& in, const SdlInputGeometry& g) {
   SDL_Event e;
   std::memset(&e, 0, sizeof e);
   const int wx = (in.x + g.margin) * g.scale + g.scale / 2, wy = (in.y + g.margin) * g.scale + g.scale / 2;
+  const auto pointer = [&](Uint32 type, Uint8 button) {
+    e.type = type;
+    if (type == SDL_MOUSEMOTION) {
+      e.motion.x = wx;
+      e.motion.y = wy;
+      e.motion.state = SDL_BUTTON(button);
+    } else {
+      e.button.button = button;
+      e.button.state = type == SDL_MOUSEBUTTONDOWN ? SDL_PRESSED : SDL_RELEASED;
+      e.button.x = wx;
+      e.button.y = wy;
+    }
+  };
   switch (in.kind) {
     case InputKind::kQuit: e.type = SDL_QUIT; break;
     case InputKind::kButtonDown:
@@ -102,23 +132,42 @@ bool sdl_inject(const InputEvent& in, const SdlInputGeometry& g) {
       e.key.keysym.scancode = scancode_of(in.button);
       e.key.keysym.sym = SDL_GetKeyFromScancode(e.key.keysym.scancode);
       break;
-    case InputKind::kStylusDown:
-    case InputKind::kStylusUp:
-      e.type = in.kind == InputKind::kStylusDown ? SDL_MOUSEBUTTONDOWN : SDL_MOUSEBUTTONUP;
-      e.button.button = SDL_BUTTON_LEFT;
-      e.button.state = in.kind == InputKind::kStylusDown ? SDL_PRESSED : SDL_RELEASED;
-      e.button.x = wx;
-      e.button.y = wy;
-      break;
-    case InputKind::kStylusMove:
-      e.type = SDL_MOUSEMOTION;
-      e.motion.x = wx;
-      e.motion.y = wy;
-      e.motion.state = SDL_BUTTON_LMASK;
+    case InputKind::kStylusDown: pointer(SDL_MOUSEBUTTONDOWN, SDL_BUTTON_RIGHT); break;
+    case InputKind::kStylusMove: pointer(SDL_MOUSEMOTION, SDL_BUTTON_RIGHT); break;
+    case InputKind::kStylusUp: pointer(SDL_MOUSEBUTTONUP, SDL_BUTTON_RIGHT); break;
+    case InputKind::kOrbitDown: pointer(SDL_MOUSEBUTTONDOWN, SDL_BUTTON_LEFT); break;
+    case InputKind::kOrbitMove: pointer(SDL_MOUSEMOTION, SDL_BUTTON_LEFT); break;
+    case InputKind::kOrbitUp: pointer(SDL_MOUSEBUTTONUP, SDL_BUTTON_LEFT); break;
+    case InputKind::kWheel:
+      e.type = SDL_MOUSEWHEEL;
+      e.wheel.y = in.y;
+      e.wheel.direction = SDL_MOUSEWHEEL_NORMAL;
       break;
     case InputKind::kNone: return false;
   }
   return SDL_PushEvent(&e) == 1;
+}
+
+bool sdl_open_video(bool headless, std::string& error) {
+  if (headless) {
+    SDL_SetHint(SDL_HINT_VIDEODRIVER, "offscreen");
+  } else {
+    const char* x11 = std::getenv("DISPLAY");
+    const char* wayland = std::getenv("WAYLAND_DISPLAY");
+    const char* driver = std::getenv("SDL_VIDEODRIVER");
+    if ((x11 == nullptr || *x11 == 0) && (wayland == nullptr || *wayland == 0) && (driver == nullptr || *driver == 0))
+      return error = "no display: DISPLAY and WAYLAND_DISPLAY are not set (an SSH session without -X, a container?); "
+                     "--headless -o FRAME.png draws without one",
+             false;
+  }
+  if (SDL_InitSubSystem(SDL_INIT_VIDEO) != 0) return error = std::string("SDL: ") + SDL_GetError(), false;
+  const char* used = SDL_GetCurrentVideoDriver();
+  const std::string name = used ? used : "";
+  if (!headless && (name == "offscreen" || name == "dummy") && std::getenv("SDL_VIDEODRIVER") == nullptr) {
+    SDL_QuitSubSystem(SDL_INIT_VIDEO);
+    return error = "no display: SDL found only its '" + name + "' video driver; --headless -o FRAME.png draws without one", false;
+  }
+  return true;
 }
 
 }  // namespace stipple

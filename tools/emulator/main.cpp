@@ -26,20 +26,30 @@ const char kUsage[] =
     "The handheld client in a window that emulates the device: its screen (240x320\n"
     "RGB565 unless --size says 320x240, 480x640, ...) scaled with nearest filtering\n"
     "in a device frame, a status line (frames a second, nodes, points, kilobytes\n"
-    "received, the link's rate) and the device's controls:\n"
-    "  arrow keys or WASD   the D-pad: left/right orbit, up/down tilt; with\n"
-    "                       Enter or Space (select) held, up/down dolly\n"
+    "received, the link's rate) and the device's controls, with a desktop's habits:\n"
+    "  left drag            orbit the model\n"
+    "  right drag           the stylus: draws the refinement window (or shift and\n"
+    "                       the left button; only nodes there are refined; another\n"
+    "                       window adds to what the earlier ones refined, TOG05's\n"
+    "                       on-demand mode, over a protocol 4 server); a click\n"
+    "                       clears it\n"
+    "  wheel                dolly\n"
+    "  arrow keys           the D-pad: left/right orbit (90 degrees a second),\n"
+    "                       up/down tilt; with Enter or Space (select) held,\n"
+    "                       up/down dolly (a model length a second)\n"
+    "  the on-screen keys   clickable; lit while held\n"
     "  C, L, Q              colour, lighting, quality (1, 1/2, 1/4, 2)\n"
-    "  mouse drag           the stylus: draws the refinement window (only nodes\n"
-    "                       there are refined; another window adds to what the\n"
-    "                       earlier ones refined, TOG05's on-demand mode, over\n"
-    "                       a protocol 4 server); a tap clears it\n"
+    "  R                    reset the view\n"
+    "  S or F12             a screenshot: stipple-emulator-NNNN.png here (printed)\n"
+    "  H or F1              the keys, on the screen\n"
     "  Escape               quit\n"
     "\n"
     "program:\n"
     "  --connect HOST:PORT  nodes from `stipple serve` (no MODEL.spg)\n"
     "  --serial DEV         the same over a serial line; --baud N its rate (115200)\n"
-    "  --scale N            window pixels per device pixel, 1..4 (default 2)\n"
+    "  --scale N            window pixels per device pixel, 1..4 (default: 2, or\n"
+    "                       the largest that fits the screen's height)\n"
+    "  --version            the version\n"
     "  --headless -o F.png  no window (SDL's offscreen driver): draw the view once it\n"
     "                       has converged and write the device's screen, the same\n"
     "                       bytes as `stipple render` of that view\n"
@@ -72,8 +82,12 @@ int run(int argc, char** argv) {
     std::fputs(kRenderOptionsHelp, stdout);
     return 0;
   }
+  if (args.flag("--version")) {
+    std::printf("stipple-emulator %s\n", STIPPLE_VERSION);
+    return 0;
+  }
   std::string error, v;
-  unsigned long long scale = 2;
+  unsigned long long scale = 0;  // 0: the default, fitted to the screen
   if (args.value("--scale", v) && (!cli::parse_uint(v, 4, scale) || scale < 1))
     return fail("--scale: expected 1..4, got '" + v + "'");
   ViewerOptions vo;
@@ -91,12 +105,14 @@ int run(int argc, char** argv) {
   SdlDisplayOptions d;
   d.width = o.config.raster.width;
   d.height = o.config.raster.height;
-  d.scale = static_cast<int>(scale);
+  d.scale = static_cast<int>(scale);  // 0: SdlDisplay fits it
   d.headless = headless;
   d.title = "stipple-emulator";
+  // The window first: without a display the program says so at once,
+  // before it loads (or encodes) a model.
+  if (!display.open(d, error)) return fail(error);
   ViewerSource source;
   if (!source.open(model, connect, serial, static_cast<uint32_t>(baud), o, error)) return fail(error);
-  if (!display.open(d, error)) return fail(error);
   RemoteModel& m = source.model();
   Client& client = m.client();
   const int32_t* extent = client.decoder().extent_mu();
@@ -155,11 +171,13 @@ int run(int argc, char** argv) {
   RateMeter rates;
   Image shot;
   bool had_window = false;  // the last camera sent had a refinement window
+  auto last_tick = std::chrono::steady_clock::now();
   while (!controls.quit()) {
     const auto frame_start = std::chrono::steady_clock::now();
     for (; next_step < script.size() && script[next_step].frame <= frame_number; ++next_step) {
       const ScriptStep& s = script[next_step];
-      if (s.kind == ScriptStep::kInput) display.inject(s.event);
+      if (s.kind == ScriptStep::kInput && s.click) display.click(s.event.button, s.event.kind == InputKind::kButtonDown);
+      else if (s.kind == ScriptStep::kInput) display.inject(s.event);
       else if (s.kind == ScriptStep::kQuit) display.inject(InputEvent{InputKind::kQuit, Button::kNone, 0, 0});
       else if (!display.screenshot(shot, error) || !write_png(s.path, shot, error)) return fail(error);
       else {
@@ -174,7 +192,9 @@ int run(int argc, char** argv) {
     bool changed = false;
     InputEvent e;
     while (display.poll(&e)) changed = controls.apply(e) || changed;
-    changed = controls.tick() || changed;
+    changed = controls.tick(seconds_since(last_tick)) || changed;
+    last_tick = std::chrono::steady_clock::now();
+    display.set_overlay(controls.help() ? help_lines() : std::vector<std::string>{});
     if (changed) {
       if (!client.set_view(controls.lighting() ? o.config.shading == ShadingMode::kNone ? ShadingMode::kSurface
                                                                                        : o.config.shading
@@ -199,6 +219,12 @@ int run(int argc, char** argv) {
     status_lines(rates.fps(), stats, m.bytes_received(), rates.bytes_per_s(), controls, m.progress(), line1, line2);
     display.set_status(line1, line2);
     if (!display.present(frame.data(), stride, r.width, r.height, r.format, error)) return fail(error);
+    if (controls.take_screenshot()) {  // the S key: the window as shown
+      const std::string path = screenshot_path("stipple-emulator");
+      if (!display.screenshot(shot, error) || !write_png(path, shot, error)) return fail(error);
+      std::printf("screenshot %s (%dx%d)\n", path.c_str(), shot.width, shot.height);
+      std::fflush(stdout);
+    }
     ++frame_number;
     pace_frame(frame_start, 30);
   }

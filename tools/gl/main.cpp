@@ -13,6 +13,7 @@
 
 #include "platform/gl/gl_renderer.h"
 #include "platform/png_io.h"
+#include "platform/text.h"
 #include "platform/sdl2/sdl_gl_window.h"
 #include "tools/embedded/options.h"
 #include "tools/embedded/render_options.h"
@@ -27,10 +28,12 @@ const char kUsage[] =
     "\n"
     "The GL desktop client: the same node stream as the handheld, decoded and\n"
     "sampled on the GPU (OpenGL 3.3 core; platform/gl/gl_renderer.h). The window\n"
-    "takes the emulator's controls: arrow keys or WASD orbit and tilt (with Enter\n"
-    "or Space held, dolly), C L Q colour, lighting and quality, a mouse drag the\n"
-    "refinement window, Escape quits. The title shows the frame rate, nodes,\n"
-    "points and kilobytes received.\n"
+    "takes the emulator's controls: a left drag orbits, a right drag (or shift\n"
+    "and the left button) draws the refinement window, the wheel dollies, arrow\n"
+    "keys orbit and tilt (with Enter or Space held, dolly), C L Q colour, lighting\n"
+    "and quality, R resets the view, S or F12 writes stipple-gl-NNNN.png here, H\n"
+    "or F1 shows the keys, Escape quits. A band at the bottom shows the frame\n"
+    "rate, nodes, points, kilobytes received and the view's progress.\n"
     "\n"
     "program:\n"
     "  --connect HOST:PORT  nodes from `stipple serve` (no MODEL.spg)\n"
@@ -47,6 +50,7 @@ const char kUsage[] =
     "  --frames N           with --headless: draw N frames and print the median\n"
     "                       time, nodes/s and points/s\n"
     "  --script FILE        scripted input, as stipple-emulator's\n"
+    "  --version            the version\n"
     "(--size defaults to 640x480 and --cache to 200000 nodes here.)\n"
     "\n";
 
@@ -91,11 +95,56 @@ void outline(int height, const int32_t r[4]) {
   glDisable(GL_SCISSOR_TEST);
 }
 
+// Lines of text drawn over the bound framebuffer (rows from the top, GL's
+// from the bottom): a dark band, the font at twice its size. Through a
+// texture blitted into place (GL 3.3 core has no raster text).
+class Overlay {
+ public:
+  ~Overlay() {
+    if (fbo_) glDeleteFramebuffers(1, &fbo_);
+    if (texture_) glDeleteTextures(1, &texture_);
+  }
+  // `y` the band's top row; -1: at the bottom, -2: in the middle.
+  void draw(const std::vector<std::string>& lines, int window_w, int window_h, int y, GLint target) {
+    if (lines.empty()) return;
+    const int scale = 2, line_h = 9 * scale, h = static_cast<int>(lines.size()) * line_h + 3 * scale;
+    const int w = window_w;
+    std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3);
+    fill_rect(rgb.data(), w, h, 0, 0, w, h, 0x101418);
+    for (size_t i = 0; i < lines.size(); ++i)
+      draw_text(rgb.data(), w, h, 4 * scale, 2 * scale + static_cast<int>(i) * line_h, lines[i], 0x9FE0A0, scale);
+    // GL's rows run bottom to top.
+    std::vector<uint8_t> rows(rgb.size());
+    for (int r = 0; r < h; ++r)
+      std::copy_n(&rgb[static_cast<size_t>(h - 1 - r) * w * 3], static_cast<size_t>(w) * 3, &rows[static_cast<size_t>(r) * w * 3]);
+    if (!texture_) {
+      glGenTextures(1, &texture_);
+      glGenFramebuffers(1, &fbo_);
+    }
+    glBindTexture(GL_TEXTURE_2D, texture_);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, w, h, 0, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+    glFramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture_, 0);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(target));
+    const int top = y == -1 ? window_h - h : y == -2 ? (window_h - h) / 2 : y;
+    glBlitFramebuffer(0, 0, w, h, 0, window_h - top - h, w, window_h - top, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(target));
+  }
+
+ private:
+  GLuint texture_ = 0, fbo_ = 0;
+};
+
 int run(int argc, char** argv) {
   cli::Args args(argc, argv, 1);
   if (args.flag("--help") || args.flag("-h")) {
     std::fputs(kUsage, stdout);
     std::fputs(kRenderOptionsHelp, stdout);
+    return 0;
+  }
+  if (args.flag("--version")) {
+    std::printf("stipple-gl %s\n", STIPPLE_VERSION);
     return 0;
   }
   bool cache_given = false;
@@ -176,6 +225,9 @@ int run(int argc, char** argv) {
   uint32_t frame_number = 0;
   RateMeter rates;
   std::vector<std::string> shots;  // this frame's screenshots
+  auto last_tick = std::chrono::steady_clock::now();
+  Overlay status, help;
+  std::string status_text[2];
   while (!controls.quit()) {
     const auto frame_start = std::chrono::steady_clock::now();
     shots.clear();
@@ -188,7 +240,8 @@ int run(int argc, char** argv) {
     bool changed = false;
     InputEvent e;
     while (window.poll(&e)) changed = controls.apply(e) || changed;
-    changed = controls.tick() || changed;
+    changed = controls.tick(seconds_since(last_tick)) || changed;
+    last_tick = std::chrono::steady_clock::now();
     if (changed) {
       if (!controls.camera(static_cast<uint16_t>(w), static_cast<uint16_t>(h), &camera)) return fail("the camera left its range");
       if (!m.request(camera, o.rule.max_size_q4, controls.window(), error)) return fail(source.name() + ": " + error);
@@ -201,7 +254,8 @@ int run(int argc, char** argv) {
     int32_t rect[4];
     if (controls.dragging(rect)) outline(window.height(), rect);
     else if (controls.window()[0] < controls.window()[2]) outline(window.height(), controls.window());
-    // Screenshots see this frame, as it will be shown.
+    // Script screenshots see this frame as drawn, without the bands (whose
+    // numbers change).
     for (const std::string& path : shots) {
       image.width = window.width();
       image.height = window.height();
@@ -210,15 +264,31 @@ int run(int argc, char** argv) {
       std::printf("frame %u: screenshot %s %dx%d, crc32 %08x\n", frame_number, path.c_str(), image.width, image.height,
                   crc32(image.rgb.data(), image.rgb.size()));
     }
-    window.swap();
-    ++frame_number;
     if (rates.frame(m.bytes_received())) {
+      RemoteModel::Progress progress = m.progress();
+      FrameStats fs;
+      fs.nodes = stats.nodes;
+      fs.points = static_cast<uint32_t>(std::min<uint64_t>(stats.points, 0xFFFFFFFFu));
+      status_lines(rates.fps(), fs, m.bytes_received(), rates.bytes_per_s(), controls, progress, status_text[0],
+                   status_text[1]);
       char title[160];
-      std::snprintf(title, sizeof title, "stipple-gl  %.1f fps  %u nodes  %llu points  %llu KB%s", rates.fps(), stats.nodes,
-                    static_cast<unsigned long long>(stats.points), static_cast<unsigned long long>(m.bytes_received() / 1024),
-                    progress_text(m.progress()).empty() ? "" : ("  " + progress_text(m.progress())).c_str());
+      std::snprintf(title, sizeof title, "stipple-gl  %s  %s", status_text[0].c_str(), status_text[1].c_str());
       window.set_title(title);
     }
+    status.draw({status_text[0] + "   " + status_text[1]}, window.width(), window.height(), -1, 0);
+    if (controls.help()) help.draw(help_lines(), window.width(), window.height(), -2, 0);
+    // The S key: the window as shown.
+    if (controls.take_screenshot()) {
+      const std::string path = screenshot_path("stipple-gl");
+      image.width = window.width();
+      image.height = window.height();
+      if (!gl_read_pixels(window.width(), window.height(), image.rgb, error) || !write_png(path, image, error))
+        return fail(error);
+      std::printf("screenshot %s (%dx%d)\n", path.c_str(), image.width, image.height);
+      std::fflush(stdout);
+    }
+    window.swap();
+    ++frame_number;
     pace_frame(frame_start, 60);
   }
   std::printf("%s: %u frames, last %u nodes, %llu points, %llu bytes received\n", source.name().c_str(), frame_number,

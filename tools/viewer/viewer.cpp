@@ -126,7 +126,10 @@ bool ViewerSource::open(const std::string& model, const std::string& connect, co
 }
 
 ViewerControls::ViewerControls(const RenderOptions& o, const SpgHeader& header, const int32_t extent_mu[3])
-    : spec_(resolve_view(o.view, header, extent_mu)), quality_q8_(o.config.quality_q8) {
+    : spec_(resolve_view(o.view, header, extent_mu)),
+      first_(spec_),
+      screen_width_(std::max<int>(o.config.raster.width, 1)),
+      quality_q8_(o.config.quality_q8) {
   for (int k = 0; k < 3; ++k) extent_[k] = extent_mu[k];
   for (int k = 0; k < 4; ++k) window_[k] = o.rule.window[k];
   grey_ = o.config.grey;
@@ -148,8 +151,36 @@ bool ViewerControls::apply(const InputEvent& e) {
           quality_q8_ = static_cast<uint16_t>(quality_q8_ >= 512 ? 256 : quality_q8_ > 64 ? quality_q8_ / 2 : 512);
           return true;
         }
-        default: return tick();  // a press turns at once
+        case Button::kReset: {  // the first view, refined everywhere
+          spec_ = first_;
+          window_[0] = window_[1] = window_[2] = window_[3] = 0;
+          return true;
+        }
+        case Button::kScreenshot: screenshot_ = true; return false;
+        case Button::kHelp: help_ = !help_; return false;
+        default: return tick(1.0 / 30);  // a press turns at once, a frame's worth
       }
+    }
+    case InputKind::kOrbitDown:
+      orbit_at_[0] = e.x;
+      orbit_at_[1] = e.y;
+      return false;
+    case InputKind::kOrbitMove:
+    case InputKind::kOrbitUp: {
+      // Grabbing the model: a drag to the right turns its front to the
+      // right (the camera goes left), a drag down shows its top.
+      const double per_px = kDragDegrees / screen_width_;
+      const int dx = e.x - orbit_at_[0], dy = e.y - orbit_at_[1];
+      orbit_at_[0] = e.x;
+      orbit_at_[1] = e.y;
+      if (dx == 0 && dy == 0) return false;
+      spec_.yaw -= dx * per_px;
+      spec_.pitch = std::clamp(spec_.pitch + dy * per_px, -85.0, 85.0);
+      return true;
+    }
+    case InputKind::kWheel: {
+      spec_.distance = std::clamp(spec_.distance * std::pow(kWheelStep, e.y), kMinDistance, kMaxDistance);
+      return true;
     }
     case InputKind::kStylusDown:
       drag_ = true;
@@ -180,20 +211,31 @@ bool ViewerControls::apply(const InputEvent& e) {
   return false;
 }
 
-bool ViewerControls::tick() {
+bool ViewerControls::tick(double seconds) {
   const auto held = [&](Button b) { return held_[static_cast<int>(b)]; };
+  seconds = std::clamp(seconds, 0.0, 0.25);  // a stalled frame does not jump the view
   bool changed = false;
   if (held(Button::kLeft) != held(Button::kRight)) {
-    spec_.yaw += held(Button::kLeft) ? -3 : 3;
+    spec_.yaw += (held(Button::kLeft) ? -1 : 1) * kOrbitDegreesPerSecond * seconds;
     changed = true;
   }
   if (held(Button::kUp) != held(Button::kDown)) {
     const bool up = held(Button::kUp);
-    if (held(Button::kSelect)) spec_.distance = std::clamp(spec_.distance * (up ? 0.95 : 1.0 / 0.95), 0.3, 20.0);
-    else spec_.pitch = std::clamp(spec_.pitch + (up ? 3 : -3), -85.0, 85.0);
+    if (held(Button::kSelect)) {
+      const double step = kDollyExtentsPerSecond * seconds * std::min(1.0, spec_.distance);
+      spec_.distance = std::clamp(spec_.distance + (up ? -step : step), kMinDistance, kMaxDistance);
+    } else {
+      spec_.pitch = std::clamp(spec_.pitch + (up ? 1 : -1) * kTiltDegreesPerSecond * seconds, -85.0, 85.0);
+    }
     changed = true;
   }
   return changed;
+}
+
+bool ViewerControls::take_screenshot() {
+  const bool s = screenshot_;
+  screenshot_ = false;
+  return s;
 }
 
 bool ViewerControls::camera(uint16_t width, uint16_t height, Camera* out) const {
@@ -215,9 +257,10 @@ bool button_named(const std::string& s, Button* out) {
   static const struct {
     const char* name;
     Button button;
-  } names[] = {{"up", Button::kUp},         {"down", Button::kDown},     {"left", Button::kLeft},
-               {"right", Button::kRight},   {"select", Button::kSelect}, {"colour", Button::kColor},
-               {"color", Button::kColor},   {"lighting", Button::kLighting}, {"quality", Button::kQuality}};
+  } names[] = {{"up", Button::kUp},           {"down", Button::kDown},         {"left", Button::kLeft},
+               {"right", Button::kRight},     {"select", Button::kSelect},     {"colour", Button::kColor},
+               {"color", Button::kColor},     {"lighting", Button::kLighting}, {"quality", Button::kQuality},
+               {"reset", Button::kReset},     {"screenshot", Button::kScreenshot}, {"help", Button::kHelp}};
   for (const auto& n : names)
     if (s == n.name) return *out = n.button, true;
   return false;
@@ -244,22 +287,33 @@ bool read_script(const std::string& path, std::vector<ScriptStep>& out, std::str
     ScriptStep s;
     s.frame = static_cast<uint32_t>(frame);
     std::string arg;
-    if (action == "down" || action == "up" || action == "press") {
+    if (action == "down" || action == "up" || action == "press" || action == "click") {
       if (!(words >> arg) || !button_named(arg, &s.event.button))
-        return bad("expected a button (up down left right select colour lighting quality), got '" + arg + "'");
+        return bad("expected a button (up down left right select colour lighting quality reset screenshot help), got '" +
+                   arg + "'");
       s.event.kind = action == "up" ? InputKind::kButtonUp : InputKind::kButtonDown;
+      s.click = action == "click";
+      if (action == "click") action = "press";
       out.push_back(s);
       if (action == "press") {
         s.frame += 5;
         s.event.kind = InputKind::kButtonUp;
         out.push_back(s);
       }
-    } else if (action == "stylus-down" || action == "stylus-move" || action == "stylus-up") {
+    } else if (action == "stylus-down" || action == "stylus-move" || action == "stylus-up" || action == "orbit-down" ||
+               action == "orbit-move" || action == "orbit-up") {
       if (!(words >> s.event.x >> s.event.y) || s.event.x < 0 || s.event.y < 0 || s.event.x > 4095 || s.event.y > 4095)
         return bad("expected X Y in screen pixels after " + action);
-      s.event.kind = action == "stylus-down" ? InputKind::kStylusDown
-                     : action == "stylus-move" ? InputKind::kStylusMove
-                                               : InputKind::kStylusUp;
+      const bool stylus = action.compare(0, 6, "stylus") == 0;
+      const std::string what = action.substr(action.find('-') + 1);
+      s.event.kind = what == "down"   ? (stylus ? InputKind::kStylusDown : InputKind::kOrbitDown)
+                     : what == "move" ? (stylus ? InputKind::kStylusMove : InputKind::kOrbitMove)
+                                      : (stylus ? InputKind::kStylusUp : InputKind::kOrbitUp);
+      out.push_back(s);
+    } else if (action == "wheel") {
+      if (!(words >> s.event.y) || s.event.y == 0 || s.event.y < -100 || s.event.y > 100)
+        return bad("expected a number of notches (-100..100, not 0) after wheel");
+      s.event.kind = InputKind::kWheel;
       out.push_back(s);
     } else if (action == "screenshot") {
       if (!(words >> s.path)) return bad("expected a path after screenshot");
@@ -269,12 +323,40 @@ bool read_script(const std::string& path, std::vector<ScriptStep>& out, std::str
       s.kind = ScriptStep::kQuit;
       out.push_back(s);
     } else {
-      return bad("unknown action '" + action + "' (down up press stylus-down stylus-move stylus-up screenshot quit)");
+      return bad("unknown action '" + action +
+                 "' (down up press click stylus-down stylus-move stylus-up orbit-down orbit-move orbit-up wheel screenshot quit)");
     }
     if (words >> arg) return bad("unexpected '" + arg + "'");
   }
   std::stable_sort(out.begin(), out.end(), [](const ScriptStep& a, const ScriptStep& b) { return a.frame < b.frame; });
   return true;
+}
+
+const std::vector<std::string>& help_lines() {
+  static const std::vector<std::string> lines = {
+      "LEFT DRAG      orbit",
+      "RIGHT DRAG     refinement window",
+      "  (or shift + left), a click clears",
+      "WHEEL          dolly",
+      "ARROWS         orbit and tilt",
+      "SPACE + UP/DN  dolly",
+      "C  L  Q        colour, light, quality",
+      "R              reset the view",
+      "S or F12       screenshot (PNG)",
+      "H or F1        this help",
+      "ESC            quit",
+  };
+  return lines;
+}
+
+std::string screenshot_path(const std::string& prefix) {
+  for (int n = 1; n < 100000; ++n) {
+    char name[64];
+    std::snprintf(name, sizeof name, "-%04d.png", n);
+    const std::string path = prefix + name;
+    if (!std::ifstream(path).good()) return path;
+  }
+  return prefix + ".png";
 }
 
 double seconds_since(std::chrono::steady_clock::time_point t) {

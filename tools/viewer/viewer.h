@@ -7,16 +7,26 @@
 // each is a RemoteModel (tools/embedded/remote.h) over the same protocol,
 // so both viewers see exactly the node stream the handheld gets.
 //
-// Controls (the D-pad and buttons of platform/display.h): left/right orbit
-// about the up axis, up/down tilt; with select held, up/down dolly; colour,
-// lighting and quality toggle; a stylus drag draws the refinement window
-// (TOG05 §8.1: only nodes there are refined), a tap clears it.
+// Controls (platform/display.h's input, as platform/sdl2/sdl_input.h maps a
+// desktop's): the D-pad's left/right orbit about the up axis at
+// kOrbitDegreesPerSecond, up/down tilt at kTiltDegreesPerSecond; with
+// select held, up/down dolly at kDollyExtentsPerSecond (model lengths, the
+// model's largest side); a left drag orbits (kDragDegrees a screen width),
+// the wheel dollies (each notch a tenth of the way to the centre or back),
+// reset returns to the first view; colour, lighting and quality toggle; the
+// stylus (a right drag) draws the refinement window (TOG05 §8.1: only nodes
+// there are refined), a tap clears it; the screenshot and help keys are the
+// program's to act on (take_screenshot, help).
 //
 // Script (`--script FILE`, for tests and demos): one event per line,
 // `FRAME ACTION [ARGS]`, FRAME counting presented frames from 0:
-//   FRAME down|up BUTTON        up down left right select colour lighting quality
+//   FRAME down|up BUTTON        up down left right select colour lighting
+//                               quality reset screenshot help
 //   FRAME press BUTTON          down at FRAME, up 5 frames later
-//   FRAME stylus-down|stylus-move|stylus-up X Y   (screen pixels)
+//   FRAME click BUTTON          the same with the mouse on the emulator's key
+//   FRAME stylus-down|stylus-move|stylus-up X Y   (screen pixels; the right button)
+//   FRAME orbit-down|orbit-move|orbit-up X Y      (the left button)
+//   FRAME wheel N               N notches (negative: towards the user)
 //   FRAME screenshot PATH       the window as shown (PNG)
 //   FRAME quit
 // Blank lines and # comments are ignored.
@@ -72,14 +82,26 @@ class ViewerSource {
   std::string name_;
 };
 
+inline constexpr double kOrbitDegreesPerSecond = 90, kTiltDegreesPerSecond = 60, kDollyExtentsPerSecond = 1;
+inline constexpr double kDragDegrees = 180;  // a drag across the screen's width
+inline constexpr double kWheelStep = 0.9;    // the distance times this a notch towards the screen
+inline constexpr double kMinDistance = 0.01, kMaxDistance = 50;  // model extents from the orbit's centre
+
 // The view a user steers, and the toggles.
 class ViewerControls {
  public:
   ViewerControls(const RenderOptions& options, const SpgHeader& header, const int32_t extent_mu[3]);
   // Applies one input event; true when the camera or the cut changed.
   bool apply(const InputEvent& e);
-  // Per presented frame: a held D-pad keeps turning. True when the camera changed.
-  bool tick();
+  // Per presented frame, `seconds` after the last: a held D-pad keeps
+  // turning (dolly slows within a model length of the centre, so that it
+  // never jumps past it). True when the camera changed.
+  bool tick(double seconds);
+  // True once after the screenshot key was pressed.
+  bool take_screenshot();
+  // Whether the help is shown (the help key toggles it).
+  bool help() const { return help_; }
+  const ViewSpec& view() const { return spec_; }
   bool camera(uint16_t width, uint16_t height, Camera* out) const;
   const int32_t* window() const { return window_; }  // px, x0 >= x1: none
   bool quit() const { return quit_; }
@@ -90,10 +112,12 @@ class ViewerControls {
   bool dragging(int32_t rect[4]) const;
 
  private:
-  ViewSpec spec_;
+  ViewSpec spec_, first_;
   int32_t extent_[3];
-  bool held_[9] = {};
-  bool quit_ = false, grey_ = false, lighting_ = true, drag_ = false;
+  int screen_width_;
+  bool held_[kButtonCount] = {};
+  bool quit_ = false, grey_ = false, lighting_ = true, drag_ = false, screenshot_ = false, help_ = false;
+  int32_t orbit_at_[2] = {0, 0};  // the orbit drag's last position
   uint16_t quality_q8_;
   int32_t window_[4] = {0, 0, 0, 0};
   int32_t drag_start_[2] = {0, 0}, drag_now_[2] = {0, 0};
@@ -104,10 +128,18 @@ struct ScriptStep {
   enum Kind : uint8_t { kInput, kScreenshot, kQuit } kind = kInput;
   InputEvent event;
   std::string path;
+  bool click = false;  // a press of the emulator's on-screen key, with the mouse
 };
 
 // Parses a script file; false with "FILE:LINE: why".
 bool read_script(const std::string& path, std::vector<ScriptStep>& out, std::string& error);
+
+// The keys, as the help shows them (lines of at most 38 characters).
+const std::vector<std::string>& help_lines();
+
+// A free name for a screenshot in the current directory:
+// PREFIX-0001.png, -0002, ... (the first that does not exist).
+std::string screenshot_path(const std::string& prefix);
 
 // Seconds since `t` (steady clock).
 double seconds_since(std::chrono::steady_clock::time_point t);
