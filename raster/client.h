@@ -92,6 +92,8 @@ class Client {
   [[nodiscard]] bool set_view(ShadingMode shading, bool grey, uint16_t quality_q8) {
     return renderer_.set_view(shading, grey, quality_q8);
   }
+  // Colour by elevation along `up` (PointRenderer::set_elevation).
+  [[nodiscard]] bool set_elevation(SpgAxis up) { return renderer_.set_elevation(up); }
   const RendererConfig& view_config() const { return renderer_.config(); }
 
   const NodeDecoder& decoder() const { return cache_.decoder(); }

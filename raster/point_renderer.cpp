@@ -8,6 +8,7 @@
 #include "raster/resolve.h"
 
 #include "core/arena.h"
+#include "core/elevation_ramp.h"
 #include "core/fixed_range.h"
 
 namespace stipple {
@@ -198,6 +199,12 @@ bool PointRenderer::set_view(ShadingMode shading, bool grey, uint16_t quality_q8
   return true;
 }
 
+bool PointRenderer::set_elevation(SpgAxis up) {
+  if (g_position_ == nullptr || static_cast<uint8_t>(up) >= kSpgAxisCount) return false;
+  config_.elevation = up;
+  return true;
+}
+
 RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, size_t bytes) {
   if (!renderer_config_valid(config)) return RenderStatus::kBadConfig;
   const Layout l = layout_of(config);
@@ -281,7 +288,10 @@ struct PointRenderer::FrameSetup {
   int32_t width_q4, height_q4;
   int depth_shift;
   int16_t light[3], half[3];  // model space, Q14
-  bool model_color;
+  bool model_color;  // the node's colour varies: the model's, or by elevation
+  int elevation_field;  // -1, or the mean's field the ramp reads (0..2)
+  int elevation_bits;   // that field's width
+  bool elevation_down;  // the axis points down: the ramp reversed
   bool lit;  // the model has normals and the shading uses them
 };
 
@@ -364,7 +374,15 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   // Colour and shading constants.
   PointShade& sh = s.shade;
   uint8_t rgb[3] = {0, 0, 0};
-  if (f.model_color) decoder.color_rgb(fields, rgb);
+  if (f.elevation_field >= 0) {
+    // The mean's cell along the up axis, as a ramp index 0..255.
+    uint32_t t = f.elevation_bits == 0 ? 128u : (uint32_t{fields.v[f.elevation_field]} << 8) >> f.elevation_bits;
+    if (f.elevation_down) t = 255u - t;
+    const uint32_t ramp = elevation_rgb(t);
+    rgb[0] = static_cast<uint8_t>(ramp >> 16), rgb[1] = static_cast<uint8_t>(ramp >> 8), rgb[2] = static_cast<uint8_t>(ramp);
+  } else if (f.model_color) {
+    decoder.color_rgb(fields, rgb);
+  }
   sh.base_rgb = f.model_color ? (uint32_t{rgb[0]} << 16) | (uint32_t{rgb[1]} << 8) | rgb[2] : config_.grey_rgb & 0xFFFFFFu;
   if (f.lit) {
     int32_t l[3], h[3];
@@ -653,7 +671,11 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
     f.light[a] = static_cast<int16_t>(l >> 14);
     f.half[a] = static_cast<int16_t>(h >> 14);
   }
-  f.model_color = header.has_color() && !config_.grey;
+  const bool elevation = config_.elevation != SpgAxis::kNone;
+  f.model_color = (header.has_color() && !config_.grey) || elevation;
+  f.elevation_field = elevation ? (static_cast<int>(config_.elevation) - 1) / 2 : -1;
+  f.elevation_down = elevation && (static_cast<int>(config_.elevation) - 1) % 2 == 1;
+  f.elevation_bits = elevation ? header.layout.bits[f.elevation_field] : 0;
   f.decoder = &cache.decoder();
   tables_.uniform_base = !f.model_color;
   tables_.base_rgb = config_.grey_rgb & 0xFFFFFFu;
@@ -667,7 +689,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
                                     : config_.shading == ShadingMode::kPerPoint ? PointNormals::kSampled
                                     : config_.shading == ShadingMode::kSurface  ? PointNormals::kSurface
                                                                                 : PointNormals::kNode;
-  const bool color_points = f.model_color && config_.sample_color;
+  const bool color_points = header.has_color() && !config_.grey && !elevation && config_.sample_color;
   const bool specular = normals && config_.lighting.specular_q8 > 0;
   using DrawFn = void (PointRenderer::*)(const FrameSetup&, const NodeFields&, uint32_t, FrameStats&);
   const PointRaster::TileFn tile_fn =

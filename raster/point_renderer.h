@@ -56,6 +56,10 @@ struct RendererConfig {
   ShadingMode shading = ShadingMode::kSurface;  // measured best against the scan (docs/results.md)
   bool sample_color = true;                // per-point colour from sigma_c (else the node's mean colour)
   bool grey = false;                       // ignore the model's colour
+  // Colour by elevation (no re-encode): each node's colour from a ramp
+  // (elevation_rgb, core/elevation_ramp.h) over the model's box along this axis,
+  // low to high — LiDAR's habit; kNone: the model's colour (or grey).
+  SpgAxis elevation = SpgAxis::kNone;
   Lighting lighting;
   uint32_t grey_rgb = 0xD8D8D8;            // base colour without colour attributes
   uint32_t clear_rgb = 0x000000;
@@ -147,6 +151,8 @@ class PointRenderer {
   // grey and the points-per-node scale — none of them sized the storage.
   // False, and nothing changed, for a value init would refuse.
   [[nodiscard]] bool set_view(ShadingMode shading, bool grey, uint16_t quality_q8);
+  // Colour by elevation along `up` while it runs (kNone: off); false before init.
+  [[nodiscard]] bool set_elevation(SpgAxis up);
   const RendererConfig& config() const { return config_; }
 
  // Per frame and per node: defined in point_renderer.cpp.

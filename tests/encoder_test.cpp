@@ -13,6 +13,8 @@
 #include "test_util.h"
 #include "tools/encoder/encoder.h"
 #include "tools/reference/metrics.h"
+#include "tools/embedded/embedded.h"
+#include "tools/scan/las_io.h"
 #include "tools/scan/ply_io.h"
 #include "tools/reference/sampler.h"
 #include "tools/reference/spg_model.h"
@@ -248,6 +250,75 @@ TEST(Encoder, ToleranceBoundsTheErrorAndFitsTheWidths) {
     std::printf("tolerance %.1f %% of the diagonal: %u nodes, %zu bytes, position %u/%u/%u bits, RMS %.4f / %.4f\n",
                 100 * share, view.header.node_count, file.size(), view.header.layout.bits[0], view.header.layout.bits[1],
                 view.header.layout.bits[2], leaves.original_to_generated.rms, leaves.generated_to_original.rms);
+  }
+}
+
+// Colour modes end to end (encode --color-by classification | intensity):
+// a synthetic LAS of a flat 60 x 60 m square, ground (class 2, intensity 40)
+// on its left half, a roof (class 6, intensity 200) on its right, without
+// RGB (point format 0). Encoded with its classes as the colour and drawn
+// unlit from above, the left half is the ground's brown, the right the
+// building's red; by intensity, dark grey and light grey.
+TEST(Encoder, LasClassesAndIntensityBecomeTheNodeColour) {
+  std::vector<uint8_t> las(227, 0);
+  std::memcpy(las.data(), "LASF", 4);
+  las[24] = 1, las[25] = 2;
+  const uint16_t header = 227, record = 20;
+  const uint32_t offset = 227, count = 120 * 120;
+  std::memcpy(&las[94], &header, 2);
+  std::memcpy(&las[96], &offset, 4);
+  std::memcpy(&las[105], &record, 2);
+  std::memcpy(&las[107], &count, 4);
+  const double scale[3] = {0.001, 0.001, 0.001}, shift[3] = {0, 0, 0};
+  std::memcpy(&las[131], scale, 24);
+  std::memcpy(&las[155], shift, 24);
+  for (int y = 0; y < 120; ++y)
+    for (int x = 0; x < 120; ++x) {
+      uint8_t r[20] = {};
+      const int32_t xyz[3] = {x * 500, y * 500, ((x * 7 + y * 13) % 5) * 2};  // 0.5 m apart, 1 cm of relief
+      std::memcpy(r, xyz, 12);
+      const uint16_t intensity = x < 60 ? 40 : 200;
+      std::memcpy(&r[12], &intensity, 2);
+      r[15] = x < 60 ? 2 : 6;
+      las.insert(las.end(), r, r + 20);
+    }
+  for (LasColor by : {LasColor::kClassification, LasColor::kIntensity}) {
+    PointCloud cloud;
+    std::string error;
+    ScanOptions scan;
+    scan.color_by = by;
+    ASSERT_TRUE(parse_point_cloud("site.las", las.data(), las.size(), cloud, error, scan)) << error;
+    std::vector<uint8_t> spg;
+    EncodeReport report;
+    ASSERT_TRUE(encode_cloud(cloud, EncodeOptions{}, spg, report, error)) << error;
+    SpgView view;
+    ASSERT_TRUE(spg_parse(spg.data(), spg.size(), &view).ok());
+    ASSERT_TRUE(view.header.has_color());
+    ClientConfig c;
+    c.raster = RasterConfig{240, 240, 5, PixelFormat::kRgb888, 1u << 20};
+    c.shading = ShadingMode::kNone;
+    c.sample_color = false;
+    ViewSpec spec;
+    ASSERT_TRUE(parse_view("0,90,1.2", spec, error)) << error;
+    FixedRender out;
+    ASSERT_TRUE(render_fixed(view, spg.data(), c, CutRule{CutRule::kProjectedSize, 0, 32}, spec, out, error)) << error;
+    // Seen from above, the square fills the screen, its halves the top and
+    // the bottom (which is which is the view's yaw's); their middles are the
+    // two colours, one each.
+    const auto at = [&](int x, int y) {
+      const uint8_t* p = &out.image.rgb[(static_cast<size_t>(y) * 240 + x) * 3];
+      return uint32_t{p[0]} << 16 | uint32_t{p[1]} << 8 | p[2];
+    };
+    const uint32_t a = at(120, 60), b = at(120, 180);
+    const uint32_t want[2] = {by == LasColor::kClassification ? las_class_rgb(2) : 0x333333u,
+                              by == LasColor::kClassification ? las_class_rgb(6) : 0xFFFFFFu};
+    const auto near = [](uint32_t x, uint32_t y) {
+      for (int k : {16, 8, 0})
+        if (std::abs(static_cast<int>((x >> k) & 255) - static_cast<int>((y >> k) & 255)) > 12) return false;
+      return true;
+    };
+    EXPECT_TRUE((near(a, want[0]) && near(b, want[1])) || (near(a, want[1]) && near(b, want[0])))
+        << std::hex << a << " " << b << " want " << want[0] << " and " << want[1];
   }
 }
 

@@ -231,6 +231,30 @@ TEST(Gl, ACloseUpStaysClosed) {
   }
 }
 
+// Colour by elevation: the GL client's ramp (in the shader) is the software
+// client's (per node, core/elevation_ramp.h) for the same cut and camera.
+TEST(Gl, ColourByElevationAsTheSoftwareClient) {
+  Gl gl;
+  ASSERT_TRUE(gl.ok) << gl.error;
+  ClientConfig c;
+  c.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 22};
+  c.shading = ShadingMode::kPerNode;
+  c.sample_color = false;
+  c.lighting.specular_q8 = 0;
+  c.resolve = false;
+  c.elevation = SpgAxis::kPosZ;  // on: the view's up
+  const Scene s(30, &c);
+  GlRenderOptions o = per_node();
+  o.elevation = s.software.up;
+  const Image gpu = gl_render(s, o);
+  const double psnr = image_psnr(s.software.image, gpu);
+  std::printf("elevation along %s: GL against software %.2f dB\n", spg_axis_name(s.software.up), psnr);
+  EXPECT_EQ(s.software.up, SpgAxis::kPosY);
+  EXPECT_GE(psnr, 27.0);
+  GlRenderOptions plain = per_node();
+  EXPECT_LT(image_psnr(gl_render(s, plain), gpu), 20.0);  // grey and the ramp differ
+}
+
 TEST(Gl, RefusesACacheWithoutStartup) {
   Gl gl;
   ASSERT_TRUE(gl.ok) << gl.error;

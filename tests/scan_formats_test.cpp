@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "tools/scan/las_io.h"
 #include "tools/scan/ply_io.h"
 
 namespace stipple {
@@ -216,6 +217,13 @@ std::vector<uint8_t> las(int minor, int format, uint16_t rgb_max = 65535) {
       const uint16_t rgb[3] = {rgb_max, static_cast<uint16_t>(rgb_max / 2), static_cast<uint16_t>(i)};
       std::memcpy(&r[rgb_at[format]], rgb, 6);
     }
+    // Intensity 100, 400, 0; classes 2 (ground), 6 (building), 9 (water),
+    // with the flag bits above the class in formats 0-5.
+    const uint16_t intensity[3] = {100, 400, 0};
+    const uint8_t classes[3] = {2, 6, 9};
+    std::memcpy(&r[12], &intensity[i], 2);
+    if (format >= 6) r[16] = classes[i];
+    else r[15] = static_cast<uint8_t>(classes[i] | 0xA0);
     out.insert(out.end(), r.begin(), r.end());
   }
   return out;
@@ -240,6 +248,43 @@ TEST(Las, EveryPointFormatWithItsOffsetInDoublePrecision) {
         EXPECT_EQ(c.colors[2], Vec3(1, 32767.0 / 65535, 2.0 / 65535));
       }
     }
+}
+
+// encode --color-by: intensity as grey (the largest white), classification
+// through the ASPRS palette, in every point format (the class byte moves in
+// formats 6-10, and formats 0-5 keep flags above the class's five bits);
+// another format is refused with them, naming it.
+TEST(Las, ColourByIntensityOrClassification) {
+  for (int format = 0; format <= 10; ++format) {
+    const std::vector<uint8_t> f = las(4, format);
+    PointCloud c;
+    std::string error;
+    ScanOptions o;
+    o.color_by = LasColor::kIntensity;
+    ASSERT_TRUE(parse_point_cloud("survey.las", f.data(), f.size(), c, error, o)) << format << ": " << error;
+    ASSERT_TRUE(c.has_colors()) << format;
+    EXPECT_EQ(c.colors[0], Vec3(0.25, 0.25, 0.25)) << format;
+    EXPECT_EQ(c.colors[1], Vec3(1, 1, 1)) << format;
+    EXPECT_EQ(c.colors[2], Vec3(0, 0, 0)) << format;
+    o.color_by = LasColor::kClassification;
+    ASSERT_TRUE(parse_point_cloud("survey.las", f.data(), f.size(), c, error, o)) << format << ": " << error;
+    const uint8_t classes[3] = {2, 6, 9};
+    for (int i = 0; i < 3; ++i) {
+      const uint32_t rgb = las_class_rgb(classes[i]);
+      EXPECT_EQ(c.colors[static_cast<size_t>(i)], Vec3((rgb >> 16) & 255, (rgb >> 8) & 255, rgb & 255) / 255.0) << format;
+    }
+  }
+  EXPECT_EQ(las_class_rgb(2), 0xA0783Cu);  // ground: brown
+  EXPECT_STREQ(las_class_name(9), "water");
+  EXPECT_STREQ(las_class_name(200), "");
+  PointCloud c;
+  std::string error;
+  ScanOptions o;
+  o.color_by = LasColor::kClassification;
+  const std::vector<uint8_t> ply = bytes("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                         "property float z\nend_header\n0 0 0\n");
+  EXPECT_FALSE(parse_point_cloud("scan.ply", ply.data(), ply.size(), c, error, o));
+  EXPECT_EQ(error, "scan.ply: --color-by classification takes a LAS scan's classification, but this is PLY");
 }
 
 TEST(Las, EightBitColourLazAndHostileHeadersAreSaidSo) {

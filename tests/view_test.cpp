@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/elevation_ramp.h"
+#include "tests/portable/test_files.h"
 #include "tools/embedded/embedded.h"
 
 namespace stipple {
@@ -114,6 +116,54 @@ TEST(View, OptionsOverrideTheFile) {
   spec.up = SpgAxis::kPosX;
   camera_for(rgbd, spec, &v);
   EXPECT_EQ(v.up, SpgAxis::kPosX);
+}
+
+// Colour by elevation (--color elevation, no re-encode): the bunny, up +y,
+// drawn unlit — its top rows red, its bottom rows blue, along the ramp; the
+// ramp's ends and middle are its colours; down the axis reversed.
+TEST(View, ColourByElevationRampsAlongTheUpAxis) {
+  EXPECT_EQ(elevation_rgb(0), kElevationRamp[0]);
+  EXPECT_EQ(elevation_rgb(128), kElevationRamp[2]);
+  EXPECT_EQ(elevation_rgb(255), 0xD81B1Cu);  // a 64th short of the last colour, 0xD7191C
+  const std::vector<uint8_t> file = test::fixture("tests/golden/bunny_v1.spg");
+  SpgView view;
+  ASSERT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
+  ClientConfig c;
+  c.raster = RasterConfig{240, 320, 5, PixelFormat::kRgb888, 1u << 20};
+  c.shading = ShadingMode::kNone;
+  c.resolve = false;
+  c.elevation = SpgAxis::kPosZ;  // "on": render_fixed takes the view's up (+y here)
+  std::string error;
+  for (SpgAxis up : {SpgAxis::kPosY, SpgAxis::kNegY}) {
+    ViewSpec spec;
+    spec.up = up;
+    spec.pitch = up == SpgAxis::kPosY ? 20 : -20;
+    FixedRender r;
+    ASSERT_TRUE(render_fixed(view, file.data(), c, CutRule{CutRule::kProjectedSize, 0, 32}, spec, r, error)) << error;
+    // The first and last covered rows' mean red and blue.
+    int first = -1, last = -1;
+    for (int y = 0; y < 320; ++y)
+      for (int x = 0; x < 240; ++x) {
+        const uint8_t* p = &r.image.rgb[(static_cast<size_t>(y) * 240 + x) * 3];
+        if (p[0] | p[1] | p[2]) (first < 0 ? first : last) = y, last = y;
+      }
+    ASSERT_GE(first, 0);
+    const auto mean = [&](int y, int k) {
+      double sum = 0;
+      int n = 0;
+      for (int x = 0; x < 240; ++x) {
+        const uint8_t* p = &r.image.rgb[(static_cast<size_t>(y) * 240 + x) * 3];
+        if (p[0] | p[1] | p[2]) sum += p[k], ++n;
+      }
+      return sum / n;
+    };
+    // The view turns with its up axis, so the top of the screen is always
+    // the high end: red above, blue below.
+    EXPECT_GT(mean(first + 2, 0), 150) << spg_axis_name(up);
+    EXPECT_LT(mean(first + 2, 2), 100) << spg_axis_name(up);
+    EXPECT_GT(mean(last - 2, 2), 150) << spg_axis_name(up);
+    EXPECT_LT(mean(last - 2, 0), 100) << spg_axis_name(up);
+  }
 }
 
 }  // namespace

@@ -91,6 +91,8 @@ TEST(ViewerControls, TurnTiltDollyToggleAndWindow) {
   ASSERT_TRUE(c.camera(240, 320, &turned));
   EXPECT_NE(std::memcmp(start.eye, turned.eye, sizeof start.eye), 0);
   EXPECT_FALSE(c.grey());
+  EXPECT_TRUE(c.apply(InputEvent{InputKind::kButtonDown, Button::kColor, 0, 0}));  // colour -> elevation -> grey
+  EXPECT_TRUE(c.elevation());
   EXPECT_TRUE(c.apply(InputEvent{InputKind::kButtonDown, Button::kColor, 0, 0}));
   EXPECT_TRUE(c.grey());
   EXPECT_TRUE(c.apply(InputEvent{InputKind::kButtonDown, Button::kQuality, 0, 0}));

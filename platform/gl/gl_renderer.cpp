@@ -10,6 +10,7 @@
 
 #include "core/gaussian_table.h"
 #include "core/node_format.h"
+#include "core/elevation_ramp.h"
 
 namespace stipple {
 namespace {
@@ -23,21 +24,18 @@ constexpr float kCoverage = 5.f;  // counts up to 1, 2, 4, ... 1024 (and above, 
 constexpr float kDiscSigma = 8.f;
 constexpr float kDiscCut = 3.f;
 constexpr int kDiscBucket = kBuckets;
-// Splats (measured on the bunny and dragon, docs/viewers.md): cut at 3σ;
-// the visibility pass draws each splat's core (1σ) pushed back by one radius,
-// so that a splat's tail never hides its neighbours' centres; a pixel whose
-// weights add to less than 0.1 is left uncovered (the resolve fills it when
-// it lies inside the surface, and trims the silhouette).
-constexpr float kSplatCut = 3.0f;
 constexpr float kMaxPointSize = 64.f;
+// Splats (measured on the bunny and dragon, docs/viewers.md): cut at 3σ;
+// the visibility pass draws each splat's core (1.5σ) pushed back by one
+// radius, so that a splat's tail never hides its neighbours' centres.
+constexpr float kSplatCut = 3.0f;
 constexpr float kVisibilityCut = 1.5f;
 constexpr float kVisibilityOffset = 1.0f;
-constexpr float kCoverCut = 2.0f;
 
 // Instance data. GPU decode: the record's 8 words, then the count. CPU
 // decode: mean, the three scaled axes, the normal frame's three columns
 // (tangents, then the normal), σn (two floats and a pad), the colour (0..1),
-// then the count.
+// then the count (its low 16 bits; the point size in px above).
 constexpr size_t kGpuStride = 8 * 4 + 4;
 constexpr size_t kCpuFloats = 3 + 9 + 9 + 3 + 3;
 constexpr size_t kCpuStride = kCpuFloats * 4 + 4;
@@ -50,6 +48,10 @@ uniform vec4 lens;         // focal px, cx px, cy px, point size px
 uniform vec4 screen;       // width, height, near, far (MU)
 uniform samplerBuffer gauss;
 uniform int shading;       // 0 none, 1 the node's normal, 2 surface normals
+uniform vec3 extent_mu;
+uniform int elevation_axis;  // -1: the model's colour; else a ramp of the mean along it
+uniform int elevation_down;  // the axis points down
+uniform vec3 ramp[5];        // core/elevation_ramp.h's kElevationRamp
 
 struct Node {
   vec3 mean;      // MU
@@ -58,6 +60,16 @@ struct Node {
   vec2 sigma_n;   // radians
   vec3 color;     // 0..1
 };
+
+// The node's colour: the model's, or by elevation.
+vec3 node_color(Node n) {
+  if (elevation_axis < 0) return n.color;
+  float t = clamp(n.mean[elevation_axis] / extent_mu[elevation_axis], 0.0, 1.0);
+  if (elevation_down != 0) t = 1.0 - t;
+  float x = t * 4.0;
+  int i = min(int(x), 3);
+  return mix(ramp[i], ramp[i + 1], x - float(i));
+}
 
 // Clip position of a camera-space point.
 vec4 clip_of(vec3 c) {
@@ -112,7 +124,7 @@ void emit(Node n, uint count) {
   vec3 c = rotation * (n.mean + n.axes * g - eye);
   gl_Position = clip_of(c);
   gl_PointSize = float(count >> 16);  // the node's point size (close-ups: larger)
-  vec3 color = n.color;
+  vec3 color = node_color(n);
   if (shading != 0) {
     vec3 normal = n.nframe[2];
     if (shading == 2) normal = turned(n, (transpose(surface_rows(n)) * g).xy);
@@ -150,7 +162,7 @@ void emit(Node n, uint count) {
   // A splat facing away is dropped: its surface's front is another's.
   if (has_normal_frame && dot(rotation * n.nframe[2], c0) > 0.0) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
   v_uv = corner;
-  v_color = n.color;
+  v_color = node_color(n);
   v_normal[0] = rotation * n.nframe[0];
   v_normal[1] = rotation * n.nframe[1];
   v_normal[2] = rotation * n.nframe[2];
@@ -182,7 +194,6 @@ layout(location = 1) in uvec4 rec1;
 layout(location = 6) in uint count;
 uniform int field_offset[18];
 uniform int field_bits[18];
-uniform vec3 extent_mu;
 uniform samplerBuffer sigmas;  // sigma_p classes (sigma1..3, MU), then sigma_n classes (radians)
 uniform int sigma_n_base;
 uniform int has_normals, has_color, grey;
@@ -253,7 +264,7 @@ flat in mat2 v_surface;
 uniform int visibility;  // 1: the visibility pass, 2: opaque discs, else the attribute pass
 uniform float cut2;      // the splat's square radius (sigma^2): the attribute pass's cut
 uniform float core2;     // the visibility pass: depth within this square radius
-uniform float cover2;    // ... and coverage within this one
+uniform float cover2;    // a disc's square radius
 out vec4 out_color;
 // The colour at this place in the splat, the normal turned as surface
 // normals turn it.
@@ -272,12 +283,10 @@ void main() {
     out_color = vec4(shaded(), 1.0);
     return;
   }
-  if (visibility != 0) {
-    // Coverage (alpha) out to cover2; depth only from the core, the rest at
-    // the far plane (where a nearer core is, the fragment fails).
-    if (r2 > cover2) discard;
-    gl_FragDepth = r2 <= core2 ? gl_FragCoord.z : 1.0;
-    out_color = vec4(0.0, 0.0, 0.0, 1.0);
+  if (visibility != 0) {  // depth only, from the core
+    if (r2 > core2) discard;
+    gl_FragDepth = gl_FragCoord.z;
+    out_color = vec4(0.0);
     return;
   }
   if (r2 > cut2) discard;
@@ -620,6 +629,14 @@ void GlRenderer::set_uniforms(unsigned p, const NodeCache& cache, const Camera& 
   glUniform1f(glGetUniformLocation(p, "specular"), o.specular);
   glUniform1f(glGetUniformLocation(p, "shininess"), o.shininess);
   glUniform1i(glGetUniformLocation(p, "has_normal_frame"), h.has_normals());
+  const int32_t* e = cache.decoder().extent_mu();
+  glUniform3f(glGetUniformLocation(p, "extent_mu"), static_cast<float>(e[0]), static_cast<float>(e[1]), static_cast<float>(e[2]));
+  const int axis = o.elevation == SpgAxis::kNone ? -1 : (static_cast<int>(o.elevation) - 1) / 2;
+  glUniform1i(glGetUniformLocation(p, "elevation_axis"), axis);
+  glUniform1i(glGetUniformLocation(p, "elevation_down"), axis >= 0 && (static_cast<int>(o.elevation) - 1) % 2 == 1);
+  float ramp[15];
+  for (int k = 0; k < 5; ++k) rgb_of(kElevationRamp[k], ramp + 3 * k);
+  glUniform3fv(glGetUniformLocation(p, "ramp"), 5, ramp);
   glUniform1i(glGetUniformLocation(p, "shading"), !(o.lighting && h.has_normals()) ? 0 : o.surface_normals ? 2 : 1);
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_BUFFER, gauss_texture_);
@@ -633,9 +650,6 @@ void GlRenderer::set_uniforms(unsigned p, const NodeCache& cache, const Camera& 
     glUniform1i(glGetUniformLocation(p, "sigma_n_base"), h.class_count[0]);
     glUniform1iv(glGetUniformLocation(p, "field_offset"), kFieldCount, field_offset_);
     glUniform1iv(glGetUniformLocation(p, "field_bits"), kFieldCount, field_bits_);
-    const int32_t* e = cache.decoder().extent_mu();
-    glUniform3f(glGetUniformLocation(p, "extent_mu"), static_cast<float>(e[0]), static_cast<float>(e[1]),
-                static_cast<float>(e[2]));
     glUniform1i(glGetUniformLocation(p, "has_normals"), h.has_normals());
     glUniform1i(glGetUniformLocation(p, "has_color"), h.has_color());
     glUniform1i(glGetUniformLocation(p, "grey"), o.grey);
@@ -689,7 +703,8 @@ bool GlRenderer::draw(const NodeCache& cache, const Camera& camera, int width, i
     // past GL's size limit cannot close that. A smaller node that wants
     // more points than the samples hold draws them larger, by the square
     // root of the shortfall.
-    if (std::sqrt(s1 * s2) > kDiscSigma) {
+    // With the point cap (a sparse scan kept sparse) there are no discs.
+    if (std::sqrt(s1 * s2) > kDiscSigma && o.point_cap == 0) {
       counts_[slot] = 1;
       buckets_[slot] = kDiscBucket;
       ++in_bucket[kDiscBucket];
@@ -830,7 +845,6 @@ bool GlRenderer::draw(const NodeCache& cache, const Camera& camera, int width, i
     glUniform1f(glGetUniformLocation(q, "splat_cut"), kSplatCut);
     glUniform1i(glGetUniformLocation(q, "visibility"), 1);
     glUniform1f(glGetUniformLocation(q, "core2"), kVisibilityCut * kVisibilityCut);
-    glUniform1f(glGetUniformLocation(q, "cover2"), kVisibilityCut * kVisibilityCut);
     glUniform1f(glGetUniformLocation(q, "cut2"), kSplatCut * kSplatCut);
     glUniform1f(offset, kVisibilityOffset);
     draw_instances(0, kBuckets + 1, true);

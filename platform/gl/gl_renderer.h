@@ -93,6 +93,7 @@ struct GlRenderOptions {
   uint16_t quality_q8 = 256;   // points-per-node scale
   uint16_t samples = 1024;     // the Gaussian buffer: most points per node
   bool grey = false;           // ignore the model's colour
+  SpgAxis elevation = SpgAxis::kNone;  // colour by height along this axis (core/elevation_ramp.h); kNone: off
   bool lighting = true;        // Lambert per node (else the colour as it is)
   float light[3] = {-4096 / 16384.f, -6144 / 16384.f, -14336 / 16384.f};  // towards the light, camera space
   float ambient = 0.25f;

@@ -462,8 +462,11 @@ BENCHMARK(BM_FrameFit)
 #ifdef STIPPLE_BENCH_GL
 // The GL client's frame (platform/gl) on whatever EGL offers (Mesa's
 // llvmpipe without a GPU) for BM_ClientFrame's cut and camera at 640x480:
-// arg 0 = 1 decodes in the vertex shader, 0 on the CPU. The per-node counts,
-// the upload, the draws and glFinish are inside the timed loop.
+// arg 0 = 1 decodes in the vertex shader, 0 on the CPU; arg 1 the picture:
+// 0 the default (surface normals, specular, the resolve), 1 EWA splats,
+// 2 the picture before them (per-node Lambert, no resolve). The per-node
+// counts, the upload, the draws, the passes and glFinish are inside the
+// timed loop.
 void BM_GlFrame(benchmark::State& state) {
   const std::vector<uint8_t>& spg = encoded_scan();
   const SpgView view = parsed_scan();
@@ -487,6 +490,8 @@ void BM_GlFrame(benchmark::State& state) {
   }
   GlRenderOptions o;
   o.gpu_decode = state.range(0) != 0;
+  if (state.range(1) == 1) o.splat = GlSplat::kEwa;
+  if (state.range(1) == 2) o.surface_normals = false, o.resolve = false, o.specular = 0;
   GlRenderer renderer;
   GlOffscreen target;
   if (!renderer.init(cache, o, error) || !target.init(640, 480, 0, error)) std::abort();
@@ -502,7 +507,7 @@ void BM_GlFrame(benchmark::State& state) {
   state.counters["nodes_per_s"] = benchmark::Counter(stats.nodes, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["points_per_s"] = benchmark::Counter(static_cast<double>(stats.points), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_GlFrame)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
+BENCHMARK(BM_GlFrame)->Args({1, 0})->Args({0, 0})->Args({1, 1})->Args({1, 2})->Unit(benchmark::kMillisecond)->UseRealTime()->Repetitions(3)->ReportAggregatesOnly(true);
 #endif
 
 // The view-dependent cut's update along a 120-step orbit of the scan at

@@ -74,11 +74,22 @@ const char kScanOptionsHelp[] =
     "its column count and values, with a warning where that is a guess):\n"
     "  --columns LIST        a text scan's columns, in order: x y z (required),\n"
     "                        nx ny nz, r g b (0..255), - to skip one; for example\n"
-    "                        --columns x,y,z,-,r,g,b for x y z intensity r g b\n";
+    "                        --columns x,y,z,-,r,g,b for x y z intensity r g b\n"
+    "  --color-by rgb|intensity|classification\n"
+    "                        a LAS scan's colour: its RGB (default), its intensity\n"
+    "                        as grey, or its classification (ground brown, vegetation\n"
+    "                        green, buildings red, water blue: `stipple render\n"
+    "                        --legend classification` shows the key)\n";
 
 bool parse_scan_options(Args& args, ScanOptions& options, std::string& error) {
   std::string spec;
   if (args.value("--columns", spec) && !parse_text_columns(spec, options.columns, error)) return false;
+  if (std::string by; args.value("--color-by", by)) {
+    if (by == "rgb") options.color_by = LasColor::kRgb;
+    else if (by == "intensity") options.color_by = LasColor::kIntensity;
+    else if (by == "classification") options.color_by = LasColor::kClassification;
+    else return error = "--color-by: expected rgb, intensity or classification, got '" + by + "'", false;
+  }
   return true;
 }
 

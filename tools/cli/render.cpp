@@ -2,17 +2,21 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "core/elevation_ramp.h"
 #include "platform/file_io.h"
 #include "platform/png_io.h"
 #include "platform/progress.h"
+#include "platform/text.h"
 #include "tools/cli/cli.h"
 #include "tools/cli/render_output.h"
 #include "tools/encoder/encoder.h"
+#include "tools/scan/las_io.h"
 #include "tools/viewer/viewer.h"
 
 namespace stipple {
@@ -52,12 +56,92 @@ const char kRenderHelpOutput[] =
     "  --reference            draw with the double-precision reference renderer instead\n"
     "  --psnr                 also render the reference and report PSNR against it\n"
     "  --frames N             draw the frame N times and report the median time\n"
-    "  --json                 one JSON line of statistics\n";
+    "  --json                 one JSON line of statistics\n"
+    "  --legend elevation|intensity|classification\n"
+    "                         a panel beside the picture saying what its colours\n"
+    "                         mean: the elevation ramp (with --color elevation) and\n"
+    "                         its heights, the intensity ramp or the LAS classes (of\n"
+    "                         a model encoded with --color-by intensity|classification)\n";
+
+// `--legend`: a panel beside the picture that says what its colours mean —
+// the elevation ramp with the heights at its ends (along the view's up
+// axis, in the scan's units), the intensity ramp, or the LAS classes.
+enum class Legend { kNone, kElevation, kIntensity, kClassification };
+
+bool parse_legend(const std::string& text, Legend& out, std::string& error) {
+  if (text == "elevation") out = Legend::kElevation;
+  else if (text == "intensity") out = Legend::kIntensity;
+  else if (text == "classification") out = Legend::kClassification;
+  else return error = "--legend: expected elevation, intensity or classification, got '" + text + "'", false;
+  return true;
+}
+
+// The box's extent along `up` (its two ends, in the file's units).
+void up_range(const SpgHeader& h, SpgAxis up, double& low, double& high) {
+  const int axis = (static_cast<int>(up == SpgAxis::kNone ? SpgAxis::kPosY : up) - 1) / 2;
+  const bool down = up != SpgAxis::kNone && (static_cast<int>(up) - 1) % 2 == 1;
+  float lo = 0, hi = 0;
+  double origin = 0;
+  std::memcpy(&lo, &h.bbox_bits[axis], 4);
+  std::memcpy(&hi, &h.bbox_bits[3 + axis], 4);
+  std::memcpy(&origin, &h.origin_bits[axis], 8);
+  low = down ? -(origin + hi) : origin + lo;
+  high = down ? -(origin + lo) : origin + hi;
+}
+
+// The picture widened by the legend's panel (taller too where the key needs it).
+void add_legend(Image& image, Legend legend, const SpgHeader& header, SpgAxis up) {
+  if (legend == Legend::kNone) return;
+  constexpr int kPanel = 150, kRow = 10;
+  constexpr uint32_t kBack = 0x101418, kInk = 0xE0E4EA;
+  const int rows = legend == Legend::kClassification ? kLasStandardClasses : 0;
+  const int w = image.width + kPanel, h = std::max(image.height, 24 + rows * kRow);
+  std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3, 0);
+  for (int y = 0; y < image.height; ++y)
+    std::memcpy(&rgb[static_cast<size_t>(y) * w * 3], &image.rgb[static_cast<size_t>(y) * image.width * 3],
+                static_cast<size_t>(image.width) * 3);
+  const int x0 = image.width;
+  fill_rect(rgb.data(), w, h, x0, 0, w, h, kBack);
+  const char* title = legend == Legend::kElevation ? "elevation" : legend == Legend::kIntensity ? "intensity" : "LAS class";
+  draw_text(rgb.data(), w, h, x0 + 8, 6, title, kInk);
+  if (legend == Legend::kClassification) {
+    for (int c = 0; c < rows; ++c) {
+      const int y = 20 + c * kRow;
+      fill_rect(rgb.data(), w, h, x0 + 8, y, x0 + 16, y + 7, las_class_rgb(static_cast<uint8_t>(c)));
+      draw_text(rgb.data(), w, h, x0 + 20, y, std::to_string(c) + " " + las_class_name(static_cast<uint8_t>(c)), kInk);
+    }
+  } else {
+    // A bar, high at the top: the ramp (or grey), its ends labelled.
+    const int top = 20, bottom = h - 12;
+    for (int y = top; y < bottom; ++y) {
+      const uint32_t t = static_cast<uint32_t>(255 * (bottom - 1 - y) / std::max(bottom - 1 - top, 1));
+      fill_rect(rgb.data(), w, h, x0 + 8, y, x0 + 24, y + 1,
+                legend == Legend::kElevation ? elevation_rgb(t) : t << 16 | t << 8 | t);
+    }
+    std::string high = "high", low = "low";
+    if (legend == Legend::kElevation) {
+      double a = 0, b = 0;
+      up_range(header, up, a, b);
+      char text[32];
+      std::snprintf(text, sizeof text, "%.6g", b);
+      high = text;
+      std::snprintf(text, sizeof text, "%.6g", a);
+      low = text;
+    }
+    draw_text(rgb.data(), w, h, x0 + 30, top, high, kInk);
+    draw_text(rgb.data(), w, h, x0 + 30, bottom - 7, low, kInk);
+  }
+  image.width = w;
+  image.height = h;
+  image.rgb = std::move(rgb);
+}
 
 }  // namespace
 
 int render_to_png(const std::string& name, const std::vector<uint8_t>& file, const RenderOptions& o,
-                  const std::string& output, bool reference, bool psnr, bool json, int frames) {
+                  const std::string& output, bool reference, bool psnr, bool json, int frames, const std::string& legend_text) {
+  Legend legend = Legend::kNone;
+  if (std::string e; !legend_text.empty() && !parse_legend(legend_text, legend, e)) return cli::fail("render: " + e);
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
   if (!r.ok()) return cli::fail(spg_error_message(name, r, file.size()));
@@ -76,7 +160,11 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
     if (!decode_spg(name, file.data(), file.size(), model, error)) return cli::fail(error);
     ref = render_reference(model, fixed.cut, o.config, o.view);
   }
-  const Image& image = reference ? ref : fixed.image;
+  Image image = reference ? ref : fixed.image;
+  if (legend != Legend::kNone) {
+    const SpgHeader& h = view.header;
+    add_legend(image, legend, h, fixed.up);
+  }
   if (!output.empty() && !write_png(output, image, error)) return cli::fail(error);
   const double db = psnr ? image_psnr(fixed.image, ref) : 0;
   if (json) {
@@ -133,6 +221,9 @@ int render_stream(const std::string& model_path, const std::string& connect, con
   const SpgHeader& h = model.header();
   const int32_t* extent = model.client().decoder().extent_mu();
   const ViewSpec base = resolve_view(o.view, h, extent);
+  if (o.config.elevation != SpgAxis::kNone &&
+      !model.client().set_elevation(base.up == SpgAxis::kNone ? SpgAxis::kPosY : base.up))
+    return cli::fail("render: the client refused colour by elevation");
   std::string log;
   const size_t stride = size_t{o.config.raster.width} * bytes_per_pixel(o.config.raster.format);
   std::vector<uint8_t> frame(stride * o.config.raster.height);
@@ -221,6 +312,8 @@ int cmd_render(int argc, char** argv) {
     return cli::fail("render: --baud " + baud_text + " sets the serial line's rate, but no --serial DEVICE is given");
   const bool remote = args.value("--connect", connect) || over_serial, has_path = args.value("--path", path);
   const bool reference = args.flag("--reference"), psnr = args.flag("--psnr"), json = args.flag("--json");
+  std::string legend;
+  const bool has_legend = args.value("--legend", legend);
   std::string frames_text;
   unsigned long long frames = 1;
   if (args.value("--frames", frames_text) && (!cli::parse_uint(frames_text, 100000, frames) || frames < 1))
@@ -245,6 +338,10 @@ int cmd_render(int argc, char** argv) {
   if (args.bad()) return cli::fail("render: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("render: " + args.unknown_option_message());
   if (!has_path && at.empty() && !cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
+  if (has_legend && (remote || has_path))
+    return cli::fail("render: --legend draws beside one frame of a local model: give it without --connect, --serial or --path");
+  if (has_legend && legend != "elevation" && legend != "intensity" && legend != "classification")
+    return cli::fail("render: --legend: expected elevation, intensity or classification, got '" + legend + "'");
   if (remote || has_path) {
     unsigned long long steps = 1;
     if (has_path && (path.rfind("orbit:", 0) != 0 || !cli::parse_uint(path.substr(6), 100000, steps) || steps == 0))
@@ -265,7 +362,7 @@ int cmd_render(int argc, char** argv) {
   if (output.empty() && !psnr && frames == 1) return cli::fail("render: -o IMAGE.png is required");
   std::vector<uint8_t> file;
   if (!read_model(files[0], file, error)) return cli::fail(error);  // a scan is encoded in memory
-  return render_to_png(files[0], file, o, output, reference, psnr, json, static_cast<int>(frames));
+  return render_to_png(files[0], file, o, output, reference, psnr, json, static_cast<int>(frames), legend);
 }
 
 }  // namespace stipple

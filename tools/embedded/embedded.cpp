@@ -154,6 +154,8 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
   }
   Camera camera;
   const ViewSpec resolved = resolve_view(spec, view.header, decoder.extent_mu());
+  if (config.elevation != SpgAxis::kNone) config.elevation = resolved.up == SpgAxis::kNone ? SpgAxis::kPosY : resolved.up;
+  out.up = resolved.up;
   if (!orbit_camera(orbit_view(decoder.extent_mu(), resolved), config.raster.width, config.raster.height, &camera)) {
     error = "--camera: the view is out of the camera's range";
     return false;

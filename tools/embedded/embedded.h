@@ -64,6 +64,7 @@ struct FixedRender {
   FrameStats stats;
   size_t arena_bytes = 0;
   Camera camera;
+  SpgAxis up = SpgAxis::kNone;  // the resolved view's up axis
   std::vector<double> frame_seconds;  // render() wall time of each frame drawn
   size_t heap_bytes = 0;  // heap_probe's answer after the frames (0 without a probe)
 };

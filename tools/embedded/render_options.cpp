@@ -49,6 +49,9 @@ const char kRenderOptionsHelp[] =
     "                                         docs/results.md)\n"
     "  --no-specular          Lambert only\n"
     "  --grey                 ignore the model's colours\n"
+    "  --color model|elevation  the model's colours (default), or a ramp of height\n"
+    "                         along the view's up axis, blue low to red high\n"
+    "                         (LiDAR's habit; no re-encode)\n"
     "  --mean-color           one colour per node (no per-point colour sampling)\n"
     "  --quality Q            points-per-node scale, 0.01..16 (default 1)\n"
     "  --point-size N         1..3 px (default 2)\n"
@@ -140,6 +143,11 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
   }
   if (args.flag("--no-specular")) c.lighting.specular_q8 = 0;
   if (args.flag("--grey")) c.grey = true;
+  if (std::string mode; args.value("--color", mode)) {
+    if (mode != "model" && mode != "elevation") return error = "--color: expected model or elevation, got '" + mode + "'", false;
+    // The axis is the view's up, known once the view is resolved (render_fixed, the viewers).
+    c.elevation = mode == "elevation" ? SpgAxis::kPosZ : SpgAxis::kNone;
+  }
   if (args.flag("--mean-color")) c.sample_color = false;
   if (args.flag("--pseudo")) c.source = GaussianSource::kPseudo;
   if (args.flag("--cache-decoded")) c.cache_decoded = true;

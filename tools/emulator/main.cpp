@@ -38,7 +38,8 @@ const char kUsage[] =
     "                       up/down tilt; with Enter or Space (select) held,\n"
     "                       up/down dolly (a model length a second)\n"
     "  the on-screen keys   clickable; lit while held\n"
-    "  C, L, Q              colour, lighting, quality (1, 1/2, 1/4, 2)\n"
+    "  C                    colour: the model's, by elevation, grey\n"
+    "  L, Q                 lighting, quality (1, 1/2, 1/4, 2)\n"
     "  R                    reset the view\n"
     "  S or F12             a screenshot: stipple-emulator-NNNN.png here (printed)\n"
     "  H or F1              the keys, on the screen\n"
@@ -117,6 +118,9 @@ int run(int argc, char** argv) {
   Client& client = m.client();
   const int32_t* extent = client.decoder().extent_mu();
   ViewerControls controls(o, m.header(), extent);
+  // Colour by elevation: along the view's up axis.
+  const SpgAxis up = controls.view().up == SpgAxis::kNone ? SpgAxis::kPosY : controls.view().up;
+  if (!client.set_elevation(controls.elevation() ? up : SpgAxis::kNone)) return fail("the client refused colour by elevation");
   const RasterConfig& r = o.config.raster;
   const size_t stride = size_t{r.width} * bytes_per_pixel(r.format);
   std::vector<uint8_t> frame(stride * r.height);
@@ -199,7 +203,8 @@ int run(int argc, char** argv) {
       if (!client.set_view(controls.lighting() ? o.config.shading == ShadingMode::kNone ? ShadingMode::kSurface
                                                                                        : o.config.shading
                                                : ShadingMode::kNone,
-                           controls.grey(), controls.quality_q8()))
+                           controls.grey(), controls.quality_q8()) ||
+          !client.set_elevation(controls.elevation() ? up : SpgAxis::kNone))
         return fail("the view's options were refused");
       if (!controls.camera(r.width, r.height, &camera)) return fail("the camera left its range");
       // A window after a window keeps what the earlier ones refined.

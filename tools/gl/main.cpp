@@ -59,8 +59,10 @@ int fail(const std::string& message) {
   return 1;
 }
 
-GlRenderOptions gl_options(const RenderOptions& o, bool gpu, GlSplat splat, const ViewerControls* c) {
+// `up`: the view's up axis, colour by elevation's.
+GlRenderOptions gl_options(const RenderOptions& o, bool gpu, GlSplat splat, const ViewerControls* c, SpgAxis up = SpgAxis::kPosY) {
   GlRenderOptions g;
+  g.elevation = (c ? c->elevation() : o.config.elevation != SpgAxis::kNone) ? up : SpgAxis::kNone;
   g.gpu_decode = gpu;
   g.splat = splat;
   g.surface_normals = o.config.shading != ShadingMode::kPerNode;
@@ -183,8 +185,9 @@ int run(int argc, char** argv) {
   RemoteModel& m = source.model();
   const NodeCache& cache = m.client().cache();
   GlRenderer renderer;
-  if (!renderer.init(cache, gl_options(o, gpu, splat, nullptr), error)) return fail(error);
   ViewerControls controls(o, m.header(), cache.decoder().extent_mu());
+  const SpgAxis up = controls.view().up == SpgAxis::kNone ? SpgAxis::kPosY : controls.view().up;
+  if (!renderer.init(cache, gl_options(o, gpu, splat, nullptr, up), error)) return fail(error);
   Camera camera;
   if (!controls.camera(static_cast<uint16_t>(w), static_cast<uint16_t>(h), &camera))
     return fail("--camera: the view is out of the camera's range");
@@ -199,7 +202,7 @@ int run(int argc, char** argv) {
     for (unsigned long long f = 0; f < std::max<unsigned long long>(frames, 1); ++f) {
       target.bind();
       const auto t = std::chrono::steady_clock::now();
-      if (!renderer.draw(cache, camera, w, h, gl_options(o, gpu, splat, nullptr), &stats, error)) return fail(error);
+      if (!renderer.draw(cache, camera, w, h, gl_options(o, gpu, splat, nullptr, up), &stats, error)) return fail(error);
       glFinish();
       times.push_back(seconds_since(t));
     }
@@ -249,7 +252,7 @@ int run(int argc, char** argv) {
     // What the link has, for at most 10 ms of this frame.
     if (!service_for(m, 0.010, error)) return fail(source.name() + ": " + error);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    if (!renderer.draw(cache, camera, window.width(), window.height(), gl_options(o, gpu, splat, &controls), &stats, error))
+    if (!renderer.draw(cache, camera, window.width(), window.height(), gl_options(o, gpu, splat, &controls, up), &stats, error))
       return fail(error);
     int32_t rect[4];
     if (controls.dragging(rect)) outline(window.height(), rect);

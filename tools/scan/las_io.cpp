@@ -27,12 +27,29 @@ constexpr size_t kVersionMajor = 24, kVersionMinor = 25, kHeaderSize = 94, kPoin
 constexpr uint16_t kFormatBytes[11] = {20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67};
 constexpr uint16_t kRgbAt[11] = {0, 0, 20, 28, 0, 28, 0, 30, 30, 0, 30};
 
+struct LasClass {
+  uint32_t rgb;
+  const char* name;
+};
+constexpr LasClass kClasses[kLasStandardClasses] = {
+    {0x9E9E9E, "never classified"}, {0xC8C8C8, "unclassified"}, {0xA0783C, "ground"},
+    {0xB4DC82, "low vegetation"},   {0x5AB446, "medium vegetation"}, {0x1E7828, "high vegetation"},
+    {0xDC4632, "building"},         {0xFF00FF, "low point (noise)"}, {0xFFD700, "model key point"},
+    {0x3C78DC, "water"},            {0x8C5AB4, "rail"},           {0x646464, "road surface"},
+    {0xE6B43C, "overlap"},          {0xF0F050, "wire guard"},     {0xF0C850, "wire conductor"},
+    {0xC878C8, "transmission tower"}, {0xF0A0A0, "wire connector"}, {0x8C8CB4, "bridge deck"},
+    {0xFF5AFF, "high noise"},
+};
+
 }  // namespace
+
+uint32_t las_class_rgb(uint8_t c) { return c < kLasStandardClasses ? kClasses[c].rgb : 0x00A0A0; }
+const char* las_class_name(uint8_t c) { return c < kLasStandardClasses ? kClasses[c].name : ""; }
 
 bool looks_like_las(const uint8_t* data, size_t size) { return size >= 4 && std::memcmp(data, "LASF", 4) == 0; }
 
 bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error,
-               ScanStream* stream) {
+               ScanStream* stream, LasColor color_by) {
   cloud = PointCloud{};
   const auto fail = [&](const std::string& what) { return error = name + ": " + what, false; };
   if (!looks_like_las(data, size)) return fail("not a LAS file (no LASF signature)");
@@ -78,10 +95,15 @@ bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointC
       return fail("header byte " + std::to_string(kScale + 8 * a) + ": scale factor " + "xyz"[a] + " is " + std::to_string(scale[a]));
     if (!std::isfinite(shift[a])) return fail("header byte " + std::to_string(kOffset + 8 * a) + ": offset " + "xyz"[a] + " is not finite");
   }
-  const size_t rgb_at = kRgbAt[format_byte];
+  // Where the colour comes from: RGB (none in formats 0, 1, 4, 6, 9), or
+  // intensity or classification, which every format has.
+  const size_t rgb_at = color_by == LasColor::kRgb ? kRgbAt[format_byte] : 0;
+  const bool by_intensity = color_by == LasColor::kIntensity, by_class = color_by == LasColor::kClassification;
+  const size_t class_at = format_byte >= 6 ? 16 : 15;
+  const uint8_t class_mask = format_byte >= 6 ? 0xFF : 0x1F;
   const uint64_t room = stream ? std::min<uint64_t>(count, kScanChunk) : count;
   cloud.positions.reserve(room);
-  if (rgb_at) cloud.colors.reserve(room);
+  if (rgb_at || by_intensity || by_class) cloud.colors.reserve(room);
   uint16_t brightest = 0;
   for (uint64_t i = 0; i < count; ++i) {
     const uint8_t* p = data + offset + i * record;
@@ -94,8 +116,30 @@ bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointC
       const uint16_t r = u16(p + rgb_at), g = u16(p + rgb_at + 2), b = u16(p + rgb_at + 4);
       brightest = std::max({brightest, r, g, b});
       cloud.colors.emplace_back(r, g, b);
+    } else if (by_intensity) {
+      const uint16_t v = u16(p + 12);
+      brightest = std::max(brightest, v);
+      cloud.colors.emplace_back(v, v, v);
+    } else if (by_class) {
+      const uint32_t c = las_class_rgb(static_cast<uint8_t>(p[class_at] & class_mask));
+      cloud.colors.emplace_back((c >> 16) & 0xFF, (c >> 8) & 0xFF, c & 0xFF);
     }
     if (stream && !stream->flush(cloud, offset + (i + 1) * record, false, error)) return false;
+  }
+  if (by_class) {
+    if (stream) stream->color_divisor = 255.0;
+    else
+      for (Vec3& c : cloud.colors) c /= 255.0;
+    return true;
+  }
+  if (by_intensity) {
+    // Grey, the file's largest intensity white (an all-zero file: black).
+    const double top = std::max<uint16_t>(brightest, 1);
+    if (stream) stream->color_divisor = top;
+    else
+      for (Vec3& c : cloud.colors) c /= top;
+    if (brightest == 0) cloud.warnings.push_back(name + ": every intensity is 0: --color-by intensity draws it black");
+    return true;
   }
   if (rgb_at && brightest == 0) {
     cloud.colors.clear();

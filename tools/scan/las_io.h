@@ -30,6 +30,14 @@ bool looks_like_las(const uint8_t* data, size_t size);
 // `stream`: the points go there a chunk at a time (tools/scan/point_cloud.h),
 // their colours unscaled (its color_divisor says how at the end).
 bool parse_las(const std::string& name, const uint8_t* data, size_t size, PointCloud& cloud, std::string& error,
-               ScanStream* stream = nullptr);
+               ScanStream* stream = nullptr, LasColor color_by = LasColor::kRgb);
+
+// The ASPRS classes (LAS 1.4 R15, table 17) as colours, 0xRRGGBB, the way
+// LiDAR viewers show them: ground brown, vegetation greens, buildings red,
+// water blue, noise magenta...; and their names, for a legend ("" for a
+// class number the standard leaves to users, drawn teal).
+uint32_t las_class_rgb(uint8_t c);
+const char* las_class_name(uint8_t c);
+inline constexpr uint8_t kLasStandardClasses = 19;  // 0 .. 18
 
 }  // namespace stipple

@@ -781,6 +781,13 @@ bool open_scan(const std::string& name, const uint8_t*& data, size_t& size, cons
             ", whose " + (format == ScanFormat::kObj ? "'v' lines are" : "header names") + " them";
     return false;
   }
+  if (format != ScanFormat::kLas && options.color_by != LasColor::kRgb) {
+    error = name + ": --color-by " + (options.color_by == LasColor::kIntensity ? "intensity" : "classification") +
+            " takes a LAS scan's " + (options.color_by == LasColor::kIntensity ? "intensity" : "classification") +
+            ", but this is " +
+            (format == ScanFormat::kPly ? "PLY" : format == ScanFormat::kPcd ? "PCD" : format == ScanFormat::kObj ? "OBJ" : "text");
+    return false;
+  }
   return true;
 }
 
@@ -795,7 +802,7 @@ bool parse_point_cloud(const std::string& name, const uint8_t* data, size_t size
   bool ok = false;
   switch (format) {
     case ScanFormat::kPly: ok = parse_ply(name, data, size, cloud, error, nullptr); break;
-    case ScanFormat::kLas: ok = parse_las(name, data, size, cloud, error); break;
+    case ScanFormat::kLas: ok = parse_las(name, data, size, cloud, error, nullptr, options.color_by); break;
     case ScanFormat::kPcd: ok = parse_pcd(name, data, size, cloud, error); break;
     case ScanFormat::kObj: ok = parse_obj(name, data, size, cloud, error); break;
     case ScanFormat::kText: {
@@ -848,7 +855,7 @@ bool stream_point_cloud(const std::string& path, ScanStream& stream, PointCloud&
   uint64_t end = size;
   switch (format) {
     case ScanFormat::kPly: ok = parse_ply(path, data, size, rest, error, &inner); break;
-    case ScanFormat::kLas: ok = parse_las(path, data, size, rest, error, &inner); break;
+    case ScanFormat::kLas: ok = parse_las(path, data, size, rest, error, &inner, options.color_by); break;
     case ScanFormat::kPcd: ok = parse_pcd(path, data, size, rest, error, &inner); break;
     case ScanFormat::kText: {
       TextPlan plan;

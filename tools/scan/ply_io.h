@@ -50,6 +50,11 @@ bool parse_text_columns(const std::string& spec, TextColumns& columns, std::stri
 
 struct ScanOptions {
   TextColumns columns;  // text scans only: a PLY, PCD or LAS file is refused with them
+  // What a LAS scan's colour is (encode --color-by): its RGB (the default),
+  // its intensity as grey, or its classification through the ASPRS palette
+  // (tools/scan/las_io.h). Intensity and classification are LAS's: another
+  // format is refused with them.
+  LasColor color_by = LasColor::kRgb;
 };
 
 bool read_point_cloud(const std::string& path, PointCloud& cloud, std::string& error,

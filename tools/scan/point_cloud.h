@@ -15,6 +15,9 @@ namespace stipple {
 
 using Vec3 = Eigen::Vector3d;
 
+// What a LAS scan's points are coloured by (ScanOptions::color_by).
+enum class LasColor : uint8_t { kRgb, kIntensity, kClassification };
+
 struct PointCloud {
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;  // empty, or one unit (or zero) vector per point

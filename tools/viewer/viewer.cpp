@@ -132,7 +132,7 @@ ViewerControls::ViewerControls(const RenderOptions& o, const SpgHeader& header, 
       quality_q8_(o.config.quality_q8) {
   for (int k = 0; k < 3; ++k) extent_[k] = extent_mu[k];
   for (int k = 0; k < 4; ++k) window_[k] = o.rule.window[k];
-  grey_ = o.config.grey;
+  color_ = o.config.grey ? kGrey : o.config.elevation != SpgAxis::kNone ? kElevation : kModel;
   lighting_ = o.config.shading != ShadingMode::kNone;
 }
 
@@ -145,7 +145,7 @@ bool ViewerControls::apply(const InputEvent& e) {
       held_[static_cast<int>(e.button)] = down;
       if (!down) return false;
       switch (e.button) {
-        case Button::kColor: grey_ = !grey_; return true;
+        case Button::kColor: color_ = color_ == kModel ? kElevation : color_ == kElevation ? kGrey : kModel; return true;
         case Button::kLighting: lighting_ = !lighting_; return true;
         case Button::kQuality: {  // 1 -> 1/2 -> 1/4 -> 2 -> 1
           quality_q8_ = static_cast<uint16_t>(quality_q8_ >= 512 ? 256 : quality_q8_ > 64 ? quality_q8_ / 2 : 512);
@@ -340,7 +340,8 @@ const std::vector<std::string>& help_lines() {
       "WHEEL          dolly",
       "ARROWS         orbit and tilt",
       "SPACE + UP/DN  dolly",
-      "C  L  Q        colour, light, quality",
+      "C              colour, elevation, grey",
+      "L  Q           lighting, quality",
       "R              reset the view",
       "S or F12       screenshot (PNG)",
       "H or F1        this help",
@@ -412,7 +413,8 @@ void status_lines(double fps, const FrameStats& stats, uint64_t bytes, double by
   // then the view's settings.
   const std::string received = progress_text(progress);
   char settings[64];
-  std::snprintf(settings, sizeof settings, "%s%s q%.2g", c.grey() ? "grey" : "colour", c.lighting() ? " lit" : "",
+  std::snprintf(settings, sizeof settings, "%s%s q%.2g", c.grey() ? "grey" : c.elevation() ? "elevation" : "colour",
+                c.lighting() ? " lit" : "",
                 c.quality_q8() / 256.0);
   std::snprintf(b, sizeof b, "%llu KB  %.1f KB/s  %s", static_cast<unsigned long long>(bytes / 1024), bytes_per_s / 1024,
                 received.empty() ? settings : received.c_str());

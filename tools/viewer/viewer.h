@@ -105,7 +105,9 @@ class ViewerControls {
   bool camera(uint16_t width, uint16_t height, Camera* out) const;
   const int32_t* window() const { return window_; }  // px, x0 >= x1: none
   bool quit() const { return quit_; }
-  bool grey() const { return grey_; }
+  // The colour key cycles the model's colours, elevation, grey.
+  bool grey() const { return color_ == kGrey; }
+  bool elevation() const { return color_ == kElevation; }
   bool lighting() const { return lighting_; }
   uint16_t quality_q8() const { return quality_q8_; }
   // The rectangle being drawn with the stylus (for an overlay), if any.
@@ -116,7 +118,8 @@ class ViewerControls {
   int32_t extent_[3];
   int screen_width_;
   bool held_[kButtonCount] = {};
-  bool quit_ = false, grey_ = false, lighting_ = true, drag_ = false, screenshot_ = false, help_ = false;
+  enum ColorMode : uint8_t { kModel, kElevation, kGrey } color_ = kModel;
+  bool quit_ = false, lighting_ = true, drag_ = false, screenshot_ = false, help_ = false;
   int32_t orbit_at_[2] = {0, 0};  // the orbit drag's last position
   uint16_t quality_q8_;
   int32_t window_[4] = {0, 0, 0, 0};
