@@ -4,9 +4,10 @@
 # the software client's default (`stipple render`), the GL client's default
 # and its EWA splats (`stipple-gl --headless`, llvmpipe unless a GPU is
 # there), each measured with `stipple image-diff` (object PSNR, SSIM) and
-# the GL ones timed (median of --frames). Then a close-up of the dragon
-# (distance 0.8) with and without its holes counted. One CSV line a
-# picture on stdout; the pictures under WORKDIR.
+# timed (median of five frames; the software client's on one core). Each
+# model from three orbit views and a close-up (distance 0.8), with the
+# shares of the scan's pixels missing and of the picture's outside it. One
+# CSV line a picture on stdout; the pictures under WORKDIR.
 # usage: tools/bench/gl_picture.sh BUILD_DIR SHARED_DATA WORKDIR [WxH]
 set -euo pipefail
 B=$1 DATA=$2 W=$3 SIZE=${4:-640x480}
@@ -17,11 +18,12 @@ measure() {  # truth picture -> "psnr,ssim,missing,outside"
 }
 echo "model,camera,client,object_psnr_db,ssim,missing_pct,outside_pct,frame_ms"
 for model in bunny dragon; do
-  [ -s "$W/$model.spg" ] || "$S" encode "$DATA/$model.ply" -o "$W/$model.spg" --quiet
+  [ -s "$W/$model.spg" ] || "$S" encode "$DATA/$model.ply" -o "$W/$model.spg" --quiet >/dev/null
   for camera in 30,20 150,20 260,20 30,20,0.8; do
     "$S" truth "$DATA/$model.ply" --size "$SIZE" --camera "$camera" -o "$W/${model}_${camera}_truth.png" >/dev/null
-    "$S" render "$W/$model.spg" --size "$SIZE" --format rgb888 --camera "$camera" -o "$W/${model}_${camera}_software.png" >/dev/null
-    echo "$model,\"$camera\",software,$(measure "$W/${model}_${camera}_truth.png" "$W/${model}_${camera}_software.png"),"
+    out=$("$S" render "$W/$model.spg" --size "$SIZE" --format rgb888 --camera "$camera" --frames 5 -o "$W/${model}_${camera}_software.png")
+    ms=$(sed -n 's/.*frame: median \([0-9.]*\) ms.*/\1/p' <<<"$out")
+    echo "$model,\"$camera\",software,$(measure "$W/${model}_${camera}_truth.png" "$W/${model}_${camera}_software.png"),$ms"
     for splat in points ewa; do
       out=$("$G" "$W/$model.spg" --headless --size "$SIZE" --camera "$camera" --splat $splat --frames 5 -o "$W/${model}_${camera}_gl_$splat.png")
       ms=$(sed -n 's/.*frame: median \([0-9.]*\) ms.*/\1/p' <<<"$out")
