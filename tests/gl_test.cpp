@@ -27,9 +27,20 @@
 namespace stipple {
 namespace {
 
+// Per-node Lambert, mean colour, no specular, no resolve (what the GL
+// client drew before it had the rest), at 640x480.
+ClientConfig per_node_config() {
+  ClientConfig c;
+  c.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 22};
+  c.shading = ShadingMode::kPerNode;
+  c.sample_color = false;
+  c.lighting.specular_q8 = 0;
+  c.resolve = false;
+  return c;
+}
+
 // The software client's picture of a model and the GL client's cache of
-// the same cut. `config` null: per-node Lambert, mean colour, no specular,
-// no resolve (what the GL client drew before it had the rest).
+// the same cut (`config` null: per_node_config()).
 struct Scene {
   std::vector<uint8_t> file;
   SpgView view;
@@ -40,13 +51,7 @@ struct Scene {
         const std::string& camera = "")
       : file(model ? *model : test::fixture("tests/golden/bunny_v1.spg")) {
     EXPECT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
-    ClientConfig c;
-    c.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 22};
-    c.shading = ShadingMode::kPerNode;
-    c.sample_color = false;
-    c.lighting.specular_q8 = 0;
-    c.resolve = false;
-    if (config) c = *config;
+    const ClientConfig c = config ? *config : per_node_config();
     ViewSpec spec;
     std::string error;
     EXPECT_TRUE(parse_view(camera.empty() ? std::to_string(yaw) + ",20" : camera, spec, error)) << error;
@@ -236,12 +241,7 @@ TEST(Gl, ACloseUpStaysClosed) {
 TEST(Gl, ColourByElevationAsTheSoftwareClient) {
   Gl gl;
   ASSERT_TRUE(gl.ok) << gl.error;
-  ClientConfig c;
-  c.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 22};
-  c.shading = ShadingMode::kPerNode;
-  c.sample_color = false;
-  c.lighting.specular_q8 = 0;
-  c.resolve = false;
+  ClientConfig c = per_node_config();
   c.elevation = SpgAxis::kPosZ;  // on: the view's up
   const Scene s(30, &c);
   GlRenderOptions o = per_node();

@@ -308,32 +308,45 @@ void main() {
 // 6 of its 8 neighbours covered takes their mean colour; and, for holes wider
 // than a pixel (close-ups: nodes seen larger than their samples cover), one
 // the coarse level filled (below) takes that level's colour.
-const char kFillFragment[] = R"(#version 330 core
-uniform sampler2D frame;   // alpha: covered
-uniform sampler2D coarse;  // alpha 0.5: filled at half the resolution
-uniform int use_coarse;
-out vec4 out_color;
-void main() {
-  ivec2 p = ivec2(gl_FragCoord.xy), size = textureSize(frame, 0);
-  vec4 here = texelFetch(frame, p, 0);
-  if (here.a > 0.5) {
-    out_color = here;
-    return;
-  }
+// The covered pixels among a pixel's 3 x 3 (inside `size`), as `at` reads
+// them: their colours' sum and their count (each shader defines `at`).
+const char kNeighbours[] = R"(
+vec4 covered_around(ivec2 p, ivec2 size) {
   vec4 sum = vec4(0.0);
   for (int dy = -1; dy <= 1; ++dy)
     for (int dx = -1; dx <= 1; ++dx) {
       ivec2 q = p + ivec2(dx, dy);
       if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-      vec4 c = texelFetch(frame, q, 0);
+      vec4 c = at(q);
       if (c.a > 0.5) sum += vec4(c.rgb, 1.0);
     }
+  return sum;
+}
+)";
+
+const char kFillFragment[] = R"(
+uniform sampler2D coarse;  // alpha 0.5: filled at half the resolution
+uniform int use_coarse;
+out vec4 out_color;
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy), size = textureSize(frame, 0);
+  vec4 here = at(p);
+  if (here.a > 0.5) {
+    out_color = here;
+    return;
+  }
+  vec4 sum = covered_around(p, size);
   out_color = sum.a >= 6.0 ? vec4(sum.rgb / sum.a, 1.0) : vec4(0.0);
   if (sum.a < 6.0 && use_coarse != 0) {
     vec4 c = texelFetch(coarse, p / 2, 0);
     if (c.a > 0.25 && c.a < 0.75) out_color = vec4(c.rgb, 1.0);
   }
 }
+)";
+// The fine level, read as it is (alpha: covered).
+const char kFineAt[] = R"(#version 330 core
+uniform sampler2D frame;
+vec4 at(ivec2 q) { return texelFetch(frame, q, 0); }
 )";
 
 // Holes wider than a pixel, at half the resolution (the pull of a pull-push
@@ -342,10 +355,12 @@ void main() {
 // mean colour; an uncovered one with at least 6 of its 8 coarse neighbours
 // covered is filled with their mean (alpha 0.5) — a hole inside the surface,
 // never past a silhouette, as the fine fill's rule.
-const char kPullFragment[] = R"(#version 330 core
+// The coarse level, read from the fine: a coarse pixel is its 2 x 2's
+// covered mean.
+const char kCoarseAt[] = R"(#version 330 core
 uniform sampler2D frame;  // the fine level, alpha: covered
-out vec4 out_color;
-vec4 block(ivec2 q, ivec2 size) {  // the coarse pixel q: (mean colour, covered)
+vec4 at(ivec2 q) {
+  ivec2 size = textureSize(frame, 0);
   vec4 sum = vec4(0.0);
   for (int k = 0; k < 4; ++k) {
     ivec2 f = 2 * q + ivec2(k & 1, k >> 1);
@@ -355,21 +370,17 @@ vec4 block(ivec2 q, ivec2 size) {  // the coarse pixel q: (mean colour, covered)
   }
   return sum.a > 0.0 ? vec4(sum.rgb / sum.a, 1.0) : vec4(0.0);
 }
+)";
+const char kPullFragment[] = R"(
+out vec4 out_color;
 void main() {
-  ivec2 p = ivec2(gl_FragCoord.xy), size = textureSize(frame, 0), coarse = (size + 1) / 2;
-  vec4 here = block(p, size);
+  ivec2 p = ivec2(gl_FragCoord.xy), coarse = (textureSize(frame, 0) + 1) / 2;
+  vec4 here = at(p);
   if (here.a > 0.5) {
     out_color = here;
     return;
   }
-  vec4 sum = vec4(0.0);
-  for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx) {
-      ivec2 q = p + ivec2(dx, dy);
-      if (q.x < 0 || q.y < 0 || q.x >= coarse.x || q.y >= coarse.y) continue;
-      vec4 c = block(q, size);
-      if (c.a > 0.5) sum += vec4(c.rgb, 1.0);
-    }
+  vec4 sum = covered_around(p, coarse);
   out_color = sum.a >= 8.0 ? vec4(sum.rgb / sum.a, 0.5) : vec4(0.0);
 }
 )";
@@ -378,24 +389,16 @@ void main() {
 // the frame is covered (beyond the frame counts as covered), or when it is
 // an isolated speck (at most 3 covered neighbours); a kept pixel takes the
 // mean of its block's covered pixels, every other pixel the clear colour.
-const char kBlendFragment[] = R"(#version 330 core
-uniform sampler2D frame;
+const char kBlendFragment[] = R"(
 uniform vec3 clear_rgb;
 out vec4 out_color;
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy), size = textureSize(frame, 0);
   out_color = vec4(clear_rgb, 1.0);
-  if (texelFetch(frame, p, 0).a < 0.5) return;
-  vec4 sum = vec4(0.0);
-  float inside = 0.0;
-  for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx) {
-      ivec2 q = p + ivec2(dx, dy);
-      if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-      inside += 1.0;
-      vec4 c = texelFetch(frame, q, 0);
-      if (c.a > 0.5) sum += vec4(c.rgb, 1.0);
-    }
+  if (at(p).a < 0.5) return;
+  vec4 sum = covered_around(p, size);
+  ivec2 lo = max(p - 1, ivec2(0)), hi = min(p + 1, size - 1);
+  float inside = float((hi.x - lo.x + 1) * (hi.y - lo.y + 1));
   if (sum.a == inside || (inside == 9.0 && sum.a <= 4.0)) out_color = vec4(sum.rgb / sum.a, 1.0);
 }
 )";
@@ -508,10 +511,10 @@ bool GlRenderer::build_programs(std::string& error) {
         !link(std::string(kCommon) + kShade + kSplatEmit + decode, shade_header + kSplatFragment, &programs_[gpu][1], error))
       return false;
   }
-  return link(kFullScreenVertex, kFillFragment, &fill_program_, error) &&
-         link(kFullScreenVertex, kBlendFragment, &blend_program_, error) &&
+  return link(kFullScreenVertex, std::string(kFineAt) + kNeighbours + kFillFragment, &fill_program_, error) &&
+         link(kFullScreenVertex, std::string(kFineAt) + kNeighbours + kBlendFragment, &blend_program_, error) &&
          link(kFullScreenVertex, kNormalizeFragment, &normalize_program_, error) &&
-         link(kFullScreenVertex, kPullFragment, &pull_program_, error);
+         link(kFullScreenVertex, std::string(kCoarseAt) + kNeighbours + kPullFragment, &pull_program_, error);
 }
 
 bool GlRenderer::init(const NodeCache& cache, const GlRenderOptions& options, std::string& error) {
