@@ -277,10 +277,10 @@ vec3 shaded() {
 }
 void main() {
   float r2 = dot(v_uv, v_uv);
-  if (visibility == 2) {  // a close-up's disc: opaque, shaded, out to cover2
+  if (visibility == 2) {  // a close-up's disc: opaque, out to cover2, shaded by its mean normal
     if (r2 > cover2) discard;
     gl_FragDepth = gl_FragCoord.z;
-    out_color = vec4(shaded(), 1.0);
+    out_color = vec4(shading == 0 ? v_color : shade(v_color, v_normal[2]), 1.0);
     return;
   }
   if (visibility != 0) {  // depth only, from the core

@@ -54,7 +54,8 @@
 // dragon (docs/viewers.md).
 //
 // Close-ups: a node whose σ spans more than 8 px on screen is drawn as its
-// 3σ ellipse, opaque and shaded per pixel (by the splat program), in either
+// 3σ ellipse, opaque and shaded by its mean normal (by the splat program;
+// the normal turned across 3σ striped sparse scans' long nodes), in either
 // mode: its samples would be sparser than the pixels, and points cannot
 // grow past GL's size limit to close that. Smaller nodes that want more
 // points than the samples hold draw them larger.
