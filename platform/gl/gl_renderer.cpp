@@ -701,12 +701,12 @@ bool GlRenderer::draw(const NodeCache& cache, const Camera& camera, int width, i
     const float scale = focal / static_cast<float>(c[2]);
     const float s1 = length(node.axis[0]) * scale, s2 = length(node.axis[1]) * scale;
     // Close-ups. A node whose σ spans more than kDiscSigma pixels is drawn
-    // as its 2σ ellipse, opaque and shaded per pixel (the splat program):
-    // its samples would be sparser than the pixels they cover, and points
-    // past GL's size limit cannot close that. A smaller node that wants
-    // more points than the samples hold draws them larger, by the square
-    // root of the shortfall.
-    // With the point cap (a sparse scan kept sparse) there are no discs.
+    // as its kDiscCut σ ellipse, opaque (the splat program): its samples
+    // would be sparser than the pixels they cover, and points past GL's
+    // size limit cannot close that. With the point cap (a sparse scan kept
+    // sparse) there are no discs. A smaller node that wants more points
+    // than the samples hold draws them larger, by the square root of the
+    // shortfall.
     if (std::sqrt(s1 * s2) > kDiscSigma && o.point_cap == 0) {
       counts_[slot] = 1;
       buckets_[slot] = kDiscBucket;
