@@ -15,9 +15,8 @@ int32_t dot_q14(const int32_t row[3], const int64_t v[3]) {
 }  // namespace
 
 void orbit_basis(SpgAxis up, int32_t basis[3][3]) {
-  const int code = up == SpgAxis::kNone ? 2 : static_cast<int>(up) - 1;  // +y
-  const int k = code / 2;
-  const int32_t sign = code % 2 ? -1 : 1;
+  const int k = up == SpgAxis::kNone ? 1 : spg_axis_index(up);  // kNone: +y
+  const int32_t sign = spg_axis_negative(up) ? -1 : 1;
   int32_t y[3] = {0, 0, 0}, z[3] = {0, 0, 0};
   y[k] = sign;
   z[(k + 1) % 3] = 1;

@@ -321,5 +321,4 @@ struct CompactBatch {
 // The next entry of a parsed batch: its id and (nodes) points and record.
 void next_compact(CompactBatch* batch, uint32_t* id, uint8_t* points, const uint8_t** record);
 
-
 }  // namespace stipple

@@ -264,7 +264,6 @@ SpgResult spg_parse_header(const uint8_t* data, size_t size, SpgHeader* out, siz
   return r;
 }
 
-
 SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
   Cursor in{data, size, 0};
   SpgView view;

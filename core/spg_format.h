@@ -62,6 +62,10 @@ inline constexpr uint8_t kSpgAxisCount = 7;
 // "+x", "-z", ...; "none" for kNone. The parser takes "+x" .. "-z" and a
 // bare "x" for "+x"; false (out untouched) for anything else.
 const char* spg_axis_name(SpgAxis a);
+// An axis's coordinate (x 0, y 1, z 2; -1 for kNone) and whether it runs
+// towards the coordinate's negative side.
+inline int spg_axis_index(SpgAxis a) { return a == SpgAxis::kNone ? -1 : (static_cast<int>(a) - 1) / 2; }
+inline bool spg_axis_negative(SpgAxis a) { return a != SpgAxis::kNone && (static_cast<int>(a) - 1) % 2 == 1; }
 [[nodiscard]] bool spg_parse_axis(const char* text, SpgAxis* out);
 
 // How the scan wants to be seen (docs/format.md §1, offset 42): which way is

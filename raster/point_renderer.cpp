@@ -673,8 +673,8 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   }
   const bool elevation = config_.elevation != SpgAxis::kNone;
   f.model_color = (header.has_color() && !config_.grey) || elevation;
-  f.elevation_field = elevation ? (static_cast<int>(config_.elevation) - 1) / 2 : -1;
-  f.elevation_down = elevation && (static_cast<int>(config_.elevation) - 1) % 2 == 1;
+  f.elevation_field = spg_axis_index(config_.elevation);
+  f.elevation_down = spg_axis_negative(config_.elevation);
   f.elevation_bits = elevation ? header.layout.bits[f.elevation_field] : 0;
   f.decoder = &cache.decoder();
   tables_.uniform_base = !f.model_color;

@@ -63,23 +63,11 @@ const char kRenderHelpOutput[] =
     "                         its heights, the intensity ramp or the LAS classes (of\n"
     "                         a model encoded with --color-by intensity|classification)\n";
 
-// `--legend`: a panel beside the picture that says what its colours mean —
-// the elevation ramp with the heights at its ends (along the view's up
-// axis, in the scan's units), the intensity ramp, or the LAS classes.
-enum class Legend { kNone, kElevation, kIntensity, kClassification };
-
-bool parse_legend(const std::string& text, Legend& out, std::string& error) {
-  if (text == "elevation") out = Legend::kElevation;
-  else if (text == "intensity") out = Legend::kIntensity;
-  else if (text == "classification") out = Legend::kClassification;
-  else return error = "--legend: expected elevation, intensity or classification, got '" + text + "'", false;
-  return true;
-}
-
-// The box's extent along `up` (its two ends, in the file's units).
+// The box's extent along `up` (kNone: +y, as orbit_basis takes it), its two
+// ends in the file's units.
 void up_range(const SpgHeader& h, SpgAxis up, double& low, double& high) {
-  const int axis = (static_cast<int>(up == SpgAxis::kNone ? SpgAxis::kPosY : up) - 1) / 2;
-  const bool down = up != SpgAxis::kNone && (static_cast<int>(up) - 1) % 2 == 1;
+  const int axis = up == SpgAxis::kNone ? 1 : spg_axis_index(up);
+  const bool down = spg_axis_negative(up);
   float lo = 0, hi = 0;
   double origin = 0;
   std::memcpy(&lo, &h.bbox_bits[axis], 4);
@@ -138,10 +126,16 @@ void add_legend(Image& image, Legend legend, const SpgHeader& header, SpgAxis up
 
 }  // namespace
 
+bool parse_legend(const std::string& text, Legend& out, std::string& error) {
+  if (text == "elevation") out = Legend::kElevation;
+  else if (text == "intensity") out = Legend::kIntensity;
+  else if (text == "classification") out = Legend::kClassification;
+  else return error = "--legend: expected elevation, intensity or classification, got '" + text + "'", false;
+  return true;
+}
+
 int render_to_png(const std::string& name, const std::vector<uint8_t>& file, const RenderOptions& o,
-                  const std::string& output, bool reference, bool psnr, bool json, int frames, const std::string& legend_text) {
-  Legend legend = Legend::kNone;
-  if (std::string e; !legend_text.empty() && !parse_legend(legend_text, legend, e)) return cli::fail("render: " + e);
+                  const std::string& output, bool reference, bool psnr, bool json, int frames, Legend legend) {
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
   if (!r.ok()) return cli::fail(spg_error_message(name, r, file.size()));
@@ -221,8 +215,7 @@ int render_stream(const std::string& model_path, const std::string& connect, con
   const SpgHeader& h = model.header();
   const int32_t* extent = model.client().decoder().extent_mu();
   const ViewSpec base = resolve_view(o.view, h, extent);
-  if (o.config.elevation != SpgAxis::kNone &&
-      !model.client().set_elevation(base.up == SpgAxis::kNone ? SpgAxis::kPosY : base.up))
+  if (o.config.elevation != SpgAxis::kNone && !model.client().set_elevation(base.up))
     return cli::fail("render: the client refused colour by elevation");
   std::string log;
   const size_t stride = size_t{o.config.raster.width} * bytes_per_pixel(o.config.raster.format);
@@ -312,8 +305,10 @@ int cmd_render(int argc, char** argv) {
     return cli::fail("render: --baud " + baud_text + " sets the serial line's rate, but no --serial DEVICE is given");
   const bool remote = args.value("--connect", connect) || over_serial, has_path = args.value("--path", path);
   const bool reference = args.flag("--reference"), psnr = args.flag("--psnr"), json = args.flag("--json");
-  std::string legend;
-  const bool has_legend = args.value("--legend", legend);
+  std::string legend_text;
+  const bool has_legend = args.value("--legend", legend_text);
+  Legend legend = Legend::kNone;
+  if (has_legend && !parse_legend(legend_text, legend, error)) return cli::fail("render: " + error);
   std::string frames_text;
   unsigned long long frames = 1;
   if (args.value("--frames", frames_text) && (!cli::parse_uint(frames_text, 100000, frames) || frames < 1))
@@ -340,8 +335,6 @@ int cmd_render(int argc, char** argv) {
   if (!has_path && at.empty() && !cli::check_output_name(output, ".png", "PNG", error)) return cli::fail("render: " + error);
   if (has_legend && (remote || has_path))
     return cli::fail("render: --legend draws beside one frame of a local model: give it without --connect, --serial or --path");
-  if (has_legend && legend != "elevation" && legend != "intensity" && legend != "classification")
-    return cli::fail("render: --legend: expected elevation, intensity or classification, got '" + legend + "'");
   if (remote || has_path) {
     unsigned long long steps = 1;
     if (has_path && (path.rfind("orbit:", 0) != 0 || !cli::parse_uint(path.substr(6), 100000, steps) || steps == 0))

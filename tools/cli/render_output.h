@@ -10,12 +10,18 @@
 
 namespace stipple {
 
+// `--legend`: a panel beside the picture that says what its colours mean —
+// the elevation ramp with the heights at its ends (along the view's up
+// axis, in the scan's units), the intensity ramp, or the LAS classes.
+enum class Legend { kNone, kElevation, kIntensity, kClassification };
+// "elevation", "intensity" or "classification"; false with the message.
+bool parse_legend(const std::string& text, Legend& out, std::string& error);
+
 // Renders `file` (a whole .spg named `name`) and writes `output` (PNG) when
-// not empty, with `legend` ("elevation", "intensity", "classification": a
-// panel beside the picture saying what its colours mean; "": none); prints
-// a summary. Returns the process exit code.
+// not empty, with `legend` beside the picture; prints a summary. Returns
+// the process exit code.
 int render_to_png(const std::string& name, const std::vector<uint8_t>& file, const RenderOptions& options,
                   const std::string& output, bool reference, bool psnr, bool json, int frames = 1,
-                  const std::string& legend = "");
+                  Legend legend = Legend::kNone);
 
 }  // namespace stipple

@@ -154,7 +154,7 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
   }
   Camera camera;
   const ViewSpec resolved = resolve_view(spec, view.header, decoder.extent_mu());
-  if (config.elevation != SpgAxis::kNone) config.elevation = resolved.up == SpgAxis::kNone ? SpgAxis::kPosY : resolved.up;
+  if (config.elevation != SpgAxis::kNone) config.elevation = resolved.up;  // resolve_view always names one
   out.up = resolved.up;
   if (!orbit_camera(orbit_view(decoder.extent_mu(), resolved), config.raster.width, config.raster.height, &camera)) {
     error = "--camera: the view is out of the camera's range";
