@@ -48,6 +48,7 @@ uniform vec4 lens;         // focal px, cx px, cy px, point size px
 uniform vec4 screen;       // width, height, near, far (MU)
 uniform samplerBuffer gauss;
 uniform int shading;       // 0 none, 1 the node's normal, 2 surface normals
+uniform int has_normals;
 uniform vec3 extent_mu;
 uniform int elevation_axis;  // -1: the model's colour; else a ramp of the mean along it
 uniform int elevation_down;  // the axis points down
@@ -87,18 +88,14 @@ mat3 surface_rows(Node n) {
   float l0 = length(r0), l1 = length(r1);
   return mat3(l0 > 0.0 ? r0 / l0 : vec3(0.0), l1 > 0.0 ? r1 / l1 : vec3(0.0), vec3(0.0));
 }
-
-// The normal (model space) turned by tangent offsets t (in sigma_n).
-vec3 turned(Node n, vec2 t) {
-  float a = n.sigma_n.x * t.x, b = n.sigma_n.y * t.y, theta = sqrt(a * a + b * b);
-  float sinc = theta > 1e-6 ? sin(theta) / theta : 1.0;
-  return cos(theta) * n.nframe[2] + sinc * (a * n.nframe[0] + b * n.nframe[1]);
-}
 )";
 
 // Lambert with ambient and a Blinn highlight, as raster/shading.h: the
 // colour times ambient + (1 - ambient) max(0, L.n), plus strength
 // max(0, H.n)^shininess on every channel. L, H and n in camera space.
+// And the surface normals' turn (raster/point_renderer.h): the normal of a
+// frame (columns: tangents, normal) turned by tangent offsets t, in units
+// of sigma_n. Both the vertex and the fragment shaders use them.
 const char kShade[] = R"(
 uniform vec3 light;
 uniform vec3 half_vector;
@@ -109,6 +106,11 @@ vec3 shade(vec3 color, vec3 n) {
   float k = ambient + (1.0 - ambient) * max(0.0, dot(light, n));
   float h = specular > 0.0 ? specular * pow(max(0.0, dot(half_vector, n)), shininess) : 0.0;
   return min(color * k + vec3(h), vec3(1.0));
+}
+vec3 turned(mat3 frame, vec2 sigma_n, vec2 t) {
+  float a = sigma_n.x * t.x, b = sigma_n.y * t.y, theta = sqrt(a * a + b * b);
+  float sinc = theta > 1e-6 ? sin(theta) / theta : 1.0;
+  return cos(theta) * frame[2] + sinc * (a * frame[0] + b * frame[1]);
 }
 )";
 
@@ -127,7 +129,7 @@ void emit(Node n, uint count) {
   vec3 color = node_color(n);
   if (shading != 0) {
     vec3 normal = n.nframe[2];
-    if (shading == 2) normal = turned(n, (transpose(surface_rows(n)) * g).xy);
+    if (shading == 2) normal = turned(n.nframe, n.sigma_n, (transpose(surface_rows(n)) * g).xy);
     color = shade(color, rotation * normal);
   }
   v_color = color;
@@ -143,12 +145,11 @@ const char kSplatEmit[] = R"(
 const float kLowPass = 1.0;
 uniform float splat_cut;     // sigma
 uniform float depth_offset;
-uniform bool has_normal_frame;
 out vec2 v_uv;                 // the fragment's place in the splat, sigma units
 flat out vec3 v_color;
-flat out vec3 v_normal[3];     // camera space: tangents, mean normal
-flat out vec4 v_turn;          // sigma_n, then the uv -> tangent-offset map's scale
-flat out mat2 v_surface;
+flat out mat3 v_frame;         // camera space: tangents, mean normal
+flat out vec2 v_sigma_n;
+flat out mat2 v_surface;       // the uv -> tangent-offset map (zero without surface normals)
 void emit(Node n, uint count) {
   vec2 corner = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0) * splat_cut;
   vec3 c0 = rotation * (n.mean - eye);
@@ -160,13 +161,11 @@ void emit(Node n, uint count) {
   c += depth_offset * max(r0, r1) * normalize(c);
   gl_Position = clip_of(c);
   // A splat facing away is dropped: its surface's front is another's.
-  if (has_normal_frame && dot(rotation * n.nframe[2], c0) > 0.0) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+  if (has_normals != 0 && dot(rotation * n.nframe[2], c0) > 0.0) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
   v_uv = corner;
   v_color = node_color(n);
-  v_normal[0] = rotation * n.nframe[0];
-  v_normal[1] = rotation * n.nframe[1];
-  v_normal[2] = rotation * n.nframe[2];
-  v_turn = vec4(n.sigma_n, 0.0, 0.0);
+  v_frame = rotation * n.nframe;
+  v_sigma_n = n.sigma_n;
   mat3 rows = surface_rows(n);  // columns: the two rows; the sample is (u, v, 0)
   v_surface = mat2(rows[0].x, rows[1].x, rows[0].y, rows[1].y);
   if (shading != 2) v_surface = mat2(0.0);
@@ -196,7 +195,7 @@ uniform int field_offset[18];
 uniform int field_bits[18];
 uniform samplerBuffer sigmas;  // sigma_p classes (sigma1..3, MU), then sigma_n classes (radians)
 uniform int sigma_n_base;
-uniform int has_normals, has_color, grey;
+uniform int has_color, grey;
 uniform vec3 grey_rgb;
 const float PI = 3.14159265358979;
 
@@ -258,8 +257,8 @@ void main() { out_color = vec4(v_color, 1.0); }
 const char kSplatFragment[] = R"(
 in vec2 v_uv;
 flat in vec3 v_color;
-flat in vec3 v_normal[3];
-flat in vec4 v_turn;
+flat in mat3 v_frame;
+flat in vec2 v_sigma_n;
 flat in mat2 v_surface;
 uniform int visibility;  // 1: the visibility pass, 2: opaque discs, else the attribute pass
 uniform float cut2;      // the splat's square radius (sigma^2): the attribute pass's cut
@@ -268,29 +267,20 @@ uniform float cover2;    // a disc's square radius
 out vec4 out_color;
 // The colour at this place in the splat, the normal turned as surface
 // normals turn it.
-vec3 shaded() {
-  if (shading == 0) return v_color;
-  vec2 t = v_surface * v_uv;
-  float a = v_turn.x * t.x, b = v_turn.y * t.y, theta = sqrt(a * a + b * b);
-  float sinc = theta > 1e-6 ? sin(theta) / theta : 1.0;
-  return shade(v_color, cos(theta) * v_normal[2] + sinc * (a * v_normal[0] + b * v_normal[1]));
-}
+vec3 shaded() { return shading == 0 ? v_color : shade(v_color, turned(v_frame, v_sigma_n, v_surface * v_uv)); }
 void main() {
   float r2 = dot(v_uv, v_uv);
   if (visibility == 2) {  // a close-up's disc: opaque, out to cover2, shaded by its mean normal
     if (r2 > cover2) discard;
-    gl_FragDepth = gl_FragCoord.z;
-    out_color = vec4(shading == 0 ? v_color : shade(v_color, v_normal[2]), 1.0);
+    out_color = vec4(shading == 0 ? v_color : shade(v_color, v_frame[2]), 1.0);
     return;
   }
   if (visibility != 0) {  // depth only, from the core
     if (r2 > core2) discard;
-    gl_FragDepth = gl_FragCoord.z;
     out_color = vec4(0.0);
     return;
   }
   if (r2 > cut2) discard;
-  gl_FragDepth = gl_FragCoord.z;
   float w = exp(-0.5 * r2);
   out_color = vec4(shaded() * w, w);
 }
@@ -304,10 +294,6 @@ void main() {
 }
 )";
 
-// The resolve's step 1 (raster/resolve.h): an uncovered pixel with at least
-// 6 of its 8 neighbours covered takes their mean colour; and, for holes wider
-// than a pixel (close-ups: nodes seen larger than their samples cover), one
-// the coarse level filled (below) takes that level's colour.
 // The covered pixels among a pixel's 3 x 3 (inside `size`), as `at` reads
 // them: their colours' sum and their count (each shader defines `at`).
 const char kNeighbours[] = R"(
@@ -324,6 +310,10 @@ vec4 covered_around(ivec2 p, ivec2 size) {
 }
 )";
 
+// The resolve's step 1 (raster/resolve.h): an uncovered pixel with at least
+// 6 of its 8 neighbours covered takes their mean colour; and, for holes wider
+// than a pixel (close-ups: nodes seen larger than their samples cover), one
+// the coarse level filled (below) takes that level's colour.
 const char kFillFragment[] = R"(
 uniform sampler2D coarse;  // alpha 0.5: filled at half the resolution
 uniform int use_coarse;
@@ -349,12 +339,6 @@ uniform sampler2D frame;
 vec4 at(ivec2 q) { return texelFetch(frame, q, 0); }
 )";
 
-// Holes wider than a pixel, at half the resolution (the pull of a pull-push
-// hole filling: Grossman and Dally 1998; Marroquim, Kraus and Cavalcanti
-// 2007): a coarse pixel is covered where any of its 2 x 2 is, with their
-// mean colour; an uncovered one with at least 6 of its 8 coarse neighbours
-// covered is filled with their mean (alpha 0.5) — a hole inside the surface,
-// never past a silhouette, as the fine fill's rule.
 // The coarse level, read from the fine: a coarse pixel is its 2 x 2's
 // covered mean.
 const char kCoarseAt[] = R"(#version 330 core
@@ -371,6 +355,12 @@ vec4 at(ivec2 q) {
   return sum.a > 0.0 ? vec4(sum.rgb / sum.a, 1.0) : vec4(0.0);
 }
 )";
+// Holes wider than a pixel, at half the resolution (the pull of a pull-push
+// hole filling: Grossman and Dally 1998; Marroquim, Kraus and Cavalcanti
+// 2007): a coarse pixel is covered where any of its 2 x 2 is, with their
+// mean colour; an uncovered one with all 8 of its coarse neighbours covered
+// is filled with their mean (alpha 0.5) — a hole inside the surface, never
+// a gap between two parts of it (with 6 of 8 it filled the dragon's).
 const char kPullFragment[] = R"(
 out vec4 out_color;
 void main() {
@@ -631,12 +621,11 @@ void GlRenderer::set_uniforms(unsigned p, const NodeCache& cache, const Camera& 
   glUniform1f(glGetUniformLocation(p, "ambient"), o.ambient);
   glUniform1f(glGetUniformLocation(p, "specular"), o.specular);
   glUniform1f(glGetUniformLocation(p, "shininess"), o.shininess);
-  glUniform1i(glGetUniformLocation(p, "has_normal_frame"), h.has_normals());
+  glUniform1i(glGetUniformLocation(p, "has_normals"), h.has_normals());
   const int32_t* e = cache.decoder().extent_mu();
   glUniform3f(glGetUniformLocation(p, "extent_mu"), static_cast<float>(e[0]), static_cast<float>(e[1]), static_cast<float>(e[2]));
-  const int axis = o.elevation == SpgAxis::kNone ? -1 : (static_cast<int>(o.elevation) - 1) / 2;
-  glUniform1i(glGetUniformLocation(p, "elevation_axis"), axis);
-  glUniform1i(glGetUniformLocation(p, "elevation_down"), axis >= 0 && (static_cast<int>(o.elevation) - 1) % 2 == 1);
+  glUniform1i(glGetUniformLocation(p, "elevation_axis"), spg_axis_index(o.elevation));
+  glUniform1i(glGetUniformLocation(p, "elevation_down"), spg_axis_negative(o.elevation));
   float ramp[15];
   for (int k = 0; k < 5; ++k) rgb_of(kElevationRamp[k], ramp + 3 * k);
   glUniform3fv(glGetUniformLocation(p, "ramp"), 5, ramp);
@@ -653,7 +642,6 @@ void GlRenderer::set_uniforms(unsigned p, const NodeCache& cache, const Camera& 
     glUniform1i(glGetUniformLocation(p, "sigma_n_base"), h.class_count[0]);
     glUniform1iv(glGetUniformLocation(p, "field_offset"), kFieldCount, field_offset_);
     glUniform1iv(glGetUniformLocation(p, "field_bits"), kFieldCount, field_bits_);
-    glUniform1i(glGetUniformLocation(p, "has_normals"), h.has_normals());
     glUniform1i(glGetUniformLocation(p, "has_color"), h.has_color());
     glUniform1i(glGetUniformLocation(p, "grey"), o.grey);
     glUniform3fv(glGetUniformLocation(p, "grey_rgb"), 1, grey);

@@ -126,11 +126,11 @@ void SdlDisplay::compose(const Image& screen) {
   c.fill(k[2].x + k[2].w, k[0].y + k[0].h, k[3].x, k[1].y, kKey);
   for (const KeyRect& key : k) c.key(key.x, key.y, key.w, key.h, key.label, lit_[static_cast<int>(key.button)]);
   // The help, over the screen.
-  if (!overlay_.empty()) {
-    const int lines = static_cast<int>(overlay_.size()), box_h = lines * 9 + 6;
+  if (overlay_ && !overlay_->empty()) {
+    const int lines = static_cast<int>(overlay_->size()), box_h = lines * 9 + 6;
     const int y0 = kMargin + std::max(0, (options_.height - box_h) / 2);
     c.fill(kMargin + 4, y0, kMargin + options_.width - 4, y0 + box_h, kOverlay);
-    for (int i = 0; i < lines; ++i) c.text(kMargin + 8, y0 + 4 + 9 * i, overlay_[static_cast<size_t>(i)], kText);
+    for (int i = 0; i < lines; ++i) c.text(kMargin + 8, y0 + 4 + 9 * i, (*overlay_)[static_cast<size_t>(i)], kText);
   }
 }
 
@@ -190,8 +190,6 @@ bool SdlDisplay::poll(InputEvent* event) {
   }
   return false;
 }
-
-void SdlDisplay::set_overlay(const std::vector<std::string>& lines) { overlay_ = lines; }
 
 bool SdlDisplay::key_rect(Button b, int* x, int* y) const {
   KeyRect k[kKeys];

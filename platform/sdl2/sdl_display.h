@@ -65,8 +65,8 @@ class SdlDisplay final : public Display {
   // Queues a mouse press (or release) on the on-screen key of `b`, as a
   // user's click; false when the device has no such key.
   bool click(Button b, bool down);
-  // Lines shown over the screen (the help); empty: none.
-  void set_overlay(const std::vector<std::string>& lines);
+  // Lines shown over the screen (the help), kept by the caller; null: none.
+  void set_overlay(const std::vector<std::string>* lines) { overlay_ = lines; }
 
   // The device image's size (unscaled) and where the screen sits in it.
   int device_width() const { return device_w_; }
@@ -93,7 +93,7 @@ class SdlDisplay final : public Display {
   std::vector<uint8_t> device_;  // device_w_ x device_h_ RGB888
   Image screen_;
   std::string status_[2];
-  std::vector<std::string> overlay_;
+  const std::vector<std::string>* overlay_ = nullptr;
   SdlPointer pointer_;
   bool lit_[kButtonCount] = {};
   Button mouse_key_ = Button::kNone;  // the on-screen key the mouse holds

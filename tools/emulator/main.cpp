@@ -119,7 +119,7 @@ int run(int argc, char** argv) {
   const int32_t* extent = client.decoder().extent_mu();
   ViewerControls controls(o, m.header(), extent);
   // Colour by elevation: along the view's up axis.
-  const SpgAxis up = controls.view().up == SpgAxis::kNone ? SpgAxis::kPosY : controls.view().up;
+  const SpgAxis up = controls.view().up;
   if (!client.set_elevation(controls.elevation() ? up : SpgAxis::kNone)) return fail("the client refused colour by elevation");
   const RasterConfig& r = o.config.raster;
   const size_t stride = size_t{r.width} * bytes_per_pixel(r.format);
@@ -198,7 +198,7 @@ int run(int argc, char** argv) {
     while (display.poll(&e)) changed = controls.apply(e) || changed;
     changed = controls.tick(seconds_since(last_tick)) || changed;
     last_tick = std::chrono::steady_clock::now();
-    display.set_overlay(controls.help() ? help_lines() : std::vector<std::string>{});
+    display.set_overlay(controls.help() ? &help_lines() : nullptr);
     if (changed) {
       if (!client.set_view(controls.lighting() ? o.config.shading == ShadingMode::kNone ? ShadingMode::kSurface
                                                                                        : o.config.shading

@@ -99,7 +99,8 @@ void outline(int height, const int32_t r[4]) {
 
 // Lines of text drawn over the bound framebuffer (rows from the top, GL's
 // from the bottom): a dark band, the font at twice its size. Through a
-// texture blitted into place (GL 3.3 core has no raster text).
+// texture blitted into place (GL 3.3 core has no raster text), drawn anew
+// only when the lines or the window's width change.
 class Overlay {
  public:
   ~Overlay() {
@@ -111,6 +112,24 @@ class Overlay {
     if (lines.empty()) return;
     const int scale = 2, line_h = 9 * scale, h = static_cast<int>(lines.size()) * line_h + 3 * scale;
     const int w = window_w;
+    if (!texture_) {
+      glGenTextures(1, &texture_);
+      glGenFramebuffers(1, &fbo_);
+    }
+    if (lines != lines_ || w != width_) {
+      upload(lines, w, h, scale, line_h);
+      lines_ = lines;
+      width_ = w;
+    }
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(target));
+    const int top = y == -1 ? window_h - h : y == -2 ? (window_h - h) / 2 : y;
+    glBlitFramebuffer(0, 0, w, h, 0, window_h - top - h, w, window_h - top, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(target));
+  }
+
+ private:
+  void upload(const std::vector<std::string>& lines, int w, int h, int scale, int line_h) {
     std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3);
     fill_rect(rgb.data(), w, h, 0, 0, w, h, 0x101418);
     for (size_t i = 0; i < lines.size(); ++i)
@@ -119,23 +138,16 @@ class Overlay {
     std::vector<uint8_t> rows(rgb.size());
     for (int r = 0; r < h; ++r)
       std::copy_n(&rgb[static_cast<size_t>(h - 1 - r) * w * 3], static_cast<size_t>(w) * 3, &rows[static_cast<size_t>(r) * w * 3]);
-    if (!texture_) {
-      glGenTextures(1, &texture_);
-      glGenFramebuffers(1, &fbo_);
-    }
     glBindTexture(GL_TEXTURE_2D, texture_);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, w, h, 0, GL_RGB, GL_UNSIGNED_BYTE, rows.data());
     glBindFramebuffer(GL_READ_FRAMEBUFFER, fbo_);
     glFramebufferTexture2D(GL_READ_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, texture_, 0);
-    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(target));
-    const int top = y == -1 ? window_h - h : y == -2 ? (window_h - h) / 2 : y;
-    glBlitFramebuffer(0, 0, w, h, 0, window_h - top - h, w, window_h - top, GL_COLOR_BUFFER_BIT, GL_NEAREST);
-    glBindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(target));
   }
 
- private:
   GLuint texture_ = 0, fbo_ = 0;
+  std::vector<std::string> lines_;  // what the texture holds
+  int width_ = 0;
 };
 
 int run(int argc, char** argv) {
@@ -186,7 +198,7 @@ int run(int argc, char** argv) {
   const NodeCache& cache = m.client().cache();
   GlRenderer renderer;
   ViewerControls controls(o, m.header(), cache.decoder().extent_mu());
-  const SpgAxis up = controls.view().up == SpgAxis::kNone ? SpgAxis::kPosY : controls.view().up;
+  const SpgAxis up = controls.view().up;  // colour by elevation's
   if (!renderer.init(cache, gl_options(o, gpu, splat, nullptr, up), error)) return fail(error);
   Camera camera;
   if (!controls.camera(static_cast<uint16_t>(w), static_cast<uint16_t>(h), &camera))
@@ -257,13 +269,16 @@ int run(int argc, char** argv) {
     int32_t rect[4];
     if (controls.dragging(rect)) outline(window.height(), rect);
     else if (controls.window()[0] < controls.window()[2]) outline(window.height(), controls.window());
+    // The window as it is now, into `image` and a PNG.
+    const auto shoot = [&](const std::string& path) {
+      image.width = window.width();
+      image.height = window.height();
+      return gl_read_pixels(window.width(), window.height(), image.rgb, error) && write_png(path, image, error);
+    };
     // Script screenshots see this frame as drawn, without the bands (whose
     // numbers change).
     for (const std::string& path : shots) {
-      image.width = window.width();
-      image.height = window.height();
-      if (!gl_read_pixels(window.width(), window.height(), image.rgb, error) || !write_png(path, image, error))
-        return fail(error);
+      if (!shoot(path)) return fail(error);
       std::printf("frame %u: screenshot %s %dx%d, crc32 %08x\n", frame_number, path.c_str(), image.width, image.height,
                   crc32(image.rgb.data(), image.rgb.size()));
     }
@@ -283,10 +298,7 @@ int run(int argc, char** argv) {
     // The S key: the window as shown.
     if (controls.take_screenshot()) {
       const std::string path = screenshot_path("stipple-gl");
-      image.width = window.width();
-      image.height = window.height();
-      if (!gl_read_pixels(window.width(), window.height(), image.rgb, error) || !write_png(path, image, error))
-        return fail(error);
+      if (!shoot(path)) return fail(error);
       std::printf("screenshot %s (%dx%d)\n", path.c_str(), image.width, image.height);
       std::fflush(stdout);
     }
