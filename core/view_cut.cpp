@@ -215,6 +215,54 @@ CutStatus CutBounds::init(const SpgView& view, const NodeDecoder& decoder, void*
   return CutStatus::kOk;
 }
 
+CutStatus CutBounds::attach(const SpgView& view, const void* table, size_t bytes, uint32_t* bad_node,
+                            const char** bad_field) {
+  bounds_ = nullptr;
+  *bad_node = 0;
+  *bad_field = "";
+  const uint32_t n = view.header.node_count;
+  if (n >= kInside) return CutStatus::kBadView;
+  if (table == nullptr || bytes < sizeof(ViewCut::Bound) * size_t{n}) return CutStatus::kStorageTooSmall;
+  const ViewCut::Bound* bounds = static_cast<const ViewCut::Bound*>(table);
+  const auto bad = [&](uint32_t i, const char* field) {
+    *bad_node = i;
+    *bad_field = field;
+    return CutStatus::kBadView;
+  };
+  // One pass front to back: the leaf counts are read in order, and an
+  // internal node's points are its children's (further on in the table,
+  // checked when reached), summed and saturated as spg_node_points does.
+  const uint8_t* counts = view.leaf_counts;
+  uint64_t next_child = 1;
+  for (uint32_t i = 0; i < n; ++i) {
+    const ViewCut::Bound& b = bounds[i];
+    const uint32_t children = spg_child_count(view, i);
+    if (b.children != children) return bad(i, "children");
+    if (b.first_child != next_child) return bad(i, "first_child");
+    next_child += children;
+    if (b.radius < 0 || b.radius > (1 << 30)) return bad(i, "radius");
+    if (b.subtree_radius < b.radius || b.subtree_radius > (1 << 30)) return bad(i, "subtree_radius");
+    if (b.cone_sin_q14 < 0) return bad(i, "cone");
+    if (b.pad0 != 0) return bad(i, "padding");
+    uint32_t points = 0;
+    if (counts != nullptr && children == 0) {
+      for (int shift = 0;; shift += 7) {  // validated by spg_parse: at most 5 bytes
+        const uint8_t byte = *counts++;
+        points |= static_cast<uint32_t>(byte & 0x7Fu) << shift;
+        if ((byte & 0x80u) == 0) break;
+      }
+    } else if (counts != nullptr) {
+      for (uint32_t k = 0; k < children; ++k) points += bounds[b.first_child + k].points;
+    }
+    if (b.points != (points < 255 ? points : 255)) return bad(i, "points");
+  }
+  if (n > 0 && next_child != n) return bad(n - 1, "first_child");
+  bounds_ = bounds;
+  node_count_ = n;
+  normals_ = view.header.has_normals();
+  return CutStatus::kOk;
+}
+
 CutStatus ViewCut::init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes,
                         const ConeRule& cones) {
   ready_ = false;

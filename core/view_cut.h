@@ -98,6 +98,20 @@ class CutBounds {
   [[nodiscard]] CutStatus init(const SpgView& view, const NodeDecoder& decoder, void* storage, size_t bytes,
                                const ConeRule& cones = {});
   uint32_t node_count() const { return node_count_; }
+  bool normals() const { return normals_; }
+  // The table init built (bytes(header) of it: 36 bytes a node, the host's
+  // little-endian layout) — what a cut table file holds (core/cut_table.h).
+  const void* table() const { return bounds_; }
+  // Takes a table made by init for `view` (from a cut table file: mapped,
+  // not copied) after checking what a cut's safety rests on: each node's
+  // children and first child against the view's topology, its points
+  // against the leaf counts, its radii (0 <= radius <= subtree radius <=
+  // 2^30) and cone (0 .. 0x7FFF), and padding zero. Its other numbers
+  // (centres, normals) are trusted: wrong ones give a wrong cut, never a
+  // fault. kBadView: the first bad node in *bad_node, the field's name in
+  // *bad_field.
+  [[nodiscard]] CutStatus attach(const SpgView& view, const void* table, size_t bytes, uint32_t* bad_node,
+                                 const char** bad_field);
 
  private:
   friend class ViewCut;

@@ -86,11 +86,16 @@ void sync_folder(const std::string& path) {
 
 }  // namespace
 
-MappedFile::~MappedFile() {
+MappedFile::~MappedFile() { close(); }
+
+void MappedFile::close() {
   if (data_) munmap(const_cast<uint8_t*>(data_), size_);
+  data_ = nullptr;
+  size_ = released_ = 0;
 }
 
 bool MappedFile::open(const std::string& path, std::string& error) {
+  close();
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) return error = path + ": is a directory, not a file", false;
   const int fd = ::open(path.c_str(), O_RDONLY);

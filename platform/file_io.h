@@ -36,7 +36,8 @@ class MappedFile {
   MappedFile(const MappedFile&) = delete;
   MappedFile& operator=(const MappedFile&) = delete;
   ~MappedFile();
-  bool open(const std::string& path, std::string& error);
+  bool open(const std::string& path, std::string& error);  // closes what was open first
+  void close();
   const uint8_t* data() const { return data_; }
   size_t size() const { return size_; }
   void release_before(size_t offset);

@@ -61,6 +61,7 @@ int cmd_metrics(int argc, char** argv);
 int cmd_levels(int argc, char** argv);
 int cmd_render(int argc, char** argv);
 int cmd_cut(int argc, char** argv);
+int cmd_cut_table(int argc, char** argv);
 int cmd_serve(int argc, char** argv);
 int cmd_load(int argc, char** argv);
 int cmd_ppn_table(int argc, char** argv);

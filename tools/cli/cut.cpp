@@ -10,6 +10,8 @@
 #include "platform/file_io.h"
 #include "tools/cli/cli.h"
 #include "tools/embedded/embedded.h"
+#include "tools/embedded/model_file.h"
+#include "platform/progress.h"
 #include "tools/embedded/render_options.h"
 
 namespace stipple {
@@ -33,7 +35,49 @@ const char kCutHelp[] =
     "                  looking again only at nodes whose deadline came; the cut is\n"
     "                  the same, the nodes evaluated per step are printed\n";
 
+const char kCutTableHelp[] =
+    "usage: stipple cut-table MODEL.spg [--leaf-cone G] [--check]\n"
+    "\n"
+    "Writes MODEL.spg.cut beside the model: its per-node cut bounds (36 bytes a\n"
+    "node; docs/format.md \"The cut table\"), which stipple serve, the viewers\n"
+    "and stipple-handheld map instead of decoding the whole tree when they\n"
+    "start, so N servers of a model share one copy in the page cache. stipple\n"
+    "encode writes one; this makes one for an older file, or for servers run\n"
+    "with another --leaf-cone. A table already there that is the model's is\n"
+    "left as it is (\"up to date\").\n"
+    "\n"
+    "  --leaf-cone G   the leaf cone the table's cones follow (default 1: what\n"
+    "                  serve and render use unless told otherwise)\n"
+    "  --check         write nothing; exit 1 when the table is missing or is not\n"
+    "                  the model's, saying why\n";
+
 }  // namespace
+
+int cmd_cut_table(int argc, char** argv) {
+  cli::Args args(argc, argv, 2);
+  if (args.flag("--help") || args.flag("-h")) return std::fputs(kCutTableHelp, stdout), 0;
+  std::string error, v;
+  ConeRule cones;
+  if (args.value("--leaf-cone", v) && !parse_leaf_cone(v, cones.leaf_gamma_q8, error)) return cli::fail("cut-table: " + error);
+  const bool check = args.flag("--check");
+  const std::vector<std::string> files = args.positionals();
+  if (args.bad()) return cli::fail("cut-table: " + args.error());
+  if (!args.unknown_option().empty()) return cli::fail("cut-table: " + args.unknown_option_message());
+  if (files.size() != 1) return cli::fail("cut-table: expected one .spg file (see stipple cut-table --help)");
+  const double start = monotonic_seconds();
+  if (check) {
+    ModelFile model;
+    if (!model.open(files[0], cones, error)) return cli::fail("cut-table: " + error);
+    if (!model.table_mapped()) return cli::fail("cut-table: " + model.table_note());
+    std::printf("%s: up to date\n", cut_table_path(files[0]).c_str());
+    return 0;
+  }
+  bool written = false;
+  if (!make_cut_table(files[0], cones, error, &written)) return cli::fail("cut-table: " + error);
+  std::printf("%s: %s in %.2f s\n", cut_table_path(files[0]).c_str(), written ? "written" : "up to date",
+              monotonic_seconds() - start);
+  return 0;
+}
 
 int cmd_cut(int argc, char** argv) {
   cli::Args args(argc, argv, 2);

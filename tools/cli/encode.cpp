@@ -9,6 +9,8 @@
 #include "tools/cli/cli.h"
 #include "tools/cli/encode_options.h"
 #include "tools/cli/render_output.h"
+#include "tools/embedded/model_file.h"
+#include "core/cut_table.h"
 #include "tools/encoder/encoder.h"
 #include "tools/encoder/merge.h"
 #include "tools/encoder/partition.h"
@@ -75,6 +77,9 @@ const char kEncodeHelp[] =
     "                        (stipple encode-part DIR ID); no SCAN\n"
     "  --every K             keep every K-th point (after normals are derived from\n"
     "                        the full mesh): quick previews and scaling studies\n"
+    "  --no-cut-table        write no MODEL.spg.cut beside the model (the per-node\n"
+    "                        cut bounds servers and local viewers map instead of\n"
+    "                        decoding the tree; a server writes it when missing)\n"
     "  --json                print the summary as JSON (with each stage's seconds:\n"
     "                        read, normals, hierarchy, classes, write; partitions)\n"
     "  -q, --quiet           no progress bar\n";
@@ -92,8 +97,21 @@ const char kEncodePartHelp[] =
     "options:\n"
     "  --threads N           worker threads (default: one per core)\n";
 
+// The model's cut table beside it (MODEL.spg.cut: what servers and local
+// viewers map instead of decoding the tree), made from the file just written.
+bool write_cut_table(const std::string& output, EncodeReport& report, std::string& error, ProgressBar& progress) {
+  const double start = monotonic_seconds();
+  progress.update(1.0, "cut table");
+  if (!make_cut_table(output, ConeRule{}, error)) return false;
+  report.cut_table = cut_table_path(output);
+  report.cut_table_bytes = kCutTableHeaderBytes + 36 * report.nodes;
+  report.seconds.cut_table = monotonic_seconds() - start;
+  return true;
+}
+
 // --merge DIR: the .spg from a plan whose jobs have run.
-int merge_plan(const std::string& dir, const std::string& output, int threads, bool quiet, bool json) {
+int merge_plan(const std::string& dir, const std::string& output, int threads, bool quiet, bool json,
+               bool cut_table) {
   const double start = monotonic_seconds();
   std::string error;
   PartitionPlan plan;
@@ -111,6 +129,7 @@ int merge_plan(const std::string& dir, const std::string& output, int threads, b
   if (!merge_parts(plan, parts, threads, sink_into(file), report, error, &progress) || !file.commit(error))
     return cli::fail("encode --merge: " + error);
   report.partitions = plan.partitions();
+  if (cut_table && !write_cut_table(output, report, error, progress)) return cli::fail("encode --merge: " + error);
   progress.finish();
   const double peak_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
   if (json) std::printf("%s\n", summary_json(dir, report, monotonic_seconds() - start, peak_mb).c_str());
@@ -168,7 +187,7 @@ int cmd_encode(int argc, char** argv) {
     if (!inputs.empty()) return cli::fail("encode: --merge DIR takes no scan: the plan in DIR names its partitions");
     if (output.empty()) return cli::fail("encode: -o MODEL.spg is required");
     if (!cli::check_output_name(output, ".spg", "a .spg model", error)) return cli::fail("encode: " + error);
-    return merge_plan(merge_dir, output, options.tree.threads, quiet, json);
+    return merge_plan(merge_dir, output, options.tree.threads, quiet, json, options.cut_table);
   }
   if (!plan_dir.empty()) {
     if (inputs.size() != 1) return cli::fail("encode: expected one scan file (see stipple encode --help)");
@@ -220,6 +239,7 @@ int cmd_encode(int argc, char** argv) {
   } else if (!encode_scan_file(inputs[0], scan_options, options, output, report, error, &progress, warn)) {
     return cli::fail(error);
   }
+  if (options.cut_table && !write_cut_table(output, report, error, progress)) return cli::fail("encode: " + error);
   progress.finish();
   const double seconds = monotonic_seconds() - start;
   const double peak_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);

@@ -121,6 +121,7 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
   o.colors = !args.flag("--no-color");
   quiet = args.flag("--quiet") || args.flag("-q");
   json = args.flag("--json");
+  o.cut_table = !args.flag("--no-cut-table");
   if (args.bad()) return error = args.error(), false;
   return true;
 }
@@ -206,7 +207,10 @@ std::string summary_json(const std::string& scan, const EncodeReport& r, double 
       .num("normals_seconds", r.seconds.normals)
       .num("hierarchy_seconds", r.seconds.hierarchy)
       .num("classes_seconds", r.seconds.classes)
-      .num("write_seconds", r.seconds.write);
+      .num("write_seconds", r.seconds.write)
+      .str("cut_table", r.cut_table)
+      .integer("cut_table_bytes", static_cast<long long>(r.cut_table_bytes))
+      .num("cut_table_seconds", r.seconds.cut_table);
   return j.done();
 }
 
@@ -220,6 +224,9 @@ void print_summary(const std::string& scan, const EncodeReport& r, double second
               r.normals_source == "k-NN" ? (std::string(", facing ") + orient_mode_name(r.frame.orient)).c_str() : "",
               spg_axis_name(r.frame.hint.up), spg_axis_name(r.frame.hint.sensor_side));
   if (r.partitions > 1) std::printf("  in %u partitions (tools/encoder/partition.h)\n", r.partitions);
+  if (!r.cut_table.empty())
+    std::printf("  cut table %s, %s bytes, %.2f s\n", r.cut_table.c_str(), cli::with_commas(r.cut_table_bytes).c_str(),
+                r.seconds.cut_table);
 }
 
 void keep_every(PointCloud& cloud, unsigned long long k, const EncodeOptions& o) {

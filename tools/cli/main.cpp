@@ -30,6 +30,7 @@ const Command kCommands[] = {
     {"levels", "bits per point and PSNR of each tree level's cut (the trade)", stipple::cmd_levels},
     {"render", "draw a .spg with the fixed-point handheld client -> .png", stipple::cmd_render},
     {"cut", "the view-dependent cut along an orbit: nodes, culling, bytes of change", stipple::cmd_cut},
+    {"cut-table", "write MODEL.spg.cut, the cut bounds servers and viewers map at start", stipple::cmd_cut_table},
     {"serve", "serve a model's view-dependent cuts to clients over TCP", stipple::cmd_serve},
     {"load", "many orbiting viewers against a server: cameras answered, latency", stipple::cmd_load},
     {"ppn-table", "measure the points-per-node table with the client's rasterizer", stipple::cmd_ppn_table},

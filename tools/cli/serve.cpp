@@ -33,8 +33,11 @@ const char kServeHelp[] =
     "a cold start's coarse cut first, larger nodes first, each class just before\n"
     "the first node that uses it — and an update-end (docs/protocol.md; a client\n"
     "of protocol 2 or 3 gets the class tables whole first). The model is\n"
-    "memory-mapped and shared by the\n"
-    "workers (and, through the page cache, by other servers of the same file).\n"
+    "memory-mapped and shared by the workers (and, through the page cache, by\n"
+    "other servers of the same file), and so is its cut table, MODEL.spg.cut\n"
+    "(written by encode, or by stipple cut-table for an older file), so that a\n"
+    "server starts without decoding the tree; without one the bounds are built\n"
+    "in memory (36 bytes a node), which the log says.\n"
     "Logs each client's connect, hello, cut size and bytes sent, and each drop\n"
     "with its reason, to stderr. Stops on SIGINT or SIGTERM, saying goodbye to\n"
     "every client.\n"
@@ -167,10 +170,11 @@ int cmd_serve(int argc, char** argv) {
   {
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
     char line[256];
-    std::snprintf(line, sizeof line, "%s: %u nodes, %.1f MB mapped, %.1f MB of cut tables, ready in %.0f ms; %llu workers, at most %u clients",
+    std::snprintf(line, sizeof line, "%s: %u nodes, %.1f MB mapped, %.1f MB of tables on the heap, ready in %.0f ms; %llu workers, at most %u clients",
                   files[0].c_str(), model->view().header.node_count, static_cast<double>(model->file_bytes()) / 1e6,
                   static_cast<double>(model->table_bytes()) / 1e6, ms, workers, max_clients);
     o.log(line);
+    o.log(model->table_note());
   }
   // One Server a worker, each on its own thread with its own listener on the
   // port (the first picks it when it is 0); the serial line is the first's.

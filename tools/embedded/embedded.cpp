@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "platform/progress.h"
+#include "tools/embedded/model_file.h"
 #include "tools/embedded/options.h"
 
 namespace stipple {
@@ -143,15 +144,35 @@ ConeRule cone_rule(const CutRule& rule) {
   return c;
 }
 
-bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
-                  const ViewSpec& spec, FixedRender& out, std::string& error, int frames, size_t (*heap_probe)()) {
-  // The cut: a decoder over the whole file, as the server side will hold.
-  std::vector<uint8_t> decoder_storage(node_decoder_bytes(view.header));
-  NodeDecoder decoder;
-  if (decoder.init(view, decoder_storage.data(), decoder_storage.size()) != DecodeStatus::kOk) {
-    error = "the file's angle fields are wider than the decoder supports";
-    return false;
+namespace {
+
+// The view-dependent cut over shared bounds, in storage sized by the cut
+// (its sent set and an update's scratch, grown while the update asks for
+// more), never by the tree.
+struct SizedCut {
+  std::vector<uint64_t> state, scratch_storage;
+  CutScratch scratch;
+  ViewCut cut;
+  bool update(const CutBounds& bounds, const Camera& camera, const CutParams& params) {
+    const uint64_t n = bounds.node_count();
+    const uint32_t sent = static_cast<uint32_t>(std::min<uint64_t>(n, params.max_nodes));
+    state.assign(view_cut_state_bytes(sent) / 8 + 1, 0);
+    if (cut.init(bounds, state.data(), state.size() * 8, &scratch) != CutStatus::kOk) return false;
+    uint64_t capacity = std::min<uint64_t>(n, 4096);
+    for (;;) {
+      scratch_storage.assign(CutScratch::bytes(static_cast<uint32_t>(capacity)) / 8 + 1, 0);
+      scratch.init(scratch_storage.data(), scratch_storage.size() * 8);
+      const CutStatus s = cut.update(camera, params);
+      if (s == CutStatus::kOk) return true;
+      if (s != CutStatus::kStorageTooSmall || capacity >= n) return false;
+      capacity = std::min<uint64_t>(n, std::max<uint64_t>(capacity + capacity / 2, uint64_t{cut.needed_capacity()} + 1));
+    }
   }
+};
+
+bool render_with(const SpgView& view, const uint8_t* file, const NodeDecoder& decoder, const CutBounds* shared,
+                 ClientConfig config, const CutRule& rule, const ViewSpec& spec, FixedRender& out, std::string& error,
+                 int frames, size_t (*heap_probe)()) {
   Camera camera;
   const ViewSpec resolved = resolve_view(spec, view.header, decoder.extent_mu());
   if (config.elevation != SpgAxis::kNone) config.elevation = resolved.up;  // resolve_view always names one
@@ -161,19 +182,33 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     return false;
   }
   std::vector<uint32_t> cut;
+  std::vector<uint8_t> points;  // the original points under each cut node (what the client caps by)
+  SizedCut view_cut;
   if (rule.kind == CutRule::kProjectedSize) {
-    // The view-dependent cut, within what the client's cache holds.
-    std::vector<uint64_t> cut_storage(view_cut_bytes(view.header) / 8 + 1);
-    ViewCut view_cut;
-    const CutParams params = cut_params(rule, config);
-    if (view_cut.init(view, decoder, cut_storage.data(), cut_storage.size() * 8, cone_rule(rule)) != CutStatus::kOk ||
-        view_cut.update(camera, params) != CutStatus::kOk) {
+    // The view-dependent cut, within what the client's cache holds, over
+    // the model's bounds (mapped from its cut table, or built here).
+    std::vector<uint64_t> own_storage;
+    CutBounds own;
+    if (shared == nullptr) {
+      own_storage.assign(CutBounds::bytes(view.header) / 8 + 1, 0);
+      if (own.init(view, decoder, own_storage.data(), own_storage.size() * 8, cone_rule(rule)) != CutStatus::kOk) {
+        error = "the view cut failed";
+        return false;
+      }
+      shared = &own;
+    }
+    if (!view_cut.update(*shared, camera, cut_params(rule, config))) {
       error = "the view cut failed";
       return false;
     }
-    for (uint32_t i = 0; i < view_cut.sent_count(); ++i) cut.push_back(index_of(view_cut.sent()[i]));
-    out.cut_nodes = view_cut.cut_count();
-    out.culled_nodes = view_cut.culled_count();
+    out.cut_bytes = own_storage.size() * 8 + view_cut.state.size() * 8 + view_cut.scratch_storage.size() * 8;
+    const ViewCut& c = view_cut.cut;
+    for (uint32_t i = 0; i < c.sent_count(); ++i) {
+      cut.push_back(index_of(c.sent()[i]));
+      points.push_back(c.points(c.sent()[i]));
+    }
+    out.cut_nodes = c.cut_count();
+    out.culled_nodes = c.culled_count();
   } else {
     std::vector<uint8_t> scratch(cut_scratch_bytes(view.header));
     cut.resize(view.header.node_count);
@@ -181,6 +216,10 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
     config.node_capacity = std::max<uint32_t>(config.node_capacity, static_cast<uint32_t>(cut.size()));
     out.cut_nodes = static_cast<uint32_t>(cut.size());
     out.culled_nodes = 0;
+    out.cut_bytes = scratch.size();
+    std::vector<uint8_t> all(view.header.node_count);
+    spg_node_points(view, all.data(), 1);
+    for (const uint32_t id : cut) points.push_back(all[id]);
   }
 
   // The arena is sized for this file: angle fields wider than the default
@@ -198,11 +237,9 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
   Client client;
   ClientStatus s = client.init(config, arena.data(), arena.size() * 8);
   if (s == ClientStatus::kOk) s = client.load_startup(file, spg_startup_bytes(view.header.version, view.header.class_count));
-  std::vector<uint8_t> points(view.header.node_count);
-  spg_node_points(view, points.data(), 1);
   for (size_t i = 0; s == ClientStatus::kOk && i < cut.size(); ++i)
     s = client.put_node(NodeId{cut[i]}, view.records + static_cast<size_t>(cut[i]) * view.record_bytes, view.record_bytes,
-                        points[cut[i]]);
+                        points[i]);
   const size_t stride = static_cast<size_t>(config.raster.width) * bytes_per_pixel(config.raster.format);
   out.frame.assign(stride * config.raster.height, 0);
   out.frame_seconds.clear();
@@ -222,6 +259,27 @@ bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config,
   out.cut = std::move(cut);
   out.camera = camera;
   return true;
+}
+
+}  // namespace
+
+bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
+                  const ViewSpec& spec, FixedRender& out, std::string& error, int frames, size_t (*heap_probe)()) {
+  // A decoder over the whole file, as the server side holds; the bounds are
+  // built (for the projected-size rule) as the cut needs them.
+  std::vector<uint8_t> decoder_storage(node_decoder_bytes(view.header));
+  NodeDecoder decoder;
+  if (decoder.init(view, decoder_storage.data(), decoder_storage.size()) != DecodeStatus::kOk) {
+    error = "the file's angle fields are wider than the decoder supports";
+    return false;
+  }
+  return render_with(view, file, decoder, nullptr, config, rule, spec, out, error, frames, heap_probe);
+}
+
+bool render_fixed(const ModelFile& model, ClientConfig config, const CutRule& rule, const ViewSpec& spec,
+                  FixedRender& out, std::string& error, int frames, size_t (*heap_probe)()) {
+  return render_with(model.view(), model.data(), model.decoder(), &model.bounds(), config, rule, spec, out, error,
+                     frames, heap_probe);
 }
 
 std::string spg_error_message(const std::string& name, const SpgResult& r, size_t size) {

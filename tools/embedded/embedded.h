@@ -67,6 +67,9 @@ struct FixedRender {
   SpgAxis up = SpgAxis::kNone;  // the resolved view's up axis
   std::vector<double> frame_seconds;  // render() wall time of each frame drawn
   size_t heap_bytes = 0;  // heap_probe's answer after the frames (0 without a probe)
+  // What the cut took: its bounds when built here (36 bytes a node of the
+  // tree), its sent set and an update's scratch (sized by the cut).
+  size_t cut_bytes = 0;
 };
 
 // The view cut's parameters for a projected-size rule and a client: its
@@ -86,5 +89,12 @@ ConeRule cone_rule(const CutRule& rule);
 bool render_fixed(const SpgView& view, const uint8_t* file, ClientConfig config, const CutRule& rule,
                   const ViewSpec& spec, FixedRender& out, std::string& error, int frames = 1,
                   size_t (*heap_probe)() = nullptr);
+// The same for a model opened as every program opens one (mapped, its cut
+// bounds from its cut table): what the run holds besides the mapped pages
+// follows the cut and the client's arena, not the model's size. The rule's
+// leaf cone must be the one `model` was opened with.
+class ModelFile;
+bool render_fixed(const ModelFile& model, ClientConfig config, const CutRule& rule, const ViewSpec& spec,
+                  FixedRender& out, std::string& error, int frames = 1, size_t (*heap_probe)() = nullptr);
 
 }  // namespace stipple

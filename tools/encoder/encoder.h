@@ -30,6 +30,7 @@ struct EncodeOptions {
   bool tolerance_relative = false;
   bool normals = true;  // store normals (computed when the scan has none)
   bool colors = true;   // store colours when the scan has them
+  bool cut_table = true;  // stipple encode: write MODEL.spg.cut beside the model (tools/embedded/model_file.h)
   int normal_neighbours = 12;
   // The .spg version written: kSpgVersion (16-bit class tables) or 1
   // (float32 tables, for readers that predate version 2).
@@ -72,12 +73,14 @@ struct EncodeReport {
   ScanFrame frame;  // what analyse_scan decided: normal orientation, view hint
   uint32_t partitions = 1;  // jobs the scan was encoded in (tools/encoder/partition.h)
   uint64_t duplicates = 0;  // repeated positions the jobs counted (a scan read in chunks)
+  std::string cut_table;    // the cut table written beside the model (stipple encode; empty: none)
+  uint64_t cut_table_bytes = 0;
   // Wall seconds of each stage: the scan's reading (the caller's), its
   // normals and frame, the hierarchy, the sigma classes, the records and file.
   // The plan's pass (a scan read in chunks: its first reading), the
   // partitions' (routing, or loading one partition), then the jobs.
   struct Stages {
-    double read = 0, plan = 0, route = 0, normals = 0, hierarchy = 0, classes = 0, write = 0;
+    double read = 0, plan = 0, route = 0, normals = 0, hierarchy = 0, classes = 0, write = 0, cut_table = 0;
   } seconds;
 };
 

@@ -24,6 +24,7 @@
 #include "platform/tcp/tcp_transport.h"
 #include "tools/embedded/remote.h"
 #include "tools/embedded/embedded.h"
+#include "tools/embedded/model_file.h"
 #include "tools/embedded/render_options.h"
 
 namespace {
@@ -110,7 +111,7 @@ int run(int argc, char** argv) {
     }
   }
 
-  MappedFile mapped;
+  ModelFile local;
   size_t file_bytes = 0;
   FixedRender frame;
   if (remote) {
@@ -155,14 +156,12 @@ int run(int argc, char** argv) {
     std::printf("%s: %llu bytes received\n", model.c_str(), static_cast<unsigned long long>(server.bytes_received()));
   } else {
     // Mapped, not read: the file's pages are the page cache's, taken as the
-    // cut needs them, not a copy on the heap.
-    if (!mapped.open(model, error)) return fail(error);
-    file_bytes = mapped.size();
-    SpgView spg;
-    const SpgResult r = spg_parse(mapped.data(), mapped.size(), &spg);
-    if (!r.ok()) return fail(spg_error_message(model, r, mapped.data(), mapped.size()));
-    if (!render_fixed(spg, mapped.data(), config, o.rule, o.view, frame, error, static_cast<int>(frames),
-                      memory ? heap_in_use : nullptr))
+    // cut needs them, not a copy on the heap; so are the cut's bounds, from
+    // the cut table beside it (MODEL.spg.cut) when there is one.
+    if (!local.open(model, cone_rule(o.rule), error)) return fail(error);
+    if (local.table_refused()) std::fprintf(stderr, "stipple-handheld: %s\n", local.table_note().c_str());
+    file_bytes = local.file_bytes();
+    if (!render_fixed(local, config, o.rule, o.view, frame, error, static_cast<int>(frames), memory ? heap_in_use : nullptr))
       return fail(model + ": " + error);
   }
   std::vector<double> t = frame.frame_seconds;
@@ -170,8 +169,9 @@ int run(int argc, char** argv) {
   std::printf("%s: %zu nodes, %u points, arena %zu bytes, frame %.3f ms (median of %lu)\n", model.c_str(), frame.cut.size(),
               frame.stats.points, frame.arena_bytes, 1e3 * t[t.size() / 2], static_cast<unsigned long>(frames));
   if (memory)
-    std::printf("memory: client arena %zu bytes, frame %zu bytes, model file %zu bytes; heap in use while drawing %zu bytes\n",
-                frame.arena_bytes, frame.frame.size(), file_bytes, frame.heap_bytes);
+    std::printf("memory: client arena %zu bytes, frame %zu bytes, model file %zu bytes%s; heap in use while drawing %zu bytes\n",
+                frame.arena_bytes, frame.frame.size(), file_bytes,
+                remote ? "" : local.table_mapped() ? " (cut table mapped)" : " (cut bounds built)", frame.heap_bytes);
   if (crc) std::printf("crc32 %08x\n", crc32(frame.image.rgb.data(), frame.image.rgb.size()));
   // The frame goes to each display asked for: the null one writes it as PPM.
   const size_t stride = static_cast<size_t>(config.raster.width) * bytes_per_pixel(config.raster.format);

@@ -123,31 +123,6 @@ void Server::log(const std::string& line) const {
   if (options_.log) options_.log(line);
 }
 
-bool ServedModel::open(const std::string& path, const ConeRule& cones, std::string& error) {
-  name_ = path;
-  if (!mapped_.open(path, error)) return false;
-  return build(mapped_.data(), mapped_.size(), cones, error);
-}
-
-bool ServedModel::adopt(std::vector<uint8_t> file, const std::string& name, const ConeRule& cones, std::string& error) {
-  owned_ = std::move(file);
-  name_ = name;
-  return build(owned_.data(), owned_.size(), cones, error);
-}
-
-bool ServedModel::build(const uint8_t* data, size_t size, const ConeRule& cones, std::string& error) {
-  size_ = size;
-  const SpgResult r = spg_parse(data, size, &view_);
-  if (!r.ok()) return error = spg_error_message(name_, r, size), false;
-  decoder_storage_.assign(node_decoder_bytes(view_.header) / 4 + 1, 0);
-  if (decoder_.init(view_, decoder_storage_.data(), decoder_storage_.size() * 4) != DecodeStatus::kOk)
-    return error = name_ + ": the angle fields are wider than the decoder supports", false;
-  bounds_storage_.assign(CutBounds::bytes(view_.header) / 8 + 1, 0);
-  if (bounds_.init(view_, decoder_, bounds_storage_.data(), bounds_storage_.size() * 8, cones) != CutStatus::kOk)
-    return error = name_ + ": the cut's bounds could not be built", false;
-  return true;
-}
-
 bool Server::init(std::shared_ptr<const ServedModel> model, const ServerOptions& options, std::string& error) {
   if (model == nullptr) return error = "no model", false;
   model_ = std::move(model);

@@ -37,40 +37,14 @@
 #include "core/stream.h"
 #include "platform/file_io.h"
 #include "platform/transport.h"
+#include "tools/embedded/model_file.h"
 
 namespace stipple {
 
-// A model as servers serve it: the file (mapped, or bytes handed over),
-// its validated view, decoder and cut bounds. Read-only once made, so any
-// number of Servers on any threads share one.
-class ServedModel {
- public:
-  ServedModel() = default;
-  ServedModel(const ServedModel&) = delete;
-  ServedModel& operator=(const ServedModel&) = delete;
-  // Maps `path` read-only (the pages are the page cache's: processes
-  // serving one file share them).
-  bool open(const std::string& path, const ConeRule& cones, std::string& error);
-  // A whole .spg in memory (a loopback server, a test).
-  bool adopt(std::vector<uint8_t> file, const std::string& name, const ConeRule& cones, std::string& error);
-  const SpgView& view() const { return view_; }
-  const CutBounds& bounds() const { return bounds_; }
-  const std::string& name() const { return name_; }
-  size_t file_bytes() const { return size_; }
-  size_t table_bytes() const { return decoder_storage_.size() * 4 + bounds_storage_.size() * 8; }
-
- private:
-  bool build(const uint8_t* data, size_t size, const ConeRule& cones, std::string& error);
-  MappedFile mapped_;
-  std::vector<uint8_t> owned_;
-  size_t size_ = 0;
-  std::string name_;
-  SpgView view_{};
-  std::vector<uint32_t> decoder_storage_;
-  NodeDecoder decoder_;
-  std::vector<uint64_t> bounds_storage_;
-  CutBounds bounds_;
-};
+// A model as servers serve it: a ModelFile (mapped, validated once, its
+// cut bounds mapped from its cut table or built), read-only once made, so
+// any number of Servers on any threads share one.
+using ServedModel = ModelFile;
 
 struct ServerOptions {
   uint32_t max_clients = 64;       // at once; more are refused with "server full" (serve sizes it from memory)

@@ -17,6 +17,19 @@
 
 namespace stipple {
 
+namespace {
+
+// A .spg by its first bytes (a scan is encoded in memory instead).
+bool starts_as_spg(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char magic[4] = {};
+  return in.read(magic, sizeof magic) && std::equal(magic, magic + 4, kSpgMagic, [](char a, uint8_t b) {
+           return static_cast<uint8_t>(a) == b;
+         });
+}
+
+}  // namespace
+
 bool parse_viewer_options(cli::Args& args, ViewerOptions& o, std::string& error) {
   std::string v;
   unsigned long long u = 0;
@@ -104,12 +117,20 @@ bool ViewerSource::open(const std::string& model, const std::string& connect, co
     ro.reconnect_context = &l;
     name_ = "tcp " + connect;
   } else {
-    std::vector<uint8_t> file;
-    if (!read_model(model, file, error)) return false;  // a scan is encoded in memory
     ServerOptions so;
     so.cull = o.rule.cull;
     so.cones = cone_rule(o.rule);
-    if (!l.local.init(std::move(file), model, so, error)) return false;
+    if (starts_as_spg(model)) {
+      // Mapped with its cut table, as stipple serve and stipple-handheld read one.
+      auto mapped = std::make_shared<ServedModel>();
+      if (!mapped->open(model, so.cones, error)) return false;
+      if (mapped->table_refused()) std::fprintf(stderr, "stipple: %s\n", mapped->table_note().c_str());
+      if (!l.local.init(std::move(mapped), so, error)) return false;
+    } else {
+      std::vector<uint8_t> file;
+      if (!read_model(model, file, error)) return false;  // a scan is encoded in memory
+      if (!l.local.init(std::move(file), model, so, error)) return false;
+    }
     l.local.add_client(std::make_unique<TransportRef>(l.pipe.server()), -1, "loopback");
     link = &l.pipe.client();
     ro.pump = [](void* s) {
