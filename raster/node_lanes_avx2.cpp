@@ -144,59 +144,26 @@ inline void transpose8(V v[8]) {
   }
 }
 
-}  // namespace
+// One batch of eight nodes as the stages below leave it: which lanes are
+// set up here (live), culled, or left to the scalar set-up (fallback).
+struct Lanes {
+  V live, culled, fallback;
+  V X, Y, Z;             // the mean in camera space
+  V frame[3][3];         // the position frame in camera space (Q14)
+  V sigma[3];            // sigma_p, clamped (MU)
+  V axes[3][3];          // the axes in camera space (MU)
+  V x0, y0, mx[3], my[3];  // the projection (NodeProjection: Q4; 1/256 px a sigma)
+  V count;               // points to draw
+  V dz[3], dshift, depth0;  // depth terms (draw_node's)
+  V depth_in_word;       // the depths stay inside the depth word
+};
 
-template <PointNormals kNormals, bool kSpecular>
-uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t count, TileNodes& out, uint32_t base,
-                      NodeLaneBatch* batches) {
-  const uint32_t base0 = base;
-  const V zero = _mm256_setzero_si256(), ones = _mm256_cmpeq_epi32(zero, zero);
-  const V lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  const V last_slot = set1(static_cast<int32_t>(first_slot + count - 1));
-  // The records' fields: a 32-bit window each (node_format.h's FieldWindow).
-  struct Window {
-    const int* base;
-    __m128i shift;
-    V mask;
-  };
-  Window windows[kFieldCount];
-#pragma GCC unroll 8
-  for (int i = 0; i < kFieldCount; ++i)
-    windows[i] = Window{reinterpret_cast<const int*>(f.records + f.window[i].byte), _mm_cvtsi32_si128(f.window[i].shift),
-                        set1(f.window[i].mask)};
-  for (uint32_t first = first_slot, batch = 0; first < first_slot + count; first += 8, ++batch) {
-  // For lanes past the last node, the last node's fields.
-  const V active = _mm256_cmpgt_epi32(set1(static_cast<int32_t>(first_slot + count - first)), lane);
-  const V slot = _mm256_min_epi32(add(set1(static_cast<int32_t>(first)), lane), last_slot);
-  const V at = _mm256_mullo_epi32(slot, set1(static_cast<int32_t>(f.stride)));
-  const auto field = [&](Field which) {
-    const Window& w = windows[static_cast<int>(which)];
-    return band(_mm256_srl_epi32(_mm256_i32gather_epi32(w.base, at, 1), w.shift), w.mask);
-  };
-
-  // The mean in camera space: the sum of the three axes' terms.
-  const V q[3] = {field(Field::kPosX), field(Field::kPosY), field(Field::kPosZ)};
-  V c[3] = {zero, zero, zero};
-#pragma GCC unroll 3
-  for (int a = 0; a < 3; ++a) {
-    const V row = _mm256_mullo_epi32(q[a], set1(3));
-#pragma GCC unroll 3
-    for (int i = 0; i < 3; ++i) c[i] = add(c[i], gather(f.mean[a] + i, row));
-  }
-  const V X = c[0], Y = c[1], Z = c[2];
-  // in_view: Z > near, |X| <= 8 Z, |Y| <= 8 Z (|v| <= 8 Z as ceil(|v| / 8) <= Z).
-  const auto within = [&](V v) {
-    const V ceil8 = _mm256_srli_epi32(add(_mm256_abs_epi32(v), set1(7)), 3);
-    return _mm256_cmpeq_epi32(_mm256_min_epu32(ceil8, Z), ceil8);
-  };
-  const V in_view = band(band(_mm256_cmpgt_epi32(Z, set1(f.near)), within(X)), within(Y));
-  V culled = band(active, _mm256_xor_si256(in_view, ones));
-  // The lanes' range: 2^46 / Z below 2^31 (and every product below within 64 bits).
-  V fallback = band(band(active, in_view), _mm256_cmpgt_epi32(set1(1 << 16), Z));
-  V live = band(band(active, in_view), _mm256_xor_si256(fallback, ones));
-  const V Zs = _mm256_blendv_epi8(set1(1 << 16), Z, live);  // no division by a culled lane's Z
-
-  // The position frame (FrameAngles::position_frame, turn).
+// The position frame (FrameAngles::position_frame, turn) and the axes in
+// camera space: (frame sigma + 2^13) >> 14, sigma <= 2^25.
+template <class FieldOf>
+[[gnu::always_inline]] inline void position_axes(const NodeLaneFrame& f, const FieldOf& field, Lanes& l) {
+  const V zero = _mm256_setzero_si256();
+  V(&frame)[3][3] = l.frame;
   const V theta = gather(f.theta_p, field(Field::kFpTheta));  // (sin, cos)
   const V phi = field(Field::kFpPhi);
   const V gamma_index = band(sub(_mm256_sllv_epi32(field(Field::kFpPsi), set1(f.gamma_psi_shift_p)),
@@ -211,7 +178,6 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
   const V t0[3] = {w0, _mm256_srli_epi32(w0, 16), w1};  // low halves are t0
   const V t1_hi[3] = {band(w1, set1(static_cast<int32_t>(0xFFFF0000u))), _mm256_slli_epi32(w2, 16),
                       band(w2, set1(static_cast<int32_t>(0xFFFF0000u)))};  // t1 in the high half
-  V frame[3][3];
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
     const V t0t2 = bor(band(t0[k], set1(0xFFFF)), set1(static_cast<int32_t>(static_cast<uint32_t>(f.column2[k]) << 16)));
@@ -221,18 +187,24 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
     frame[1][k] = rot(ut1, ngs_gc);
     frame[2][k] = rot(t0t2, theta);
   }
-  // The axes in camera space: (frame sigma + 2^13) >> 14, sigma <= 2^25.
   const V sp3 = _mm256_mullo_epi32(field(Field::kSigmaP), set1(3));
-  V axes[3][3], sigma_c[3];
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
     const V sigma = _mm256_min_epi32(gather(f.sigma_p, add(sp3, set1(k))), set1(1 << 25));
-    sigma_c[k] = sigma;
+    l.sigma[k] = sigma;
 #pragma GCC unroll 8
-    for (int i = 0; i < 3; ++i) axes[k][i] = narrow(mul64(frame[k][i], sigma), 1 << 13, 14);
+    for (int i = 0; i < 3; ++i) l.axes[k][i] = narrow(mul64(frame[k][i], sigma), 1 << 13, 14);
   }
+}
 
-  // NodeProjection::setup: u = 2^46 / Z, one division a lane.
+// NodeProjection::setup: u = 2^46 / Z, one division a lane; lanes whose
+// slopes pass 2^15 fall back.
+[[gnu::always_inline]] inline void project(const NodeLaneFrame& f, V Zs, Lanes& l) {
+  const V ones = _mm256_cmpeq_epi32(_mm256_setzero_si256(), _mm256_setzero_si256());
+  const V X = l.X, Y = l.Y;
+  const V(&axes)[3][3] = l.axes;
+  V(&mx)[3] = l.mx;
+  V(&my)[3] = l.my;
   alignas(32) int32_t zs[8], us[8];
   _mm256_store_si256(reinterpret_cast<__m256i*>(zs), Zs);
 #pragma GCC unroll 8
@@ -240,28 +212,32 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
   const V u = _mm256_load_si256(reinterpret_cast<const __m256i*>(us));
   const V focal = set1(f.focal_q4);
   const V xr = narrow(mul64(X, u), 0, 30), yr = narrow(mul64(Y, u), 0, 30);
-  const V x0 = add(set1(f.cx_q4), narrow(mul64(focal, xr), 0, 16));
-  const V y0 = add(set1(f.cy_q4), narrow(mul64(focal, yr), 0, 16));
+  l.x0 = add(set1(f.cx_q4), narrow(mul64(focal, xr), 0, 16));
+  l.y0 = add(set1(f.cy_q4), narrow(mul64(focal, yr), 0, 16));
   const V fu = narrow(mul64(focal, u), 0, 20);
-  V mx[3], my[3];
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
     const V dx = sub(axes[k][0], narrow(mul64(xr, axes[k][2]), 0, 16));
     const V dy = sub(axes[k][1], narrow(mul64(yr, axes[k][2]), 0, 16));
     const Wide px = mul64(dx, fu), py = mul64(dy, fu);
     // Beyond 2^15 a slope (2^37 before the shift): not a lane's node.
-    fallback = bor(fallback, band(live, bor(beyond(px, 37), beyond(py, 37))));
+    l.fallback = bor(l.fallback, band(l.live, bor(beyond(px, 37), beyond(py, 37))));
     mx[k] = narrow(px, 0, 22);
     my[k] = narrow(py, 0, 22);
   }
-  live = band(live, _mm256_xor_si256(fallback, ones));
+  l.live = band(l.live, _mm256_xor_si256(l.fallback, ones));
+}
 
-  // The 3.5 sigma extent on screen (L1): cull nodes wholly off screen.
+// The 3.5 sigma extent on screen (L1) culls nodes wholly off screen; the
+// points: ppn_index of the screen covariance, then the table.
+[[gnu::always_inline]] inline void footprint(const NodeLaneFrame& f, Lanes& l) {
+  const V zero = _mm256_setzero_si256(), ones = _mm256_cmpeq_epi32(zero, zero);
+  const V x0 = l.x0, y0 = l.y0;
   V vx4[3], vy4[3], ex = zero, ey = zero;
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
-    vx4[k] = _mm256_srai_epi32(mx[k], 4);
-    vy4[k] = _mm256_srai_epi32(my[k], 4);
+    vx4[k] = _mm256_srai_epi32(l.mx[k], 4);
+    vy4[k] = _mm256_srai_epi32(l.my[k], 4);
     ex = add(ex, _mm256_abs_epi32(vx4[k]));
     ey = add(ey, _mm256_abs_epi32(vy4[k]));
   }
@@ -269,10 +245,9 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
   ey = _mm256_srai_epi32(_mm256_mullo_epi32(ey, set1(7)), 1);
   const V off = bor(bor(_mm256_cmpgt_epi32(zero, add(x0, ex)), _mm256_cmpgt_epi32(sub(x0, ex), set1(f.width_q4 - 1))),
                     bor(_mm256_cmpgt_epi32(zero, add(y0, ey)), _mm256_cmpgt_epi32(sub(y0, ey), set1(f.height_q4 - 1))));
-  culled = bor(culled, band(live, off));
-  live = band(live, _mm256_xor_si256(off, ones));
+  l.culled = bor(l.culled, band(l.live, off));
+  l.live = band(l.live, _mm256_xor_si256(off, ones));
 
-  // Points: ppn_index of the screen covariance, then the table.
   V a = zero, b = zero, cc = zero;
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
@@ -291,35 +266,58 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
   d = _mm256_min_epi32(_mm256_max_epi32(d, zero), set1(kPpnAspects - 1));
   const V size_index = _mm256_min_epi32(t, set1(kPpnSizes - 1));
   const V measured = gather16(f.ppn, add(_mm256_mullo_epi32(size_index, set1(kPpnAspects)), d));
-  const V count_v = _mm256_min_epi32(
+  l.count = _mm256_min_epi32(
       _mm256_max_epi32(_mm256_srli_epi32(add(_mm256_mullo_epi32(measured, set1(static_cast<int32_t>(f.quality_q8))), set1(128)), 8),
                        set1(1)),
       set1(static_cast<int32_t>(f.samples)));
 
-  // Depth: depth0 = (Z - near) << shift, dz = (A_z << shift) >> e in 16 bits.
+}
+
+// Depth: depth0 = (Z - near) << shift, dz = (A_z << shift) >> e in 16 bits;
+// whether every depth of the node stays inside the word.
+[[gnu::always_inline]] inline void depth_terms(const NodeLaneFrame& f, Lanes& l) {
+  const V zero = _mm256_setzero_si256();
+  const V Z = l.Z;
+  const V(&axes)[3][3] = l.axes;
+  V(&dz)[3] = l.dz;
   const V s_d = set1(f.depth_shift);
   const V az_max = _mm256_max_epi32(_mm256_max_epi32(_mm256_abs_epi32(axes[0][2]), _mm256_abs_epi32(axes[1][2])),
                                     _mm256_abs_epi32(axes[2][2]));
   const V bits = add(log2_32(_mm256_max_epi32(az_max, set1(1))), set1(1));
   const V e = band(_mm256_max_epi32(sub(add(bits, s_d), set1(15)), zero), _mm256_cmpgt_epi32(az_max, zero));
   const V left = _mm256_max_epi32(sub(s_d, e), zero), right = _mm256_max_epi32(sub(e, s_d), zero);
-  V dz[3], dsum = zero;
+  V dsum = zero;
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
     dz[k] = _mm256_srav_epi32(_mm256_sllv_epi32(axes[k][2], left), right);
     dsum = add(dsum, _mm256_abs_epi32(dz[k]));
   }
-  const V dshift = sub(set1(12), e);
+  const V dshift = l.dshift = sub(set1(12), e);
   const V reach = _mm256_srlv_epi32(_mm256_mullo_epi32(dsum, set1(kGaussianClip)), _mm256_max_epi32(dshift, zero));
   const V dn = sub(Z, set1(f.near));
   const V fits = _mm256_cmpeq_epi32(_mm256_srl_epi32(dn, _mm_cvtsi32_si128(32 - f.depth_shift)), zero);
-  const V depth0 = _mm256_sll_epi32(dn, _mm_cvtsi32_si128(f.depth_shift));
+  const V depth0 = l.depth0 = _mm256_sll_epi32(dn, _mm_cvtsi32_si128(f.depth_shift));
   const V above = _mm256_cmpeq_epi32(_mm256_max_epu32(depth0, add(reach, set1(1))), depth0);  // depth0 > reach
   const V below = _mm256_cmpeq_epi32(_mm256_min_epu32(depth0, sub(set1(static_cast<int32_t>(0xFFFFFFFEu)), reach)), depth0);
 
-  // Shading (FrameAngles::light_terms).
-  V sn = zero, lt = zero, ht = zero, l0h0 = zero, intensity = set1(256), specular = zero;
-  V surface[2][3] = {{zero, zero, zero}, {zero, zero, zero}};
+  l.depth_in_word = band(fits, band(above, below));
+}
+
+// A node's shading constants in lanes (FrameAngles::light_terms; the
+// surface's turn as draw_node's kSurface block).
+struct LaneShade {
+  V sn, lt, ht, l0h0, intensity, specular;
+  V surface[2][3];
+  V node_rgb;  // the node's colour, shaded
+};
+template <PointNormals kNormals, bool kSpecular, class FieldOf>
+[[gnu::always_inline]] inline LaneShade lane_shade(const NodeLaneFrame& f, const FieldOf& field, const Lanes& l) {
+  const V zero = _mm256_setzero_si256();
+  const V(&frame)[3][3] = l.frame;
+  const V(&sigma_c)[3] = l.sigma;
+  LaneShade sh{zero, zero, zero, zero, set1(256), zero, {{zero, zero, zero}, {zero, zero, zero}}, zero};
+  V &sn = sh.sn, &lt = sh.lt, &ht = sh.ht, &l0h0 = sh.l0h0, &intensity = sh.intensity, &specular = sh.specular;
+  V(&surface)[2][3] = sh.surface;
   if (f.lit) {
     const V th = gather(f.theta_n, field(Field::kFnTheta));
     const V ph = field(Field::kFnPhi);
@@ -406,15 +404,29 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
     const V v = add(_mm256_srli_epi32(_mm256_mullo_epi32(set1(channel), intensity), 8), specular);
     return _mm256_min_epi32(v, set1(255));
   };
-  const V node_rgb = bor(bor(_mm256_slli_epi32(shade_channel(static_cast<int32_t>(f.base_rgb >> 16)), 16),
+  sh.node_rgb = bor(bor(_mm256_slli_epi32(shade_channel(static_cast<int32_t>(f.base_rgb >> 16)), 16),
                              _mm256_slli_epi32(shade_channel(static_cast<int32_t>((f.base_rgb >> 8) & 0xFF)), 8)),
                          shade_channel(static_cast<int32_t>(f.base_rgb & 0xFF)));
+  return sh;
+}
 
-  // The tile pass: slopes and depth terms in 16 bits, the depths inside the
-  // word, within 2 x 2 tiles (pixel_span: the reach of the count's samples,
-  // sample_reach_bucket; lanes whose slopes reach 2^15 wrap here and are
-  // not tile lanes).
-  const V bucket = sample_reach_bucket8(count_v);
+// The tile pass's lanes: slopes and depth terms in 16 bits, the depths
+// inside the word, within 2 x 2 tiles (pixel_span: the reach of the
+// count's samples, sample_reach_bucket; lanes whose slopes reach 2^15 wrap
+// here and are not tile lanes). The rest of the live lanes fall back.
+struct LaneTiles {
+  V lo_x, hi_x, lo_y, hi_y;  // the span on screen (px)
+  V tx0, ty0, tx1, ty1;      // the tiles it touches
+  V tile;                    // the lanes that wait for the tile pass
+};
+[[gnu::always_inline]] inline LaneTiles tile_lanes(const NodeLaneFrame& f, Lanes& l) {
+  const V zero = _mm256_setzero_si256(), ones = _mm256_cmpeq_epi32(zero, zero);
+  const V(&mx)[3] = l.mx;
+  const V(&my)[3] = l.my;
+  const V x0 = l.x0, y0 = l.y0, dshift = l.dshift;
+  LaneTiles t;
+  V &lo_x = t.lo_x, &hi_x = t.hi_x, &lo_y = t.lo_y, &hi_y = t.hi_y;
+  const V bucket = sample_reach_bucket8(l.count);
   V sx = zero, sy = zero, rx = zero, ry = zero;
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
@@ -430,24 +442,35 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
     *lo = _mm256_srai_epi32(sub(sub(p0, dd), set1(1 + corner)), 4);
     *hi = add(_mm256_srai_epi32(sub(add(p0, dd), set1(corner)), 4), set1(f.size - 1));
   };
-  V lo_x, hi_x, lo_y, hi_y;
   span(x0, rx, &lo_x, &hi_x);
   span(y0, ry, &lo_y, &hi_y);
   const __m128i tl = _mm_cvtsi32_si128(f.tile_log2);
-  const V tx0 = _mm256_sra_epi32(_mm256_max_epi32(lo_x, zero), tl), ty0 = _mm256_sra_epi32(_mm256_max_epi32(lo_y, zero), tl);
-  const V tx1 = _mm256_sra_epi32(_mm256_min_epi32(hi_x, set1(f.width - 1)), tl);
-  const V ty1 = _mm256_sra_epi32(_mm256_min_epi32(hi_y, set1(f.height - 1)), tl);
+  const V tx0 = t.tx0 = _mm256_sra_epi32(_mm256_max_epi32(lo_x, zero), tl);
+  const V ty0 = t.ty0 = _mm256_sra_epi32(_mm256_max_epi32(lo_y, zero), tl);
+  const V tx1 = t.tx1 = _mm256_sra_epi32(_mm256_min_epi32(hi_x, set1(f.width - 1)), tl);
+  const V ty1 = t.ty1 = _mm256_sra_epi32(_mm256_min_epi32(hi_y, set1(f.height - 1)), tl);
   const V small = band(band(_mm256_cmpgt_epi32(set1(1 << 15), sx), _mm256_cmpgt_epi32(set1(1 << 15), sy)),
                        _mm256_cmpgt_epi32(dshift, set1(-1)));
   const V on_screen = band(band(_mm256_cmpgt_epi32(hi_x, set1(-1)), _mm256_cmpgt_epi32(hi_y, set1(-1))),
                            band(_mm256_cmpgt_epi32(set1(f.width), lo_x), _mm256_cmpgt_epi32(set1(f.height), lo_y)));
   const V few_tiles = band(_mm256_cmpgt_epi32(set1(2), sub(tx1, tx0)), _mm256_cmpgt_epi32(set1(2), sub(ty1, ty0)));
-  const V tile = band(live, band(band(small, band(fits, band(above, below))), band(on_screen, few_tiles)));
-  fallback = bor(fallback, band(live, _mm256_xor_si256(tile, ones)));
+  t.tile = band(l.live, band(band(small, l.depth_in_word), band(on_screen, few_tiles)));
+  l.fallback = bor(l.fallback, band(l.live, _mm256_xor_si256(t.tile, ones)));
+  return t;
+}
 
-  // The TileNodes of the tile lanes, left-packed from `base` (TileNodes::store):
-  // fields 0-23 of the 8 lanes, as three 8 x 8 transposes to 8-word pieces of rows.
-  const uint32_t tile_mask = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(tile)));
+
+// The TileNodes of the tile lanes, left-packed from `base` (TileNodes::store):
+// fields 0-23 of the 8 lanes, as three 8 x 8 transposes to 8-word pieces of rows.
+template <PointNormals kNormals>
+[[gnu::always_inline]] inline void store_tile_nodes(const NodeLaneFrame& f, const Lanes& l, const LaneShade& sh,
+                                                    const LaneTiles& t, uint32_t tile_mask, TileNodes& out,
+                                                    uint32_t base) {
+  const V(&mx)[3] = l.mx;
+  const V(&my)[3] = l.my;
+  const V(&dz)[3] = l.dz;
+  const V(&surface)[2][3] = sh.surface;
+  const int32_t corner = (f.size - 1) * 8;
   const V order = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(kPacking.order[tile_mask])));
   V fields[24] = {};
   const auto put = [&](TileField which, V v) { fields[static_cast<int>(which)] = v; };
@@ -457,19 +480,19 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
   put(TileField::kMy2, band(my[2], set1(0xFFFF)));
   put(TileField::kDz01, pair(dz[0], dz[1]));
   put(TileField::kDz2, band(dz[2], set1(0xFFFF)));
-  put(TileField::kX0, sub(x0, set1(corner)));
-  put(TileField::kY0, sub(y0, set1(corner)));
-  put(TileField::kDepth0, depth0);
-  put(TileField::kSpanX, pair(lo_x, hi_x));
-  put(TileField::kSpanY, pair(lo_y, hi_y));
-  put(TileField::kCountShift, bor(count_v, _mm256_slli_epi32(dshift, 16)));
-  put(TileField::kSn, sn);
-  put(TileField::kLt, lt);
-  put(TileField::kHt, ht);
-  put(TileField::kL0H0, l0h0);
+  put(TileField::kX0, sub(l.x0, set1(corner)));
+  put(TileField::kY0, sub(l.y0, set1(corner)));
+  put(TileField::kDepth0, l.depth0);
+  put(TileField::kSpanX, pair(t.lo_x, t.hi_x));
+  put(TileField::kSpanY, pair(t.lo_y, t.hi_y));
+  put(TileField::kCountShift, bor(l.count, _mm256_slli_epi32(l.dshift, 16)));
+  put(TileField::kSn, sh.sn);
+  put(TileField::kLt, sh.lt);
+  put(TileField::kHt, sh.ht);
+  put(TileField::kL0H0, sh.l0h0);
   put(TileField::kBaseRgb, set1(static_cast<int32_t>(f.base_rgb)));
-  put(TileField::kNodeRgb, node_rgb);
-  put(TileField::kLighting, bor(intensity, _mm256_slli_epi32(specular, 16)));
+  put(TileField::kNodeRgb, sh.node_rgb);
+  put(TileField::kLighting, bor(sh.intensity, _mm256_slli_epi32(sh.specular, 16)));
   if constexpr (kNormals == PointNormals::kSurface) {
     put(TileField::kS0_01, pair(surface[0][0], surface[0][1]));
     put(TileField::kS0_2, band(surface[0][2], set1(0xFFFF)));
@@ -488,17 +511,81 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
     for (int k = 0; k < 8; ++k) _mm256_storeu_si256(reinterpret_cast<__m256i*>(out.row(base + k) + 8 * piece), rows[k]);
   }
 
-  NodeLaneBatch& r = batches[batch];
-  r.tile_mask = tile_mask;
-  r.culled_mask = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(culled)));
-  r.tile_count = static_cast<uint32_t>(__builtin_popcount(tile_mask));
-  r.culled_count = static_cast<uint32_t>(__builtin_popcount(r.culled_mask));
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(r.count), count_v);
-  _mm256_storeu_si256(reinterpret_cast<__m256i*>(r.tiles),
-                      bor(bor(tx0, _mm256_slli_epi32(ty0, 12)),
-                          bor(_mm256_slli_epi32(band(_mm256_cmpgt_epi32(tx1, tx0), set1(1)), 24),
-                              _mm256_slli_epi32(band(_mm256_cmpgt_epi32(ty1, ty0), set1(1)), 25))));
-  base += r.tile_count;
+}
+
+}  // namespace
+
+template <PointNormals kNormals, bool kSpecular>
+uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t count, TileNodes& out, uint32_t base,
+                      NodeLaneBatch* batches) {
+  const uint32_t base0 = base;
+  const V zero = _mm256_setzero_si256(), ones = _mm256_cmpeq_epi32(zero, zero);
+  const V lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const V last_slot = set1(static_cast<int32_t>(first_slot + count - 1));
+  // The records' fields: a 32-bit window each (node_format.h's FieldWindow).
+  struct Window {
+    const int* base;
+    __m128i shift;
+    V mask;
+  };
+  Window windows[kFieldCount];
+#pragma GCC unroll 8
+  for (int i = 0; i < kFieldCount; ++i)
+    windows[i] = Window{reinterpret_cast<const int*>(f.records + f.window[i].byte), _mm_cvtsi32_si128(f.window[i].shift),
+                        set1(f.window[i].mask)};
+  for (uint32_t first = first_slot, batch = 0; first < first_slot + count; first += 8, ++batch) {
+    // For lanes past the last node, the last node's fields.
+    const V active = _mm256_cmpgt_epi32(set1(static_cast<int32_t>(first_slot + count - first)), lane);
+    const V slot = _mm256_min_epi32(add(set1(static_cast<int32_t>(first)), lane), last_slot);
+    const V at = _mm256_mullo_epi32(slot, set1(static_cast<int32_t>(f.stride)));
+    const auto field = [&](Field which) {
+      const Window& w = windows[static_cast<int>(which)];
+      return band(_mm256_srl_epi32(_mm256_i32gather_epi32(w.base, at, 1), w.shift), w.mask);
+    };
+
+    // The mean in camera space: the sum of the three axes' terms.
+    const V q[3] = {field(Field::kPosX), field(Field::kPosY), field(Field::kPosZ)};
+    V c[3] = {zero, zero, zero};
+#pragma GCC unroll 3
+    for (int a = 0; a < 3; ++a) {
+      const V row = _mm256_mullo_epi32(q[a], set1(3));
+#pragma GCC unroll 3
+      for (int i = 0; i < 3; ++i) c[i] = add(c[i], gather(f.mean[a] + i, row));
+    }
+    Lanes l;
+    const V X = l.X = c[0], Y = l.Y = c[1], Z = l.Z = c[2];
+    // in_view: Z > near, |X| <= 8 Z, |Y| <= 8 Z (|v| <= 8 Z as ceil(|v| / 8) <= Z).
+    const auto within = [&](V v) {
+      const V ceil8 = _mm256_srli_epi32(add(_mm256_abs_epi32(v), set1(7)), 3);
+      return _mm256_cmpeq_epi32(_mm256_min_epu32(ceil8, Z), ceil8);
+    };
+    const V in_view = band(band(_mm256_cmpgt_epi32(Z, set1(f.near)), within(X)), within(Y));
+    l.culled = band(active, _mm256_xor_si256(in_view, ones));
+    // The lanes' range: 2^46 / Z below 2^31 (and every product below within 64 bits).
+    l.fallback = band(band(active, in_view), _mm256_cmpgt_epi32(set1(1 << 16), Z));
+    l.live = band(band(active, in_view), _mm256_xor_si256(l.fallback, ones));
+    const V Zs = _mm256_blendv_epi8(set1(1 << 16), Z, l.live);  // no division by a culled lane's Z
+
+    position_axes(f, field, l);
+    project(f, Zs, l);
+    footprint(f, l);
+    depth_terms(f, l);
+    const LaneShade sh = lane_shade<kNormals, kSpecular>(f, field, l);
+    const LaneTiles t = tile_lanes(f, l);
+    const uint32_t tile_mask = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(t.tile)));
+    store_tile_nodes<kNormals>(f, l, sh, t, tile_mask, out, base);
+
+    NodeLaneBatch& r = batches[batch];
+    r.tile_mask = tile_mask;
+    r.culled_mask = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(l.culled)));
+    r.tile_count = static_cast<uint32_t>(__builtin_popcount(tile_mask));
+    r.culled_count = static_cast<uint32_t>(__builtin_popcount(r.culled_mask));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(r.count), l.count);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(r.tiles),
+                        bor(bor(t.tx0, _mm256_slli_epi32(t.ty0, 12)),
+                            bor(_mm256_slli_epi32(band(_mm256_cmpgt_epi32(t.tx1, t.tx0), set1(1)), 24),
+                                _mm256_slli_epi32(band(_mm256_cmpgt_epi32(t.ty1, t.ty0), set1(1)), 25))));
+    base += r.tile_count;
   }
   return base - base0;
 }

@@ -2,7 +2,9 @@
 // formats and measured errors are in docs/fixed_point.md.
 #include "raster/point_renderer.h"
 
+#include <array>
 #include <type_traits>
+#include <utility>
 
 #include "raster/point_kernel_avx2.h"
 #include "raster/resolve.h"
@@ -295,66 +297,10 @@ struct PointRenderer::FrameSetup {
   bool lit;  // the model has normals and the shading uses them
 };
 
-template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
-void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uint32_t max_points, FrameStats& stats) {
-  const NodeDecoder& decoder = *f.decoder;
-  // The mean in camera space, each axis's terms rounded (mean_axis_terms),
-  // from the frame's table where it has one.
-  int32_t c[3];
-  if (f.mean[0] != nullptr) {
-    const int32_t *t0 = f.mean[0] + 3 * fields.v[0], *t1 = f.mean[1] + 3 * fields.v[1], *t2 = f.mean[2] + 3 * fields.v[2];
-    for (int i = 0; i < 3; ++i) c[i] = t0[i] + t1[i] + t2[i];
-  } else {
-    camera_mean(f.camera, decoder, fields, c);
-  }
-  if (!NodeProjection::in_view(f.camera, c)) {
-    ++stats.nodes_culled;
-    return;
-  }
-  // The axes in camera space (node_setup.h): the frame in Q14 times sigma
-  // in MU, at most 2^25 (two box extents: larger only in a hostile file),
-  // below 2^25 + 2^11.
-  int16_t frame[3][3];
-  angles_.position_frame(decoder.euler(FrameField::kPosition), fields, frame);
-  const int32_t* sigma = decoder.sigma_p_mu(ClassId{fields[Field::kSigmaP]});
-  int32_t axes[3][3], sk[3];
-  for (int k = 0; k < 3; ++k) {
-    sk[k] = sigma[k] < kMaxSigmaP ? sigma[k] : kMaxSigmaP;
-    for (int i = 0; i < 3; ++i) axes[k][i] = mul_q14_fast(frame[k][i], sk[k]);
-  }
-  PointSetup s;
-  NodeProjection& proj = s.proj;
-  if (!proj.template setup<P != Projection::kAffine>(f.camera, c, axes)) {
-    ++stats.nodes_culled;
-    return;
-  }
-  // The gamma-extent (3.5 sigma) on screen, an L1 bound: cull nodes wholly
-  // off screen. Screen covariance M M^T for the points-per-node index.
-  // |mx|, |my| < 2^28: the extents below 2^28 (int32), the covariance's
-  // products 32 x 32 bits into 64.
-  int32_t ex = 0, ey = 0;
-  int64_t a = 0, b = 0, cc = 0;
-  for (int k = 0; k < 3; ++k) {
-    const int32_t vx = proj.mx[k] >> 4, vy = proj.my[k] >> 4;  // 1/16 px per sigma
-    ex += vx < 0 ? -vx : vx;
-    ey += vy < 0 ? -vy : vy;
-    a += int64_t{vx} * vx;
-    b += int64_t{vx} * vy;
-    cc += int64_t{vy} * vy;
-  }
-  ex = (ex * 7) >> 1;
-  ey = (ey * 7) >> 1;
-  if (proj.x0_q4 + ex < 0 || proj.x0_q4 - ex >= f.width_q4 || proj.y0_q4 + ey < 0 || proj.y0_q4 - ey >= f.height_q4) {
-    ++stats.nodes_culled;
-    return;
-  }
-  // a, c: (1/16 px)^2 = 1/256 px^2, below 3 * 2^48.
-  s.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
-  if (s.count > max_points) s.count = max_points;  // the point cap
-  s.near = f.camera.near_mu;
-  s.size = config_.point_size;
-
-  // Depth: (z - near) << shift for z = Z + (A_z . g) / 2^12, as
+// Depth: the node's (Z - near) and depth per sigma in the depth word's units.
+[[gnu::always_inline]] inline void PointRenderer::set_up_depth(const FrameSetup& f, const int32_t c[3],
+                                                              const int32_t axes[3][3], PointSetup& s) {
+  // (z - near) << shift for z = Z + (A_z . g) / 2^12, as
   // depth0 + (dz . g) >> dshift with dz = A_z 2^(shift - e) in 16 bits
   // (|A_z| 2^shift < 2^61.1: e <= 47).
   // e from A_z's bit length and the shift; A_z << (shift - e) or
@@ -371,8 +317,16 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
     s.dz[k] = e <= f.depth_shift ? axes[k][2] * (1 << (f.depth_shift - e)) : axes[k][2] >> (e - f.depth_shift);
   s.dshift = 12 - e;
 
-  // Colour and shading constants.
-  PointShade& sh = s.shade;
+}
+
+// A node's colour and shading constants (point_kernel.h's PointShade): its
+// colour (the model's, its elevation's or the grey), the light's terms in
+// its normal frame, the surface's turn and the colour axes.
+template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
+[[gnu::always_inline]] inline void PointRenderer::set_up_shade(const FrameSetup& f, const NodeFields& fields,
+                                                              const int16_t frame[3][3], const int32_t sk[3],
+                                                              PointShade& sh) {
+  const NodeDecoder& decoder = *f.decoder;
   uint8_t rgb[3] = {0, 0, 0};
   if (f.elevation_field >= 0) {
     // The mean's cell along the up axis, as a ramp index 0..255.
@@ -442,48 +396,120 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
         sh.ca[k][ch] = static_cast<int16_t>(w > 32767 ? 32767 : w < -32767 ? -32767 : w);
       }
   }
+}
+
+// The affine projection: a node whose terms fit 16 bits and whose depths
+// stay inside the depth word, waiting for the tile pass of the tiles it
+// touches; false when it does not (its points then go through the bins).
+template <PointNormals kNormals, bool kColorPoints>
+[[gnu::always_inline]] inline bool PointRenderer::wait_in_tiles(PointSetup& s, FrameStats& stats) {
+  const NodeProjection& proj = s.proj;
+  const PointShade& sh = s.shade;
+  // At most 2 x 2 tiles; its points count against the frame's budget now.
+  // Such a node beyond the tile pass's room takes the bins with the tile
+  // pass's int32 formula (draw_points).
+  const int32_t sx = abs32(proj.mx[0]) + abs32(proj.mx[1]) + abs32(proj.mx[2]);  // below 2^30
+  const int32_t sy = abs32(proj.my[0]) + abs32(proj.my[1]) + abs32(proj.my[2]);
+  const int32_t reach = sx < (1 << 15) && sy < (1 << 15) && s.dshift >= 0
+                            ? ((abs32(s.dz[0]) + abs32(s.dz[1]) + abs32(s.dz[2])) * kGaussianClip) >> s.dshift
+                            : -1;
+  s.int32_terms = reach >= 0 && s.depth0 - reach - 1 >= 0 && s.depth0 + reach <= 0xFFFFFFFE;
+  if (s.int32_terms && s.count >= kTileMinPoints && raster_.item_room(s.count)) {
+    // Its span on screen from the samples it draws, which reach no
+    // farther than sample_reach_ says (for a few points, little more
+    // than half kGaussianClip) — fewer nodes across tile edges.
+    const int32_t* g = sample_reach_[sample_reach_bucket(s.count)];
+    const auto offsets = [g](const int32_t m[3]) { return abs32(m[0]) * g[0] + abs32(m[1]) * g[1] + abs32(m[2]) * g[2]; };
+    const Span spx = pixel_span(proj.x0_q4, offsets(proj.mx), s.size), spy = pixel_span(proj.y0_q4, offsets(proj.my), s.size);
+    const int sh_t = internal_.tile_log2;
+    const int32_t tx0 = (spx.lo < 0 ? 0 : spx.lo) >> sh_t, ty0 = (spy.lo < 0 ? 0 : spy.lo) >> sh_t;
+    const int32_t tx1 = (spx.hi >= internal_.width ? internal_.width - 1 : spx.hi) >> sh_t;
+    const int32_t ty1 = (spy.hi >= internal_.height ? internal_.height - 1 : spy.hi) >> sh_t;
+    if (spx.hi >= 0 && spy.hi >= 0 && spx.lo < internal_.width && spy.lo < internal_.height && tx1 - tx0 <= 1 &&
+        ty1 - ty0 <= 1) {
+      const uint32_t item = raster_.items();
+      raster_.take_item(s.count);
+      const int32_t span[4] = {spx.lo, spx.hi, spy.lo, spy.hi};
+      tile_nodes_.store_terms(item, proj.mx, proj.my, s.dz, proj.x0_q4 - (s.size - 1) * 8,
+                              proj.y0_q4 - (s.size - 1) * 8, static_cast<uint32_t>(s.depth0), span, s.count,
+                              static_cast<uint32_t>(s.dshift));
+      tile_nodes_.store_shade<kNormals == PointNormals::kSurface, kColorPoints>(item, sh);
+      int slot = 0;
+      for (int32_t ty = ty0; ty <= ty1; ++ty)
+        for (int32_t tx = tx0; tx <= tx1; ++tx)
+          raster_.file_item(item, slot++, static_cast<uint32_t>(ty * raster_.tiles_x() + tx));
+      ++stats.nodes_in_tiles;
+      stats.points += s.count;
+      return true;
+    }
+  }
+  return false;
+}
+
+template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
+void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uint32_t max_points, FrameStats& stats) {
+  const NodeDecoder& decoder = *f.decoder;
+  // The mean in camera space, each axis's terms rounded (mean_axis_terms),
+  // from the frame's table where it has one.
+  int32_t c[3];
+  if (f.mean[0] != nullptr) {
+    const int32_t *t0 = f.mean[0] + 3 * fields.v[0], *t1 = f.mean[1] + 3 * fields.v[1], *t2 = f.mean[2] + 3 * fields.v[2];
+    for (int i = 0; i < 3; ++i) c[i] = t0[i] + t1[i] + t2[i];
+  } else {
+    camera_mean(f.camera, decoder, fields, c);
+  }
+  if (!NodeProjection::in_view(f.camera, c)) {
+    ++stats.nodes_culled;
+    return;
+  }
+  // The axes in camera space (node_setup.h): the frame in Q14 times sigma
+  // in MU, at most 2^25 (two box extents: larger only in a hostile file),
+  // below 2^25 + 2^11.
+  int16_t frame[3][3];
+  angles_.position_frame(decoder.euler(FrameField::kPosition), fields, frame);
+  const int32_t* sigma = decoder.sigma_p_mu(ClassId{fields[Field::kSigmaP]});
+  int32_t axes[3][3], sk[3];
+  for (int k = 0; k < 3; ++k) {
+    sk[k] = sigma[k] < kMaxSigmaP ? sigma[k] : kMaxSigmaP;
+    for (int i = 0; i < 3; ++i) axes[k][i] = mul_q14_fast(frame[k][i], sk[k]);
+  }
+  PointSetup s;
+  NodeProjection& proj = s.proj;
+  if (!proj.template setup<P != Projection::kAffine>(f.camera, c, axes)) {
+    ++stats.nodes_culled;
+    return;
+  }
+  // The gamma-extent (3.5 sigma) on screen, an L1 bound: cull nodes wholly
+  // off screen. Screen covariance M M^T for the points-per-node index.
+  // |mx|, |my| < 2^28: the extents below 2^28 (int32), the covariance's
+  // products 32 x 32 bits into 64.
+  int32_t ex = 0, ey = 0;
+  int64_t a = 0, b = 0, cc = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int32_t vx = proj.mx[k] >> 4, vy = proj.my[k] >> 4;  // 1/16 px per sigma
+    ex += vx < 0 ? -vx : vx;
+    ey += vy < 0 ? -vy : vy;
+    a += int64_t{vx} * vx;
+    b += int64_t{vx} * vy;
+    cc += int64_t{vy} * vy;
+  }
+  ex = (ex * 7) >> 1;
+  ey = (ey * 7) >> 1;
+  if (proj.x0_q4 + ex < 0 || proj.x0_q4 - ex >= f.width_q4 || proj.y0_q4 + ey < 0 || proj.y0_q4 - ey >= f.height_q4) {
+    ++stats.nodes_culled;
+    return;
+  }
+  // a, c: (1/16 px)^2 = 1/256 px^2, below 3 * 2^48.
+  s.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
+  if (s.count > max_points) s.count = max_points;  // the point cap
+  s.near = f.camera.near_mu;
+  s.size = config_.point_size;
+
+  set_up_depth(f, c, axes, s);
+  set_up_shade<kNormals, kColorPoints, kSpecular>(f, fields, frame, sk, s.shade);
   ++stats.nodes_drawn;
   if constexpr (P == Projection::kAffine) {
-    // A node whose terms fit 16 bits and whose depths stay inside the depth
-    // word waits for the tile pass of the (at most 2 x 2) tiles it touches;
-    // its points count against the frame's budget now.
-    // Such a node beyond the tile pass's room takes the bins with the tile
-    // pass's int32 formula (draw_points).
-    const int32_t sx = abs32(proj.mx[0]) + abs32(proj.mx[1]) + abs32(proj.mx[2]);  // below 2^30
-    const int32_t sy = abs32(proj.my[0]) + abs32(proj.my[1]) + abs32(proj.my[2]);
-    const int32_t reach = sx < (1 << 15) && sy < (1 << 15) && s.dshift >= 0
-                              ? ((abs32(s.dz[0]) + abs32(s.dz[1]) + abs32(s.dz[2])) * kGaussianClip) >> s.dshift
-                              : -1;
-    s.int32_terms = reach >= 0 && s.depth0 - reach - 1 >= 0 && s.depth0 + reach <= 0xFFFFFFFE;
-    if (s.int32_terms && s.count >= kTileMinPoints && raster_.item_room(s.count)) {
-      // Its span on screen from the samples it draws, which reach no
-      // farther than sample_reach_ says (for a few points, little more
-      // than half kGaussianClip) — fewer nodes across tile edges.
-      const int32_t* g = sample_reach_[sample_reach_bucket(s.count)];
-      const auto offsets = [g](const int32_t m[3]) { return abs32(m[0]) * g[0] + abs32(m[1]) * g[1] + abs32(m[2]) * g[2]; };
-      const Span spx = pixel_span(proj.x0_q4, offsets(proj.mx), s.size), spy = pixel_span(proj.y0_q4, offsets(proj.my), s.size);
-      const int sh_t = internal_.tile_log2;
-      const int32_t tx0 = (spx.lo < 0 ? 0 : spx.lo) >> sh_t, ty0 = (spy.lo < 0 ? 0 : spy.lo) >> sh_t;
-      const int32_t tx1 = (spx.hi >= internal_.width ? internal_.width - 1 : spx.hi) >> sh_t;
-      const int32_t ty1 = (spy.hi >= internal_.height ? internal_.height - 1 : spy.hi) >> sh_t;
-      if (spx.hi >= 0 && spy.hi >= 0 && spx.lo < internal_.width && spy.lo < internal_.height && tx1 - tx0 <= 1 &&
-          ty1 - ty0 <= 1) {
-        const uint32_t item = raster_.items();
-        raster_.take_item(s.count);
-        const int32_t span[4] = {spx.lo, spx.hi, spy.lo, spy.hi};
-        tile_nodes_.store_terms(item, proj.mx, proj.my, s.dz, proj.x0_q4 - (s.size - 1) * 8,
-                                proj.y0_q4 - (s.size - 1) * 8, static_cast<uint32_t>(s.depth0), span, s.count,
-                                static_cast<uint32_t>(s.dshift));
-        tile_nodes_.store_shade<kNormals == PointNormals::kSurface, kColorPoints>(item, sh);
-        int slot = 0;
-        for (int32_t ty = ty0; ty <= ty1; ++ty)
-          for (int32_t tx = tx0; tx <= tx1; ++tx)
-            raster_.file_item(item, slot++, static_cast<uint32_t>(ty * raster_.tiles_x() + tx));
-        ++stats.nodes_in_tiles;
-        stats.points += s.count;
-        return;
-      }
-    }
+    if (wait_in_tiles<kNormals, kColorPoints>(s, stats)) return;
   }
   stats.points += draw_points<P, kNormals, kColorPoints, kSpecular>(s, stats);
 }
@@ -637,17 +663,45 @@ NodeLaneFrame PointRenderer::lane_frame(const FrameSetup& f, const NodeCache& ca
   return lf;
 }
 
-RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera, uint8_t* frame, size_t stride,
-                                   FrameStats* stats_out) {
-  if (ppn_ == nullptr) return RenderStatus::kBadConfig;  // not initialized
-  if (!cache.ready()) return RenderStatus::kNoStartup;
+using DrawFn = void (PointRenderer::*)(const PointRenderer::FrameSetup&, const NodeFields&, uint32_t, FrameStats&);
+using LaneFn = uint32_t (*)(const NodeLaneFrame&, uint32_t, uint32_t, TileNodes&, uint32_t, NodeLaneBatch*);
+
+// A frame's kernels, each a template over the variant, chosen together.
+struct PointRenderer::Kernels {
+  DrawFn draw;               // a node's set-up, then its points through the bins or a wait for the tile pass
+  PointRaster::TileFn tile;  // the tile pass over the nodes waiting in a tile
+  LaneFn lanes;              // eight nodes' set-up at once in AVX2 lanes (null: none for this variant or build)
+};
+
+const PointRenderer::Kernels& PointRenderer::kernels(Projection projection, PointNormals normals, bool color_points,
+                                                     bool specular) {
+  // Entry ((projection * 3 + normals) * 2 + colour) * 2 + specular.
+  constexpr auto at = []<size_t I>(std::integral_constant<size_t, I>) {
+    constexpr Projection P = static_cast<Projection>(I / 12);
+    constexpr PointNormals N = static_cast<PointNormals>(I / 4 % 3);
+    constexpr bool kColor = I / 2 % 2 != 0, kSpecular = I % 2 != 0;
+    LaneFn lanes = nullptr;  // the lanes take uniform-colour nodes of the affine projection
+    if constexpr (avx2::kBuilt && P == Projection::kAffine && !kColor) lanes = &avx2::set_up_nodes<N, kSpecular>;
+    return Kernels{&PointRenderer::draw_node<P, N, kColor, kSpecular>, &PointRenderer::tile_nodes_of<N, kColor, kSpecular>,
+                   lanes};
+  };
+  static constexpr auto table = [&]<size_t... I>(std::index_sequence<I...>) {
+    return std::array<Kernels, sizeof...(I)>{at(std::integral_constant<size_t, I>{})...};
+  }(std::make_index_sequence<3 * 3 * 2 * 2>{});
+  static_assert(static_cast<int>(Projection::kExact) == 2 && static_cast<int>(PointNormals::kSurface) == 2);
+  return table[((static_cast<size_t>(projection) * 3 + static_cast<size_t>(normals)) * 2 + color_points) * 2 + specular];
+}
+
+// The camera's checks and what follows from it for every node: the internal
+// frame's camera, the depth word, the light in model space, the colour mode
+// and the angle tables.
+RenderStatus PointRenderer::set_up_frame(const NodeCache& cache, const Camera& camera, FrameSetup& f) {
   const SpgHeader& header = cache.header();
   if (camera.focal_q4 < 1 || camera.focal_q4 > kMaxFocalQ4 || camera.near_mu < kCameraMinDistance ||
       camera.far_mu <= camera.near_mu || camera.far_mu > kMaxDepthMu)
     return RenderStatus::kBadCamera;
   for (int k = 0; k < 3; ++k)
     if (camera.eye[k] < -(1 << 29) || camera.eye[k] > (1 << 29)) return RenderStatus::kBadCamera;
-  FrameSetup f;
   f.camera = camera;
   const int32_t n = config_.supersample;
   if (n > 1) {  // the camera for the internal frame: focal length and principal point scaled
@@ -677,51 +731,143 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   f.elevation_down = spg_axis_negative(config_.elevation);
   f.elevation_bits = elevation ? header.layout.bits[f.elevation_field] : 0;
   f.decoder = &cache.decoder();
+  f.lit = header.has_normals() && config_.shading != ShadingMode::kNone;
   tables_.uniform_base = !f.model_color;
   tables_.base_rgb = config_.grey_rgb & 0xFFFFFFu;
   tables_.grey_shade = f.model_color ? nullptr : grey_shades_;
   tables_.grey_shade565 = tables_.grey_shade ? tables_.grey_shade + kGreyShades : nullptr;
   if (!angles_.build(f.camera, cache.decoder(), f.light, f.half)) return RenderStatus::kBadConfig;  // fields too wide
+  return RenderStatus::kOk;
+}
 
-  const bool normals = header.has_normals() && config_.shading != ShadingMode::kNone;
-  f.lit = normals;
-  const PointNormals point_normals = !normals                                    ? PointNormals::kNode
+// Eight nodes at a time in AVX2 lanes (node_lanes.h), from the first, while
+// the tile pass and the budget surely hold them; what the lanes leave
+// through draw_slot, so the order in which nodes claim the room is the
+// scalar loop's. Returns the first node not set up.
+template <class DrawSlot>
+uint32_t PointRenderer::set_up_in_lanes(const FrameSetup& f, const NodeCache& cache, const Kernels& k,
+                                        FrameStats& stats, const DrawSlot& draw_slot) {
+  const uint32_t count = cache.count();
+  const NodeLaneFrame lf = lane_frame(f, cache);
+  const uint32_t tiles_x = static_cast<uint32_t>(raster_.tiles_x());
+  NodeLaneBatch batches[kLaneBatches];
+  uint32_t first = 0;
+  while (first < count) {
+    // As many batches as the tile pass and the budget surely hold (each
+    // node of them a TileNode, or its scalar set-up's, and every point
+    // filed; the lanes write 8 rows a batch past the last taken), so
+    // that no node is refused for room.
+    uint32_t run = (count - first + 7) / 8;
+    if (run > kLaneBatches) run = kLaneBatches;
+    while (run > 0 && !raster_.room_for(8 * run + 8, 8 * run * config_.samples)) run /= 2;
+    if (run == 0) break;
+    const uint32_t slots = count - first < 8 * run ? count - first : 8 * run;
+    const uint32_t base = raster_.items();
+    uint32_t item = base, points = 0;
+    k.lanes(lf, first, slots, tile_nodes_, base, batches);
+    for (uint32_t b = 0; b < run; ++b) {
+      const NodeLaneBatch& r = batches[b];
+      for (uint32_t m = r.tile_mask; m != 0; m &= m - 1) {
+        const uint32_t code = r.tiles[__builtin_ctz(m)];
+        raster_.file_item_in_tiles(item++, ((code >> 12) & 0xFFFu) * tiles_x + (code & 0xFFFu), code >> 24 & 1u,
+                                   code >> 25 & 1u);
+        points += r.count[__builtin_ctz(m)];
+      }
+      stats.nodes_in_lanes += r.tile_count + r.culled_count;
+      stats.nodes_drawn += r.tile_count;
+      stats.nodes_in_tiles += r.tile_count;
+      stats.nodes_culled += r.culled_count;
+    }
+    raster_.took_items(item - base, points);
+    stats.points += points;
+    for (uint32_t b = 0; b < run; ++b) {
+      const uint32_t lanes = slots - 8 * b < 8 ? slots - 8 * b : 8;
+      const uint32_t scalar = ~(batches[b].tile_mask | batches[b].culled_mask) & ((1u << lanes) - 1u);
+      for (uint32_t m = scalar; m != 0; m &= m - 1) draw_slot(first + 8 * b + static_cast<uint32_t>(__builtin_ctz(m)));
+    }
+    first += slots;
+  }
+  return first;
+}
+
+// Supersampling: the screen's coverage bits from the internal frame's (a
+// screen pixel is covered where any pixel of its block is), and each screen
+// pixel the rounded mean of its n x n block.
+void PointRenderer::finish_supersampled(uint8_t* frame, size_t stride) {
+  // Locals, not members, in the loops: the frame's bytes may alias nothing
+  // the compiler must reload.
+  const int32_t n = config_.supersample;
+  const uint32_t width = config_.raster.width, height = config_.raster.height;
+  const bool rgb888 = config_.raster.format == PixelFormat::kRgb888;
+  const uint8_t* const internal = internal_frame_;
+  const size_t internal_stride = size_t{internal_.width} * 3;
+  if (coverage_ != nullptr) {
+    const size_t in_row = coverage_row_bytes(internal_.width), out_row = coverage_row_bytes(config_.raster.width);
+    const uint32_t block = (1u << n) - 1;
+    for (uint32_t y = 0; y < height; ++y) {
+      uint8_t* out = screen_coverage_ + y * out_row;
+      for (size_t i = 0; i < out_row; ++i) out[i] = 0;
+      for (int32_t dy = 0; dy < n; ++dy) {
+        const uint8_t* in = coverage_ + (y * n + static_cast<uint32_t>(dy)) * in_row;
+        for (uint32_t x = 0; x < width; ++x) {
+          const uint32_t bit = x * static_cast<uint32_t>(n);  // n divides 8: a block never straddles a byte
+          if ((in[bit >> 3] >> (bit & 7)) & block) out[x >> 3] = static_cast<uint8_t>(out[x >> 3] | (1u << (x & 7)));
+        }
+      }
+    }
+  }
+  const uint32_t half = static_cast<uint32_t>(n * n) / 2, shift = n == 2 ? 2 : 4;
+  for (uint32_t y = 0; y < height; ++y) {
+    uint8_t* out = frame + y * stride;
+    for (uint32_t x = 0; x < width; ++x) {
+      uint32_t sum[3] = {half, half, half};
+      for (int32_t dy = 0; dy < n; ++dy) {
+        const uint8_t* p = internal + (y * n + static_cast<uint32_t>(dy)) * internal_stride + size_t{x} * n * 3;
+        for (int32_t dx = 0; dx < n; ++dx, p += 3) {
+          sum[0] += p[0];
+          sum[1] += p[1];
+          sum[2] += p[2];
+        }
+      }
+      const uint32_t r = sum[0] >> shift, g = sum[1] >> shift, b = sum[2] >> shift;
+      if (rgb888) {
+        out[3 * x] = static_cast<uint8_t>(r);
+        out[3 * x + 1] = static_cast<uint8_t>(g);
+        out[3 * x + 2] = static_cast<uint8_t>(b);
+      } else {
+        const uint16_t v = rgb565((r << 16) | (g << 8) | b);
+        out[2 * x] = static_cast<uint8_t>(v);
+        out[2 * x + 1] = static_cast<uint8_t>(v >> 8);
+      }
+    }
+  }
+}
+
+RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera, uint8_t* frame, size_t stride,
+                                   FrameStats* stats_out) {
+  if (ppn_ == nullptr) return RenderStatus::kBadConfig;  // not initialized
+  if (!cache.ready()) return RenderStatus::kNoStartup;
+  FrameSetup f;
+  if (const RenderStatus s = set_up_frame(cache, camera, f); s != RenderStatus::kOk) return s;
+
+  // The variant: how normals are taken, per-point colour, specular.
+  const SpgHeader& header = cache.header();
+  const PointNormals point_normals = !f.lit                                       ? PointNormals::kNode
                                     : config_.shading == ShadingMode::kPerPoint ? PointNormals::kSampled
                                     : config_.shading == ShadingMode::kSurface  ? PointNormals::kSurface
                                                                                 : PointNormals::kNode;
-  const bool color_points = header.has_color() && !config_.grey && !elevation && config_.sample_color;
-  const bool specular = normals && config_.lighting.specular_q8 > 0;
-  using DrawFn = void (PointRenderer::*)(const FrameSetup&, const NodeFields&, uint32_t, FrameStats&);
-  const PointRaster::TileFn tile_fn =
-      point_normals == PointNormals::kSampled
-          ? (color_points ? (specular ? &tile_nodes_of<PointNormals::kSampled, true, true> : &tile_nodes_of<PointNormals::kSampled, true, false>)
-                          : (specular ? &tile_nodes_of<PointNormals::kSampled, false, true> : &tile_nodes_of<PointNormals::kSampled, false, false>))
-      : point_normals == PointNormals::kSurface
-          ? (color_points ? (specular ? &tile_nodes_of<PointNormals::kSurface, true, true> : &tile_nodes_of<PointNormals::kSurface, true, false>)
-                          : (specular ? &tile_nodes_of<PointNormals::kSurface, false, true> : &tile_nodes_of<PointNormals::kSurface, false, false>))
-          : (color_points ? (specular ? &tile_nodes_of<PointNormals::kNode, true, true> : &tile_nodes_of<PointNormals::kNode, true, false>)
-                          : (specular ? &tile_nodes_of<PointNormals::kNode, false, true> : &tile_nodes_of<PointNormals::kNode, false, false>));
-#define STIPPLE_PICK_N(P, N)                                                                                       \
-  (color_points ? (specular ? &PointRenderer::draw_node<P, N, true, true> : &PointRenderer::draw_node<P, N, true, false>) \
-                : (specular ? &PointRenderer::draw_node<P, N, false, true> : &PointRenderer::draw_node<P, N, false, false>))
-#define STIPPLE_PICK(P) \
-  (point_normals == PointNormals::kSampled   ? STIPPLE_PICK_N(P, PointNormals::kSampled) \
-   : point_normals == PointNormals::kSurface ? STIPPLE_PICK_N(P, PointNormals::kSurface) \
-                                             : STIPPLE_PICK_N(P, PointNormals::kNode))
-  DrawFn draw = config_.projection == Projection::kAffine       ? STIPPLE_PICK(Projection::kAffine)
-                : config_.projection == Projection::kReciprocal ? STIPPLE_PICK(Projection::kReciprocal)
-                                                                : STIPPLE_PICK(Projection::kExact);
-#undef STIPPLE_PICK_N
-#undef STIPPLE_PICK
+  const bool color_points = header.has_color() && !config_.grey && config_.elevation == SpgAxis::kNone &&
+                            config_.sample_color;
+  const bool specular = f.lit && config_.lighting.specular_q8 > 0;
+  const Kernels& k = kernels(config_.projection, point_normals, color_points, specular);
 
   const uint32_t count = cache.count();
   // The mean table where the fields fit it: for the node lanes, and for
   // draw_node where the cut repays building it (kMeanCellsPerNode).
   const bool mean_fits = header.layout.bits[0] <= kMeanTermBits && header.layout.bits[1] <= kMeanTermBits &&
                          header.layout.bits[2] <= kMeanTermBits;
-  const bool node_lanes = avx2::kBuilt && lane_ppn_ != nullptr && lanes_ == PointLanes::kBest &&
-                          config_.projection == Projection::kAffine && !f.model_color && config_.point_cap == 0 &&
-                          mean_fits && count >= 64;
+  const bool node_lanes = k.lanes != nullptr && lane_ppn_ != nullptr && lanes_ == PointLanes::kBest &&
+                          !f.model_color && config_.point_cap == 0 && mean_fits && count >= 64;
   const uint32_t mean_cells = (1u << header.layout.bits[0]) + (1u << header.layout.bits[1]) + (1u << header.layout.bits[2]);
   f.mean[0] = f.mean[1] = f.mean[2] = nullptr;
   FrameStats stats;
@@ -732,6 +878,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   raster_.begin_frame();
   // The point cap: a node draws at most point_cap times the original points
   // under it (times the supersampling's n^2, so it means the same on screen).
+  const int32_t n = config_.supersample;
   const uint32_t cap_scale = uint32_t{config_.point_cap} * static_cast<uint32_t>(n * n);
   const auto cap_of = [&](uint32_t s) {
     const uint32_t p = cache.points_at(s);
@@ -740,114 +887,16 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   // Records were checked when they were put: every one unpacks to valid classes.
   const RecordUnpacker& unpacker = cache.decoder().unpacker();
   const auto draw_slot = [&](uint32_t s) {
-    if (cache.decoded()) (this->*draw)(f, cache.fields_at(s), cap_of(s), stats);
-    else (this->*draw)(f, unpacker.unpack(cache.record_at(s)), cap_of(s), stats);
+    if (cache.decoded()) (this->*k.draw)(f, cache.fields_at(s), cap_of(s), stats);
+    else (this->*k.draw)(f, unpacker.unpack(cache.record_at(s)), cap_of(s), stats);
   };
-  uint32_t first = 0;  // nodes before it are set up
-  if constexpr (avx2::kBuilt) {
-    // Eight nodes at a time in AVX2 lanes (node_lanes.h) where this frame
-    // allows; what the lanes leave, and every node when the tile pass or the
-    // budget runs short (so the order in which nodes claim them is the
-    // scalar loop's), through draw_node.
-    if (node_lanes) {
-      const NodeLaneFrame lf = lane_frame(f, cache);
-      using LaneFn = uint32_t (*)(const NodeLaneFrame&, uint32_t, uint32_t, TileNodes&, uint32_t, NodeLaneBatch*);
-      const LaneFn lane_fn = point_normals == PointNormals::kSampled
-                                 ? (specular ? &avx2::set_up_nodes<PointNormals::kSampled, true>
-                                             : &avx2::set_up_nodes<PointNormals::kSampled, false>)
-                             : point_normals == PointNormals::kSurface
-                                 ? (specular ? &avx2::set_up_nodes<PointNormals::kSurface, true>
-                                             : &avx2::set_up_nodes<PointNormals::kSurface, false>)
-                                 : (specular ? &avx2::set_up_nodes<PointNormals::kNode, true>
-                                             : &avx2::set_up_nodes<PointNormals::kNode, false>);
-      const uint32_t tiles_x = static_cast<uint32_t>(raster_.tiles_x());
-      NodeLaneBatch batches[kLaneBatches];
-      while (first < count) {
-        // As many batches as the tile pass and the budget surely hold (each
-        // node of them a TileNode, or its scalar set-up's, and every point
-        // filed; the lanes write 8 rows a batch past the last taken), so
-        // that no node is refused for room.
-        uint32_t run = (count - first + 7) / 8;
-        if (run > kLaneBatches) run = kLaneBatches;
-        while (run > 0 && !raster_.room_for(8 * run + 8, 8 * run * config_.samples)) run /= 2;
-        if (run == 0) break;
-        const uint32_t slots = count - first < 8 * run ? count - first : 8 * run;
-        const uint32_t base = raster_.items();
-        uint32_t item = base, points = 0;
-        lane_fn(lf, first, slots, tile_nodes_, base, batches);
-        for (uint32_t b = 0; b < run; ++b) {
-          const NodeLaneBatch& r = batches[b];
-          for (uint32_t m = r.tile_mask; m != 0; m &= m - 1) {
-            const int k = __builtin_ctz(m);
-            const uint32_t code = r.tiles[k];
-            raster_.file_item_in_tiles(item++, ((code >> 12) & 0xFFFu) * tiles_x + (code & 0xFFFu), code >> 24 & 1u,
-                                       code >> 25 & 1u);
-            points += r.count[k];
-          }
-          stats.nodes_in_lanes += r.tile_count + r.culled_count;
-          stats.nodes_drawn += r.tile_count;
-          stats.nodes_in_tiles += r.tile_count;
-          stats.nodes_culled += r.culled_count;
-        }
-        raster_.took_items(item - base, points);
-        stats.points += points;
-        for (uint32_t b = 0; b < run; ++b) {
-          const uint32_t lanes = slots - 8 * b < 8 ? slots - 8 * b : 8;
-          const uint32_t scalar = ~(batches[b].tile_mask | batches[b].culled_mask) & ((1u << lanes) - 1u);
-          for (uint32_t m = scalar; m != 0; m &= m - 1) draw_slot(first + 8 * b + static_cast<uint32_t>(__builtin_ctz(m)));
-        }
-        first += slots;
-      }
-    }
-  }
+  // Eight at a time where the lanes take this frame; the rest (and every
+  // node when the tile pass or the budget runs short) one by one.
+  const uint32_t first = node_lanes ? set_up_in_lanes(f, cache, k, stats, draw_slot) : 0;
   for (uint32_t s = first; s < count; ++s) draw_slot(s);
-  uint8_t* const target = n == 1 ? frame : internal_frame_;
-  const size_t target_stride = n == 1 ? stride : size_t{internal_.width} * 3;
-  raster_.draw(config_.clear_rgb, target, target_stride, coverage_, tile_fn, this);
-  if (n > 1 && coverage_ != nullptr) {
-    // The resolve's coverage: a screen pixel is covered where any pixel of its block is.
-    const size_t in_row = coverage_row_bytes(internal_.width), out_row = coverage_row_bytes(config_.raster.width);
-    const uint32_t block = (1u << n) - 1;
-    for (uint32_t y = 0; y < config_.raster.height; ++y) {
-      uint8_t* out = screen_coverage_ + y * out_row;
-      for (size_t i = 0; i < out_row; ++i) out[i] = 0;
-      for (int32_t dy = 0; dy < n; ++dy) {
-        const uint8_t* in = coverage_ + (y * n + static_cast<uint32_t>(dy)) * in_row;
-        for (uint32_t x = 0; x < config_.raster.width; ++x) {
-          const uint32_t bit = x * static_cast<uint32_t>(n);  // n divides 8: a block never straddles a byte
-          if ((in[bit >> 3] >> (bit & 7)) & block) out[x >> 3] = static_cast<uint8_t>(out[x >> 3] | (1u << (x & 7)));
-        }
-      }
-    }
-  }
-  if (n > 1) {
-    // Each screen pixel is the rounded mean of its n x n block.
-    const uint32_t half = static_cast<uint32_t>(n * n) / 2, shift = n == 2 ? 2 : 4;
-    for (uint32_t y = 0; y < config_.raster.height; ++y) {
-      uint8_t* out = frame + y * stride;
-      for (uint32_t x = 0; x < config_.raster.width; ++x) {
-        uint32_t sum[3] = {half, half, half};
-        for (int32_t dy = 0; dy < n; ++dy) {
-          const uint8_t* p = internal_frame_ + (y * n + static_cast<uint32_t>(dy)) * target_stride + size_t{x} * n * 3;
-          for (int32_t dx = 0; dx < n; ++dx, p += 3) {
-            sum[0] += p[0];
-            sum[1] += p[1];
-            sum[2] += p[2];
-          }
-        }
-        const uint32_t r = sum[0] >> shift, g = sum[1] >> shift, b = sum[2] >> shift;
-        if (config_.raster.format == PixelFormat::kRgb888) {
-          out[3 * x] = static_cast<uint8_t>(r);
-          out[3 * x + 1] = static_cast<uint8_t>(g);
-          out[3 * x + 2] = static_cast<uint8_t>(b);
-        } else {
-          const uint16_t v = rgb565((r << 16) | (g << 8) | b);
-          out[2 * x] = static_cast<uint8_t>(v);
-          out[2 * x + 1] = static_cast<uint8_t>(v >> 8);
-        }
-      }
-    }
-  }
+  raster_.draw(config_.clear_rgb, n == 1 ? frame : internal_frame_, n == 1 ? stride : size_t{internal_.width} * 3,
+               coverage_, k.tile, this);
+  if (n > 1) finish_supersampled(frame, stride);
   if (screen_coverage_ != nullptr)
     resolve_frame(frame, stride, config_.raster.format, config_.raster.width, config_.raster.height, screen_coverage_,
                   config_.clear_rgb, resolve_scratch_);

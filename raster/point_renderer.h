@@ -162,6 +162,12 @@ class PointRenderer {
  private:
   template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
   void draw_node(const FrameSetup& f, const NodeFields& fields, uint32_t max_points, FrameStats& stats);
+  void set_up_depth(const FrameSetup& f, const int32_t c[3], const int32_t axes[3][3], PointSetup& s);
+  template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
+  void set_up_shade(const FrameSetup& f, const NodeFields& fields, const int16_t frame[3][3], const int32_t sk[3],
+                    PointShade& sh);
+  template <PointNormals kNormals, bool kColorPoints>
+  bool wait_in_tiles(PointSetup& s, FrameStats& stats);
   template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
   [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
   template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
@@ -169,6 +175,15 @@ class PointRenderer {
   template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
   static void tile_nodes_of(void* context, uint32_t tile, int px0, int py0, void* words);
   NodeLaneFrame lane_frame(const FrameSetup& f, const NodeCache& cache);
+  // The frame's kernels, for one variant — projection x normals x per-point
+  // colour x specular — from one table (point_renderer.cpp).
+  struct Kernels;
+  static const Kernels& kernels(Projection projection, PointNormals normals, bool color_points, bool specular);
+  RenderStatus set_up_frame(const NodeCache& cache, const Camera& camera, FrameSetup& f);
+  template <class DrawSlot>
+  uint32_t set_up_in_lanes(const FrameSetup& f, const NodeCache& cache, const Kernels& k, FrameStats& stats,
+                           const DrawSlot& draw_slot);
+  void finish_supersampled(uint8_t* frame, size_t stride);
 
   RendererConfig config_{};
   PointRaster raster_;
