@@ -50,4 +50,9 @@ if "$S" cut-table "$W/m.spg" --leaf-cone 2 --check 2>"$W/cone.err"; then fail "-
 grep -q "made for another cone rule" "$W/cone.err" || { cat "$W/cone.err"; fail "--check should name the cone rule"; }
 "$S" encode "$SCAN" -o "$W/bare.spg" -q --no-cut-table >/dev/null
 [ ! -e "$W/bare.spg.cut" ] || fail "--no-cut-table wrote a table"
+# A table that cannot be written (a folder in its place) is a warning: the model is whole.
+mkdir "$W/blocked.spg.cut"
+"$S" encode "$SCAN" -o "$W/blocked.spg" -q >/dev/null 2>"$W/blocked.err" || { cat "$W/blocked.err"; fail "encode failed for want of its table"; }
+grep -q "warning: .*blocked.spg.cut.*blocked.spg is whole" "$W/blocked.err" || { cat "$W/blocked.err"; fail "encode should warn of the table"; }
+"$H" "$W/blocked.spg" --crc >/dev/null || fail "the model without its table does not draw"
 echo "encode wrote the table ($nodes nodes); handheld and serve map it; a corrupt one is named and mended"

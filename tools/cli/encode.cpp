@@ -98,15 +98,22 @@ const char kEncodePartHelp[] =
     "  --threads N           worker threads (default: one per core)\n";
 
 // The model's cut table beside it (MODEL.spg.cut: what servers and local
-// viewers map instead of decoding the tree), made from the file just written.
-bool write_cut_table(const std::string& output, EncodeReport& report, std::string& error, ProgressBar& progress) {
+// viewers map instead of decoding the tree), made from the file just
+// written. A table that cannot be written is a warning: the model is whole,
+// and whatever reads it builds the bounds itself.
+void write_cut_table(const std::string& output, EncodeReport& report, ProgressBar& progress) {
   const double start = monotonic_seconds();
   progress.update(1.0, "cut table");
-  if (!make_cut_table(output, ConeRule{}, error)) return false;
+  std::string error;
+  if (!make_cut_table(output, ConeRule{}, error)) {
+    progress.finish();
+    cli::warn({error + "; " + output + " is whole, and servers and viewers build its cut bounds in memory (stipple cut-table " +
+               output + " writes the table)"});
+    return;
+  }
   report.cut_table = cut_table_path(output);
   report.cut_table_bytes = kCutTableHeaderBytes + 36 * report.nodes;
   report.seconds.cut_table = monotonic_seconds() - start;
-  return true;
 }
 
 // --merge DIR: the .spg from a plan whose jobs have run.
@@ -129,7 +136,7 @@ int merge_plan(const std::string& dir, const std::string& output, int threads, b
   if (!merge_parts(plan, parts, threads, sink_into(file), report, error, &progress) || !file.commit(error))
     return cli::fail("encode --merge: " + error);
   report.partitions = plan.partitions();
-  if (cut_table && !write_cut_table(output, report, error, progress)) return cli::fail("encode --merge: " + error);
+  if (cut_table) write_cut_table(output, report, progress);
   progress.finish();
   const double peak_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
   if (json) std::printf("%s\n", summary_json(dir, report, monotonic_seconds() - start, peak_mb).c_str());
@@ -239,7 +246,7 @@ int cmd_encode(int argc, char** argv) {
   } else if (!encode_scan_file(inputs[0], scan_options, options, output, report, error, &progress, warn)) {
     return cli::fail(error);
   }
-  if (options.cut_table && !write_cut_table(output, report, error, progress)) return cli::fail("encode: " + error);
+  if (options.cut_table) write_cut_table(output, report, progress);
   progress.finish();
   const double seconds = monotonic_seconds() - start;
   const double peak_mb = static_cast<double>(peak_rss_bytes()) / (1024.0 * 1024.0);
