@@ -21,7 +21,7 @@ seconds=${FUZZ_SECONDS:-60}
 build=build/fuzz
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DSTIPPLE_FUZZ=ON -DSTIPPLE_CHECK_RANGES=ON -DSTIPPLE_WERROR=ON \
   -DCMAKE_CXX_FLAGS="-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -O1 -g" >/dev/null
-harnesses="spg scan stream decoder serial png server resend columns encode_render"
+harnesses="spg scan stream decoder serial png server resend columns encode_render cut_table"
 cmake --build "$build" -j2 --target $(for h in $harnesses; do printf '%s_fuzz ' "$h"; done)
 mkdir -p "$build/crashes"
 status=0
@@ -39,6 +39,7 @@ for harness in $harnesses; do
     resend) cp tests/fuzz/seeds/sphere_stream.cobs "$corpus/"; max_len=8192 ;;
     columns) cp tests/fuzz/seeds/columns_* tests/fuzz/seeds/tiny.pts tests/fuzz/seeds/tiny.obj tests/fuzz/seeds/tiny.xyz "$corpus/"; max_len=2048 ;;
     encode_render) cp tests/fuzz/seeds/tiny.xyz tests/fuzz/seeds/tiny_ascii.ply tests/fuzz/seeds/tiny.obj "$corpus/"; max_len=2048 ;;
+    cut_table) cp tests/fuzz/seeds/cut_table_* "$corpus/"; max_len=8192 ;;
   esac
   [ -d "tests/fuzz/regressions/$harness" ] && cp tests/fuzz/regressions/$harness/* "$corpus/" 2>/dev/null || true
   log=$build/$harness.log
