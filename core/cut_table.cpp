@@ -29,15 +29,14 @@ const char* cut_table_error_text(CutTableError e) {
   return "unknown error";
 }
 
-ModelTag model_tag(const SpgView& view, const uint8_t* file, size_t size) {
+ModelTag model_tag(const uint8_t* file, size_t size) {
   ModelTag t;
   t.bytes = size;
   t.crc = size >= 4 ? load_u32le(file + size - 4) : 0;
-  t.node_count = view.header.node_count;
   return t;
 }
 
-size_t cut_table_bytes(const SpgHeader& header) { return kCutTableHeaderBytes + kBoundBytes * size_t{header.node_count}; }
+size_t cut_table_bytes(uint32_t node_count) { return kCutTableHeaderBytes + kBoundBytes * size_t{node_count}; }
 
 void cut_table_header(const ModelTag& tag, const ConeRule& cones, const CutBounds& bounds,
                       uint8_t out[kCutTableHeaderBytes]) {
@@ -45,7 +44,7 @@ void cut_table_header(const ModelTag& tag, const ConeRule& cones, const CutBound
   for (size_t i = 0; i < sizeof kMagic; ++i) out[i] = kMagic[i];
   store_u16le(out + 8, kCutTableVersion);
   store_u16le(out + 10, kBoundBytes);
-  store_u32le(out + 12, tag.node_count);
+  store_u32le(out + 12, bounds.node_count());
   store_u32le(out + 16, static_cast<uint32_t>(tag.bytes));
   store_u32le(out + 20, static_cast<uint32_t>(tag.bytes >> 32));
   store_u32le(out + 24, tag.crc);
@@ -71,7 +70,7 @@ CutTableResult cut_table_attach(const uint8_t* data, size_t size, const SpgView&
   for (size_t i = 33; i < 60; ++i)
     if (data[i] != 0) return fail(CutTableError::kBadVersion);  // reserved: a later version's
   const uint32_t n = load_u32le(data + 12);
-  if (n != tag.node_count || n != view.header.node_count || load_u64le(data + 16) != tag.bytes ||
+  if (n != view.header.node_count || load_u64le(data + 16) != tag.bytes ||
       load_u32le(data + 24) != tag.crc)
     return fail(CutTableError::kOtherModel);
   const bool normals = data[32] != 0;

@@ -1,8 +1,8 @@
 // stipple core — the cut table file (MODEL.spg.cut): a model's per-node cut
 // bounds (CutBounds, 36 bytes a node), made once — by `stipple encode`, or
-// by the first server to start on the model — and then mapped read-only by
-// every server process and local viewer of it, so that none decodes the
-// whole tree at start-up and N processes share one copy in the page cache.
+// later by `stipple cut-table` — and then mapped read-only by every server
+// process and local viewer of it, so that none decodes the whole tree at
+// start-up and N processes share one copy in the page cache.
 // The layout is in docs/format.md ("The cut table").
 //
 // A table names the model it was made from (its size, CRC-32 trailer and
@@ -36,17 +36,17 @@ enum class CutTableError : uint8_t {
 };
 const char* cut_table_error_text(CutTableError e);
 
-// What identifies a model: a file of `bytes` bytes ending in its CRC-32
+// What identifies a model's file: its size and the CRC-32 it ends in
 // (validated by spg_parse).
 struct ModelTag {
   uint64_t bytes = 0;
   uint32_t crc = 0;
-  uint32_t node_count = 0;
 };
-ModelTag model_tag(const SpgView& view, const uint8_t* file, size_t size);
+ModelTag model_tag(const uint8_t* file, size_t size);
 
-// Bytes of a table for the header's model: the header and 36 bytes a node.
-size_t cut_table_bytes(const SpgHeader& header);
+// Bytes of a table for a model of `node_count` nodes: the header and 36
+// bytes a node.
+size_t cut_table_bytes(uint32_t node_count);
 // The header of a table holding `bounds` (made by CutBounds::init for the
 // tagged model with `cones`); the nodes follow it: bounds.table(), 36 bytes
 // a node.
@@ -59,9 +59,10 @@ struct CutTableResult {
   const char* field = "";  // kBadNode: the field
   bool ok() const { return error == CutTableError::kOk; }
 };
-// Checks `data[0 .. size)` as the cut table of the tagged model and `view`
-// with `cones`, and attaches `out` to its nodes (no copy: the data must
-// outlive the bounds); refused, `out` is left unattached.
+// Checks `data[0 .. size)` as the cut table of the tagged model file, its
+// `view` (node count, topology, leaf counts) and `cones`, and attaches
+// `out` to its nodes (no copy: the data must outlive the bounds); refused,
+// `out` is left unattached.
 [[nodiscard]] CutTableResult cut_table_attach(const uint8_t* data, size_t size, const SpgView& view,
                                               const ModelTag& tag, const ConeRule& cones, CutBounds* out);
 

@@ -768,10 +768,11 @@ uint32_t PointRenderer::set_up_in_lanes(const FrameSetup& f, const NodeCache& ca
     for (uint32_t b = 0; b < run; ++b) {
       const NodeLaneBatch& r = batches[b];
       for (uint32_t m = r.tile_mask; m != 0; m &= m - 1) {
-        const uint32_t code = r.tiles[__builtin_ctz(m)];
+        const int lane = __builtin_ctz(m);
+        const uint32_t code = r.tiles[lane];
         raster_.file_item_in_tiles(item++, ((code >> 12) & 0xFFFu) * tiles_x + (code & 0xFFFu), code >> 24 & 1u,
                                    code >> 25 & 1u);
-        points += r.count[__builtin_ctz(m)];
+        points += r.count[lane];
       }
       stats.nodes_in_lanes += r.tile_count + r.culled_count;
       stats.nodes_drawn += r.tile_count;

@@ -39,8 +39,8 @@ struct Model {
     if (decoder.init(view, decoder_storage.data(), decoder_storage.size() * 4) != DecodeStatus::kOk) __builtin_trap();
     bounds_storage.resize(CutBounds::bytes(view.header) / 8 + 1);
     if (bounds.init(view, decoder, bounds_storage.data(), bounds_storage.size() * 8) != CutStatus::kOk) __builtin_trap();
-    table.resize(cut_table_bytes(view.header));
-    cut_table_header(model_tag(view, file.data(), file.size()), ConeRule{}, bounds, table.data());
+    table.resize(cut_table_bytes(view.header.node_count));
+    cut_table_header(model_tag(file.data(), file.size()), ConeRule{}, bounds, table.data());
     const uint8_t* nodes = static_cast<const uint8_t*>(bounds.table());
     for (size_t i = kCutTableHeaderBytes; i < table.size(); ++i) table[i] = nodes[i - kCutTableHeaderBytes];
   }
@@ -61,7 +61,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   CutBounds bounds;
   const CutTableResult r =
-      cut_table_attach(t.data(), t.size(), m.view, model_tag(m.view, m.file.data(), m.file.size()), ConeRule{}, &bounds);
+      cut_table_attach(t.data(), t.size(), m.view, model_tag(m.file.data(), m.file.size()), ConeRule{}, &bounds);
   if (!r.ok()) {
     if (bounds.table() != nullptr) __builtin_trap();  // refused: nothing attached
     return 0;

@@ -24,7 +24,7 @@ const Model& bunny() {
   return m;
 }
 
-ModelTag tag(const Model& m) { return model_tag(m.view, m.file.data(), m.file.size()); }
+ModelTag tag(const Model& m) { return model_tag(m.file.data(), m.file.size()); }
 
 // The table of a model's bounds, as `stipple encode` writes it.
 struct Table {
@@ -33,7 +33,7 @@ struct Table {
   std::vector<uint8_t> bytes;
   explicit Table(const Model& m, const ConeRule& cones = {}) : storage(CutBounds::bytes(m.view.header) / 8 + 1) {
     EXPECT_EQ(built.init(m.view, m.decoder, storage.data(), storage.size() * 8, cones), CutStatus::kOk);
-    bytes.resize(cut_table_bytes(m.view.header));
+    bytes.resize(cut_table_bytes(m.view.header.node_count));
     cut_table_header(tag(m), cones, built, bytes.data());
     std::memcpy(bytes.data() + kCutTableHeaderBytes, built.table(), bytes.size() - kCutTableHeaderBytes);
   }

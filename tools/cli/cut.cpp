@@ -8,10 +8,10 @@
 #include "core/protocol.h"
 #include "core/view_cut.h"
 #include "platform/file_io.h"
+#include "platform/progress.h"
 #include "tools/cli/cli.h"
 #include "tools/embedded/embedded.h"
 #include "tools/embedded/model_file.h"
-#include "platform/progress.h"
 #include "tools/embedded/render_options.h"
 
 namespace stipple {

@@ -79,7 +79,7 @@ const char kEncodeHelp[] =
     "                        the full mesh): quick previews and scaling studies\n"
     "  --no-cut-table        write no MODEL.spg.cut beside the model (the per-node\n"
     "                        cut bounds servers and local viewers map instead of\n"
-    "                        decoding the tree; a server writes it when missing)\n"
+    "                        decoding the tree; stipple cut-table writes it later)\n"
     "  --json                print the summary as JSON (with each stage's seconds:\n"
     "                        read, normals, hierarchy, classes, write; partitions)\n"
     "  -q, --quiet           no progress bar\n";
@@ -112,7 +112,7 @@ void write_cut_table(const std::string& output, EncodeReport& report, ProgressBa
     return;
   }
   report.cut_table = cut_table_path(output);
-  report.cut_table_bytes = kCutTableHeaderBytes + 36 * report.nodes;
+  report.cut_table_bytes = cut_table_bytes(static_cast<uint32_t>(report.nodes));  // a .spg's count is 32-bit
   report.seconds.cut_table = monotonic_seconds() - start;
 }
 

@@ -26,7 +26,7 @@ bool ModelFile::open(const std::string& path, const ConeRule& cones, std::string
   std::string why;
   if (table_.open(table_path, why)) {
     const CutTableResult r =
-        cut_table_attach(table_.data(), table_.size(), view_, model_tag(view_, data_, size_), cones, &bounds_);
+        cut_table_attach(table_.data(), table_.size(), view_, model_tag(data_, size_), cones, &bounds_);
     if (r.ok()) {
       table_note_ = "cut table " + table_path + " mapped";
       return true;
@@ -67,10 +67,10 @@ bool ModelFile::build_bounds(std::string& error) {
 
 bool ModelFile::write_table(const std::string& path, std::string& error) const {
   uint8_t header[kCutTableHeaderBytes];
-  cut_table_header(model_tag(view_, data_, size_), cones_, bounds_, header);
+  cut_table_header(model_tag(data_, size_), cones_, bounds_, header);
   AtomicFileWriter out;
   if (!out.open(path, error)) return false;
-  const size_t nodes = cut_table_bytes(view_.header) - kCutTableHeaderBytes;
+  const size_t nodes = cut_table_bytes(view_.header.node_count) - kCutTableHeaderBytes;
   if (!out.write(header, sizeof header) || !out.write(bounds_.table(), nodes)) return error = out.failure(), false;
   return out.commit(error);
 }
