@@ -31,9 +31,10 @@ const char kCutHelp[] =
     "are render's: --size, --camera, --up, --max-size, --no-cull, --leaf-cone,\n"
     "--window, --cache (the node budget).\n"
     "\n"
-    "  --incremental   update the cut from the previous one (as the server does),\n"
-    "                  looking again only at nodes whose deadline came; the cut is\n"
-    "                  the same, the nodes evaluated per step are printed\n";
+    "  --incremental   update the cut from the previous one (TOG05's persistent\n"
+    "                  cut; the server derives each from the root), looking\n"
+    "                  again only at nodes whose deadline came; the cut is the\n"
+    "                  same, the nodes evaluated per step are printed\n";
 
 const char kCutTableHelp[] =
     "usage: stipple cut-table MODEL.spg [--leaf-cone G] [--check]\n"
