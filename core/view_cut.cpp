@@ -5,6 +5,7 @@
 #include "core/arena.h"
 
 #include <algorithm>
+#include <utility>
 
 #include "core/cut.h"
 #include "core/fixed_trig.h"
@@ -294,6 +295,7 @@ CutStatus ViewCut::init(const CutBounds& shared, void* state, size_t state_bytes
   front_ = nullptr;
   front_count_ = front_capacity_ = 0;
   front_valid_ = budget_bound_ = has_previous_ = false;
+  unheaped_ = 0;
   ready_ = true;
   return CutStatus::kOk;
 }
@@ -600,6 +602,10 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
   uint32_t cut_count = 0, fresh_count = 0;
   heap_count_ = 0;
   visited_ = 0;
+  if (capacity == 0) return too_large(1);
+  // The breadth-first pass gives up, and the budget binds, past this many
+  // visits (the largest-first pass then costs what the budget allows).
+  const uint64_t visit_limit = 4 * uint64_t{params.max_nodes} + 8;
 
   const auto settle = [&](uint32_t id, const Eval& e) {
     cut_[cut_count++] = NodeId{id};
@@ -608,31 +614,201 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
       sent_size_[fresh_count++] = e.size;
     }
   };
-  // Without a binding budget every splittable node splits, in any order:
-  // breadth first, which settles the nodes in id order (ids are breadth-first,
-  // children adjacent in their parents' order), so no sort is needed. The
-  // queue is a ring in the heap's place: what waits in it and what settled
-  // are never more than the finished cut, so 2 C ids hold it.
-  uint32_t* queue = reinterpret_cast<uint32_t*>(heap_);
-  const uint64_t ring = 2 * uint64_t{capacity};
-  uint64_t head = 0, tail = 0;
-  if (capacity == 0) return too_large(1);
-  queue[tail++] = 0;
-  // A binding budget stops it early (too many sent, or too many visited for
-  // the budget: the greedy pass then costs what the budget allows).
-  const uint64_t visit_limit = 4 * uint64_t{params.max_nodes} + 8;
-  {
+  // The budget's pass: refine the largest projected size first, until a
+  // split does not fit the budget (its visible children replace it); that
+  // node and every one still waiting stay whole. The sent nodes at any
+  // moment are the settled visible ones and every waiting one (all
+  // visible). `placed`: the nodes evaluated into the cut or the heap, each
+  // one a node of the budget-free cut or above it. When a split is refused,
+  // `waited` is where the nodes that waited begin in `fresh` (each one
+  // splits without the budget; the ones before it are the budget-free
+  // cut's).
+  //
+  // The heap is the pass's cost; the nodes larger on screen than
+  // `unheaped_` split without it, depth first, when that is sure to give
+  // the same cut. Before the greedy pass pops a node, every node larger
+  // than it has split (it pops largest first) and its sent count is at most
+  // the cut's nodes, which a split never lessens: so while the cut that
+  // splits every node larger than a size S has at most the budget's nodes
+  // (culled ones included), no node larger than S is refused, and those
+  // splits are made in any order. S is the last pass's smallest split size
+  // with the cut then at 7/8 of the budget (a camera's step moves a few
+  // percent of it); the first split past the budget here makes the pass
+  // start over with the heap alone.
+  const auto largest_first = [&](uint64_t& placed, bool& refused, uint32_t& waited) {
+    refused = false;
+    frame.split_sizes = true;
+    const auto place = [&](uint32_t id) {
+      ++placed;
+      const Eval e = evaluate(frame, id, false);
+      if (e.split) heap_push(e.size, id);
+      else settle(id, e);
+    };
+    // The cut's nodes it may reach without the heap: the budget's (or the
+    // scratch's, when smaller: the heap's pass then refuses as it would).
+    const uint64_t room = std::min<uint64_t>(params.max_nodes, capacity);
+    const uint64_t unheaped_cut = room - room / 8;
+    bool whole = false;  // the nodes above unheaped_ split
+    if (unheaped_ > 0) {
+      cut_count = fresh_count = 0;
+      heap_count_ = 0;
+      placed = 0;
+      uint32_t* stack = reinterpret_cast<uint32_t*>(entered_);  // (first, count) pairs, as below
+      uint32_t sp = 0;
+      uint64_t waiting = 1;  // in the stack, not yet evaluated
+      stack[0] = 0;
+      stack[1] = 1;
+      ++sp;
+      whole = true;
+      while (sp > 0) {
+        uint32_t* top = stack + 2 * (sp - 1);
+        if (top[1] == 0) {
+          --sp;
+          continue;
+        }
+        const uint32_t id = top[0]++;
+        --top[1];
+        --waiting;
+        ++placed;
+        const Eval e = evaluate(frame, id, false);
+        if (!e.split) {
+          settle(id, e);
+        } else if (e.size <= unheaped_) {
+          heap_push(e.size, id);
+        } else {
+          const Bound& b = bounds_[id];
+          waiting += b.children;
+          if (uint64_t{cut_count} + heap_count_ + waiting > room || sp == capacity) {
+            whole = false;
+            break;
+          }
+          stack[2 * sp] = b.first_child;
+          stack[2 * sp + 1] = b.children;
+          ++sp;
+        }
+      }
+    }
+    if (!whole) {
+      cut_count = fresh_count = 0;
+      heap_count_ = 0;
+      placed = 0;
+      place(0);
+    }
+    unheaped_ = 0;
+    while (heap_count_ > 0) {
+      const uint64_t top = heap_pop();
+      const uint32_t id = ~static_cast<uint32_t>(top);
+      const Bound& b = bounds_[id];
+      if (uint64_t{fresh_count} + heap_count_ + b.children > params.max_nodes) {
+        uint32_t visible = 0;
+        for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(frame, b.first_child + k, false).visible;
+        if (uint64_t{fresh_count} + heap_count_ + visible > params.max_nodes) {
+          // The budget is spent. What waits settles in the heap's order (the
+          // sent set is sorted below); the cut and the heap never held more
+          // than the capacity together.
+          refused = true;
+          waited = fresh_count;
+          settle(id, Eval{true, false, false, static_cast<uint32_t>(top >> 32)});
+          for (uint32_t i = 0; i < heap_count_; ++i)
+            settle(~static_cast<uint32_t>(heap_[i]), Eval{true, false, false, static_cast<uint32_t>(heap_[i] >> 32)});
+          heap_count_ = 0;
+          break;
+        }
+      }
+      if (uint64_t{cut_count} + heap_count_ + b.children > capacity)
+        return too_large(uint64_t{cut_count} + heap_count_ + b.children);
+      for (uint32_t k = 0; k < b.children; ++k) place(b.first_child + k);
+      if (uint64_t{cut_count} + heap_count_ <= unheaped_cut) unheaped_ = static_cast<uint32_t>(top >> 32);
+    }
+    return CutStatus::kOk;
+  };
+  // After a refused split: does the budget-free cut fit the budget all the
+  // same (its sent nodes within it, and the breadth-first pass's visits
+  // within their limit), as when splits below the refused node's children
+  // cull more than they add? The nodes below the waiting ones, depth first
+  // (a stack of child ranges in the change lists, unused until keep_sent),
+  // until either count passes its bound. 1: it fits; 0: it does not; -1:
+  // the stack outgrew its room. `visits` counts on from the nodes placed.
+  const auto budget_free_fits = [&](uint64_t& visits, uint32_t waited) {
+    uint64_t visible = waited;
+    frame.split_sizes = false;
+    uint32_t* stack = reinterpret_cast<uint32_t*>(entered_);  // (first, count) pairs
+    const uint32_t stack_capacity = capacity;                   // pairs, in the entered and left lists
+    for (uint32_t i = waited; i < fresh_count; ++i) {
+      const Bound& w = bounds_[index_of(fresh[i])];
+      uint32_t sp = 0;
+      stack[sp * 2] = w.first_child;
+      stack[sp * 2 + 1] = w.children;
+      ++sp;
+      while (sp > 0) {
+        uint32_t* top = stack + 2 * (sp - 1);
+        if (top[1] == 0) {
+          --sp;
+          continue;
+        }
+        const uint32_t id = top[0]++;
+        --top[1];
+        if (++visits > visit_limit + 1) return 0;
+        const Eval e = evaluate(frame, id, false);
+        if (e.split) {
+          if (sp == stack_capacity) return -1;
+          stack[sp * 2] = bounds_[id].first_child;
+          stack[sp * 2 + 1] = bounds_[id].children;
+          ++sp;
+        } else if (e.visible && ++visible > params.max_nodes) {
+          return 0;
+        }
+      }
+    }
+    return 1;
+  };
+
+  // The last cut was the budget's: most likely this one is too, and the
+  // largest-first pass comes first. Its cut is the from-the-root cut unless
+  // the budget-free cut fits after all (then that one is made below).
+  bool settled = false, by_size = false;  // by_size: the largest-first pass's cut (sorted below)
+  if (budget_bound_) {
+    uint64_t placed = 0;
+    uint32_t waited = 0;
+    bool refused = false;
+    if (largest_first(placed, refused, waited) != CutStatus::kOk) return CutStatus::kStorageTooSmall;
+    visited_ = count31(placed);
+    if (!refused) {
+      // Nothing refused: every splittable node split, the budget-free cut
+      // (the breadth-first pass would have given up past its visits).
+      settled = true;
+      budget_bound_ = placed > visit_limit + 1;
+    } else {
+      uint64_t visits = placed;
+      const int fits = budget_free_fits(visits, waited);
+      visited_ = count31(visits);
+      if (fits < 0) return too_large(uint64_t{capacity} + 1);
+      settled = fits == 0;
+      budget_bound_ = settled;
+    }
+    by_size = settled;
+  }
+  if (!settled) {
+    // Without a binding budget every splittable node splits, in any order:
+    // breadth first, which settles the nodes in id order (ids are
+    // breadth-first, children adjacent in their parents' order), so no sort
+    // is needed. The queue is a ring in the heap's place: what waits in it
+    // and what settled are never more than the finished cut, so 2 C ids
+    // hold it. A binding budget stops it early (too many sent, or too many
+    // visited).
+    cut_count = fresh_count = 0;
+    frame.split_sizes = false;
+    uint32_t* queue = reinterpret_cast<uint32_t*>(heap_);
+    const uint64_t ring = 2 * uint64_t{capacity};
+    uint64_t head = 0, tail = 0;
+    queue[tail++] = 0;
     uint32_t visited = 0;
     while (head < tail && fresh_count <= params.max_nodes && visited <= visit_limit) {
       const uint32_t id = queue[head++ % ring];
       ++visited;
       const Eval e = evaluate(frame, id & ~kInside, id & kInside);
       if (!e.split) {
-        cut_[cut_count++] = NodeId{id & ~kInside};
-        if (e.visible) {
-          fresh[fresh_count] = NodeId{id & ~kInside};
-          sent_size_[fresh_count++] = e.size;
-        }
+        settle(id & ~kInside, e);
         continue;
       }
       const Bound& b = bounds_[id & ~kInside];
@@ -640,48 +816,36 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
       const uint32_t flag = e.inside ? kInside : 0;
       for (uint32_t k = 0; k < b.children; ++k) queue[tail++ % ring] = (b.first_child + k) | flag;
     }
-    visited_ = visited;
-  }
-  budget_bound_ = head < tail || fresh_count > params.max_nodes;
-  if (budget_bound_) {
-    // The budget binds: refine largest projected size first. The sent nodes
-    // so far are the settled visible ones plus every node waiting in the heap
-    // (all visible).
-    cut_count = fresh_count = 0;
-    frame.split_sizes = true;
-    const auto place = [&](uint32_t id) {
-      ++visited_;
-      const Eval e = evaluate(frame, id, false);
-      if (e.split) heap_push(e.size, id);
-      else settle(id, e);
-    };
-    place(0);
-    bool room = true;
-    while (heap_count_ > 0) {
-      const uint64_t top = heap_pop();
-      const uint32_t id = ~static_cast<uint32_t>(top);
-      const Bound& b = bounds_[id];
-      if (room && uint64_t{fresh_count} + heap_count_ + b.children > params.max_nodes) {
-        // The split's cost: its visible children replace it.
-        uint32_t visible = 0;
-        for (uint32_t k = 0; k < b.children; ++k) visible += evaluate(frame, b.first_child + k, false).visible;
-        room = uint64_t{fresh_count} + heap_count_ + visible <= params.max_nodes;
-      }
-      if (!room) {  // the budget is spent: this node and all still waiting stay whole
-        settle(id, Eval{true, false, false, static_cast<uint32_t>(top >> 32)});
-        continue;
-      }
-      if (uint64_t{cut_count} + heap_count_ + b.children > capacity)
-        return too_large(uint64_t{cut_count} + heap_count_ + b.children);
-      for (uint32_t k = 0; k < b.children; ++k) place(b.first_child + k);
+    visited_ = count31(uint64_t{visited_} + visited);  // after a largest-first pass that found it fits, both
+    budget_bound_ = head < tail || fresh_count > params.max_nodes;
+    if (budget_bound_) {
+      uint64_t placed = 0;
+      uint32_t waited = 0;
+      bool refused = false;
+      if (largest_first(placed, refused, waited) != CutStatus::kOk) return CutStatus::kStorageTooSmall;
+      visited_ = count31(uint64_t{visited_} + placed);
+      by_size = true;
     }
-    // Sent nodes in id order (the order a client's cache is filled in), with
-    // their sizes: sorted as (id, size) pairs in the heap's storage.
-    for (uint32_t i = 0; i < fresh_count; ++i) heap_[i] = (uint64_t{index_of(fresh[i])} << 32) | sent_size_[i];
-    std::sort(heap_, heap_ + fresh_count);
+  }
+  if (by_size) {
+    // The largest-first pass's sent nodes in id order (the order a client's
+    // cache is filled in), with their sizes: (id, size) pairs radix sorted
+    // by id, 11 bits a pass, between the heap's storage and the change
+    // lists' (unused until keep_sent).
+    uint64_t* from = heap_;
+    uint64_t* to = reinterpret_cast<uint64_t*>(entered_);
+    for (uint32_t i = 0; i < fresh_count; ++i) from[i] = (uint64_t{index_of(fresh[i])} << 32) | sent_size_[i];
+    for (int shift = 32; shift < 64 && (uint64_t{node_count_ - 1} >> (shift - 32)) > 0; shift += 11) {
+      uint32_t start[2048] = {};
+      for (uint32_t i = 0; i < fresh_count; ++i) ++start[(from[i] >> shift) & 2047];
+      uint32_t at = 0;
+      for (uint32_t& s : start) at += std::exchange(s, at);
+      for (uint32_t i = 0; i < fresh_count; ++i) to[start[(from[i] >> shift) & 2047]++] = from[i];
+      std::swap(from, to);
+    }
     for (uint32_t i = 0; i < fresh_count; ++i) {
-      fresh[i] = NodeId{static_cast<uint32_t>(heap_[i] >> 32)};
-      sent_size_[i] = static_cast<uint32_t>(heap_[i]);
+      fresh[i] = NodeId{static_cast<uint32_t>(from[i] >> 32)};
+      sent_size_[i] = static_cast<uint32_t>(from[i]);
     }
   }
   const CutStatus kept = keep_sent(fresh, fresh_count);

@@ -264,6 +264,7 @@ class ViewCut {
   const uint32_t* previous_ = nullptr;  // accumulation: the previous sent set, decoded (the scratch's last 4 bytes a node)
   uint32_t previous_count_ = 0;
   uint32_t heap_count_ = 0;
+  uint32_t unheaped_ = 0;  // the budget's pass: nodes larger than this split without the heap (0: none)
   uint32_t cut_count_ = 0, sent_count_ = 0, entered_count_ = 0, left_count_ = 0, visited_ = 0, needed_ = 0;
   // Incremental mode: the front (ids ascending), the clock its deadlines
   // are on, and the camera and parameters it was made for.

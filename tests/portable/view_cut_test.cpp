@@ -183,6 +183,61 @@ TEST(ViewCut, BudgetRefinesWhereNodesAreLargest) {
               cut.cut.sent_count(), unbounded, largest / 16.0, largest_unbounded / 16.0);
 }
 
+// After a cut the budget bound, the next update runs the largest-first pass
+// first (the nodes above the last pass's safe size split without its heap)
+// and makes the breadth-first pass only when the budget-free cut fits after
+// all; the cut is the one a fresh ViewCut derives (breadth first, then
+// largest first), node for node, with the same sizes. Budgets around the
+// budget-free count, where a split refused can be undone by culling below
+// it, and steps small (the safe size holds) and large (it does not).
+TEST(ViewCut, BudgetBoundPassesGiveTheFreshCut) {
+  for (const char* file : {"tests/golden/bunny_v1.spg"}) {
+    const Model m(file);
+    Cut walk(m), fresh(m);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0, 1);
+    double yaw = 40, pitch = 15, distance = 1.5;
+    uint32_t bound = 0, unbound_after_bound = 0;
+    bool last_bound = false;
+    for (int step = 0; step < 250; ++step) {
+      if (u(rng) < 0.1) yaw += 90 * u(rng), distance = 0.5 + 4 * u(rng);  // a jump
+      yaw += -4 + 8 * u(rng);
+      pitch = std::clamp(pitch - 3 + 6 * u(rng), -70.0, 70.0);
+      const Camera c = camera(m, yaw, pitch, distance);
+      CutParams p;
+      p.cull_backfaces = u(rng) < 0.9;
+      ASSERT_EQ(fresh.cut.init(m.view, m.decoder, fresh.storage.data(), fresh.storage.size() * 8), CutStatus::kOk);
+      ASSERT_EQ(fresh.cut.update(c, p), CutStatus::kOk);
+      const uint32_t free_count = fresh.cut.sent_count();
+      const double roll = u(rng);
+      p.max_nodes = roll < 0.5   ? free_count - 3 + static_cast<uint32_t>(rng() % 7)  // around the budget-free count
+                    : roll < 0.9 ? 1 + free_count * static_cast<uint32_t>(10 + rng() % 80) / 100
+                                 : 0xFFFFFFFFu;
+      ASSERT_EQ(fresh.cut.init(m.view, m.decoder, fresh.storage.data(), fresh.storage.size() * 8), CutStatus::kOk);
+      ASSERT_EQ(fresh.cut.update(c, p), CutStatus::kOk);
+      ASSERT_EQ(walk.cut.update(c, p), CutStatus::kOk);
+      ASSERT_EQ(walk.sent(), fresh.sent()) << file << " step " << step << " budget " << p.max_nodes;
+      ASSERT_EQ(std::vector<uint32_t>(walk.cut.sent_size_q4(), walk.cut.sent_size_q4() + walk.cut.sent_count()),
+                std::vector<uint32_t>(fresh.cut.sent_size_q4(), fresh.cut.sent_size_q4() + fresh.cut.sent_count()))
+          << step;
+      std::vector<uint32_t> a, b;
+      for (uint32_t i = 0; i < walk.cut.cut_count(); ++i) a.push_back(index_of(walk.cut.cut()[i]));
+      for (uint32_t i = 0; i < fresh.cut.cut_count(); ++i) b.push_back(index_of(fresh.cut.cut()[i]));
+      std::sort(a.begin(), a.end());
+      std::sort(b.begin(), b.end());
+      ASSERT_EQ(a, b) << step;
+      const bool is_bound = fresh.cut.sent_count() < free_count;
+      bound += is_bound;
+      unbound_after_bound += last_bound && !is_bound;
+      last_bound = is_bound;
+    }
+    std::printf("%s: %u of 250 cuts bound by the budget, %u budget-free after a bound one\n", file, bound,
+                unbound_after_bound);
+    EXPECT_GT(bound, 100u);
+    EXPECT_GT(unbound_after_bound, 15u);
+  }
+}
+
 TEST(ViewCut, CullingRemovesBackFacesAndTheOffScreenAndNeverSendsThem) {
   const Model& m = bunny();
   Cut plain(m), culled(m);

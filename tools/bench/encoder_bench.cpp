@@ -511,7 +511,8 @@ BENCHMARK(BM_GlFrame)->Args({1, 0})->Args({0, 0})->Args({1, 1})->Args({1, 2})->U
 #endif
 
 // The view-dependent cut's update along a 120-step orbit of the scan at
-// 240x320 (arg 0: culling off, 1: on, 2: on and incremental, docs/cut.md):
+// 240x320 (arg 0: culling off, 1: on, 2: on and incremental, 3: on, with a
+// node budget of a quarter of the budget-free cut, docs/cut.md "Budget"):
 // the server's cost per camera update.
 void BM_ViewCutUpdate(benchmark::State& state) {
   const SpgView view = parsed_scan();
@@ -534,6 +535,10 @@ void BM_ViewCutUpdate(benchmark::State& state) {
   }
   CutParams p;
   p.cull_frustum = p.cull_backfaces = state.range(0) != 0;
+  if (state.range(0) == 3) {
+    if (cut.update(cameras[0], p) != CutStatus::kOk) std::abort();
+    p.max_nodes = cut.sent_count() / 4;
+  }
   size_t i = 0;
   double nodes = 0;
   for (auto _ : state) {
@@ -544,7 +549,7 @@ void BM_ViewCutUpdate(benchmark::State& state) {
   state.counters["ns_per_cut_node"] =
       benchmark::Counter(nodes, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
-BENCHMARK(BM_ViewCutUpdate)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ViewCutUpdate)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond);
 
 // Time to the first image, to a whole silhouette (90 % of the converged
 // one's pixels) and to the converged view over an emulated link
