@@ -36,6 +36,34 @@ struct ViewCut::Eval {
 
 namespace {
 
+// A depth-first walk's stack of child ranges: (first, count) pairs in the
+// caller's storage, `capacity` of them.
+struct RangeStack {
+  uint32_t* pairs;
+  uint32_t capacity;
+  uint32_t depth = 0;
+  bool push(uint32_t first, uint32_t count) {
+    if (depth == capacity) return false;
+    pairs[2 * depth] = first;
+    pairs[2 * depth + 1] = count;
+    ++depth;
+    return true;
+  }
+  // The next node, depth first; false when the walk is done.
+  bool next(uint32_t& id) {
+    while (depth > 0) {
+      uint32_t* top = pairs + 2 * (depth - 1);
+      if (top[1] > 0) {
+        id = top[0]++;
+        --top[1];
+        return true;
+      }
+      --depth;
+    }
+    return false;
+  }
+};
+
 constexpr int32_t kNoCone = 0x7FFF;
 constexpr uint32_t kInside = 0x80000000u;  // in the breadth-first queue: the node's subtree is wholly visible
 
@@ -653,21 +681,12 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
       cut_count = fresh_count = 0;
       heap_count_ = 0;
       placed = 0;
-      uint32_t* stack = reinterpret_cast<uint32_t*>(entered_);  // (first, count) pairs, as below
-      uint32_t sp = 0;
+      // The stack in the change lists (unused until keep_sent): `capacity` pairs.
+      RangeStack stack{reinterpret_cast<uint32_t*>(entered_), capacity};
       uint64_t waiting = 1;  // in the stack, not yet evaluated
-      stack[0] = 0;
-      stack[1] = 1;
-      ++sp;
+      stack.push(0, 1);
       whole = true;
-      while (sp > 0) {
-        uint32_t* top = stack + 2 * (sp - 1);
-        if (top[1] == 0) {
-          --sp;
-          continue;
-        }
-        const uint32_t id = top[0]++;
-        --top[1];
+      for (uint32_t id = 0; stack.next(id);) {
         --waiting;
         ++placed;
         const Eval e = evaluate(frame, id, false);
@@ -678,13 +697,10 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
         } else {
           const Bound& b = bounds_[id];
           waiting += b.children;
-          if (uint64_t{cut_count} + heap_count_ + waiting > room || sp == capacity) {
+          if (uint64_t{cut_count} + heap_count_ + waiting > room || !stack.push(b.first_child, b.children)) {
             whole = false;
             break;
           }
-          stack[2 * sp] = b.first_child;
-          stack[2 * sp + 1] = b.children;
-          ++sp;
         }
       }
     }
@@ -694,7 +710,11 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
       placed = 0;
       place(0);
     }
-    unheaped_ = 0;
+    // The next pass's size: set below; when the cut split without the heap
+    // is already past 7/8 of the budget, a little larger than this one's.
+    unheaped_ = whole && uint64_t{cut_count} + heap_count_ > unheaped_cut
+                    ? static_cast<uint32_t>(std::min<uint64_t>(uint64_t{unheaped_} * 17 / 16 + 1, 0xFFFFFFFEu))
+                    : 0;
     while (heap_count_ > 0) {
       const uint64_t top = heap_pop();
       const uint32_t id = ~static_cast<uint32_t>(top);
@@ -732,29 +752,15 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
   const auto budget_free_fits = [&](uint64_t& visits, uint32_t waited) {
     uint64_t visible = waited;
     frame.split_sizes = false;
-    uint32_t* stack = reinterpret_cast<uint32_t*>(entered_);  // (first, count) pairs
-    const uint32_t stack_capacity = capacity;                   // pairs, in the entered and left lists
+    RangeStack stack{reinterpret_cast<uint32_t*>(entered_), capacity};
     for (uint32_t i = waited; i < fresh_count; ++i) {
       const Bound& w = bounds_[index_of(fresh[i])];
-      uint32_t sp = 0;
-      stack[sp * 2] = w.first_child;
-      stack[sp * 2 + 1] = w.children;
-      ++sp;
-      while (sp > 0) {
-        uint32_t* top = stack + 2 * (sp - 1);
-        if (top[1] == 0) {
-          --sp;
-          continue;
-        }
-        const uint32_t id = top[0]++;
-        --top[1];
+      stack.push(w.first_child, w.children);
+      for (uint32_t id = 0; stack.next(id);) {
         if (++visits > visit_limit + 1) return 0;
         const Eval e = evaluate(frame, id, false);
         if (e.split) {
-          if (sp == stack_capacity) return -1;
-          stack[sp * 2] = bounds_[id].first_child;
-          stack[sp * 2 + 1] = bounds_[id].children;
-          ++sp;
+          if (!stack.push(bounds_[id].first_child, bounds_[id].children)) return -1;
         } else if (e.visible && ++visible > params.max_nodes) {
           return 0;
         }
@@ -800,23 +806,42 @@ CutStatus ViewCut::derive(Frame& frame, const CutParams& params) {
     frame.split_sizes = false;
     uint32_t* queue = reinterpret_cast<uint32_t*>(heap_);
     const uint64_t ring = 2 * uint64_t{capacity};
-    uint64_t head = 0, tail = 0;
-    queue[tail++] = 0;
-    uint32_t visited = 0;
-    while (head < tail && fresh_count <= params.max_nodes && visited <= visit_limit) {
-      const uint32_t id = queue[head++ % ring];
-      ++visited;
+    // head, tail: the nodes taken from the queue (visited) and put in it;
+    // taken, put: where in the ring (wrapped by a compare: a 64-bit
+    // division there was a fifth of the pass's time).
+    uint64_t head = 0, tail = 1, taken = 0, put = 1;
+    queue[0] = 0;
+    const uint32_t max_nodes = params.max_nodes;
+    while (head < tail && fresh_count <= max_nodes && head <= visit_limit) {
+      const uint32_t id = queue[taken];
+      if (++taken == ring) taken = 0;
+      ++head;
       const Eval e = evaluate(frame, id & ~kInside, id & kInside);
       if (!e.split) {
         settle(id & ~kInside, e);
         continue;
       }
       const Bound& b = bounds_[id & ~kInside];
-      if (cut_count + (tail - head) + b.children > capacity) return too_large(cut_count + (tail - head) + b.children);
-      const uint32_t flag = e.inside ? kInside : 0;
-      for (uint32_t k = 0; k < b.children; ++k) queue[tail++ % ring] = (b.first_child + k) | flag;
+      const uint32_t n = b.children;
+      if (cut_count + (tail - head) + n > capacity) return too_large(cut_count + (tail - head) + n);
+      // Ids below kInside (init): the flag and the child's index never carry into each other.
+      const uint32_t first = b.first_child | (e.inside ? kInside : 0);
+      if (n == 2 && put + 2 < ring) {  // the binary tree's case, without a loop
+        queue[put] = first;
+        queue[put + 1] = first + 1;
+        put += 2;
+      } else if (put + n < ring) {
+        for (uint32_t k = 0; k < n; ++k) queue[put + k] = first + k;
+        put += n;
+      } else {
+        for (uint32_t k = 0; k < n; ++k) {
+          queue[put] = first + k;
+          if (++put == ring) put = 0;
+        }
+      }
+      tail += n;
     }
-    visited_ = count31(uint64_t{visited_} + visited);  // after a largest-first pass that found it fits, both
+    visited_ = count31(uint64_t{visited_} + head);  // after a largest-first pass that found it fits, both
     budget_bound_ = head < tail || fresh_count > params.max_nodes;
     if (budget_bound_) {
       uint64_t placed = 0;
