@@ -183,6 +183,14 @@ uint32_t NodeCache::find(uint32_t id) const {
 
 bool NodeCache::has(NodeId id) const { return ready_ && entry(find(index_of(id))) != 0; }
 
+bool NodeCache::fields_of(NodeId id, NodeFields* out) const {
+  if (!ready_) return false;
+  const uint32_t e = entry(find(index_of(id)));
+  if (e == 0) return false;
+  *out = decoded() ? fields_at(e - 1) : unpack_record(header_.layout, record_at(e - 1));
+  return true;
+}
+
 void NodeCache::erase_hash(uint32_t hole) {
   // Backward-shift deletion keeps every probe sequence unbroken.
   for (uint32_t j = (hole + 1) & hash_mask_; entry(j) != 0; j = (j + 1) & hash_mask_) {

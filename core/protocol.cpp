@@ -25,6 +25,8 @@ bool message_type_known(uint8_t t) {
     case MessageType::kModel:
     case MessageType::kClasses:
     case MessageType::kUpdateBegin:
+    case MessageType::kCode:
+    case MessageType::kCodedNodes:
     case MessageType::kStartup:
     case MessageType::kNodes:
     case MessageType::kDrop:
@@ -47,6 +49,8 @@ const char* message_type_name(uint8_t t) {
     case MessageType::kModel: return "model";
     case MessageType::kClasses: return "classes";
     case MessageType::kUpdateBegin: return "update-begin";
+    case MessageType::kCode: return "code";
+    case MessageType::kCodedNodes: return "coded nodes";
     case MessageType::kStartup: return "startup";
     case MessageType::kNodes: return "nodes";
     case MessageType::kDrop: return "drop";
@@ -172,8 +176,9 @@ bool parse_hello(const uint8_t* p, size_t size, Hello* out) {
   h.pixel_format = p[6];
   h.attributes = p[7];
   h.cache_capacity = load_u32le(p + 8);
-  // Version 2 knows neither a token nor a resume.
-  const uint8_t known = h.version >= 3 ? kWantNormals | kWantColor | kResuming : kWantNormals | kWantColor;
+  // Version 2 knows neither a token nor a resume; before 5 no batch is coded.
+  const uint8_t known = static_cast<uint8_t>(kWantNormals | kWantColor | (h.version >= 3 ? kResuming : 0) |
+                                             (h.version >= 5 ? kWantCoded : 0));
   if (h.width == 0 || h.width > 4096 || h.height == 0 || h.height > 4096 || h.pixel_format > 1 ||
       (h.attributes & ~known) != 0 || h.cache_capacity == 0 || h.cache_capacity > (1u << 24) ||
       (h.version < 3 && size != kHelloBytes))

@@ -29,7 +29,9 @@ namespace stipple {
 // a version 3 server serves version 2 clients as before. 4: the class tables
 // in pieces (model, classes) before the nodes that use them, and each
 // update's parts announced (update-begin); older clients are served as before.
-inline constexpr uint16_t kProtocolVersion = 4;
+// 5: a client may ask for entropy-coded node batches (kWantCoded: code,
+// coded nodes; core/node_coding.h).
+inline constexpr uint16_t kProtocolVersion = 5;
 inline constexpr uint16_t kOldestProtocolVersion = 2;
 inline constexpr size_t kFrameHeaderBytes = 8;
 inline constexpr size_t kFrameTrailerBytes = 4;
@@ -59,6 +61,8 @@ enum class MessageType : uint8_t {
   kModel = 0x87,      // (4) the startup's fixed header alone, with the model's tag: classes come in pieces
   kClasses = 0x88,    // (4) a piece of one class table: the classes the next nodes use
   kUpdateBegin = 0x89,  // (4) a part of an update begins: the nodes entering and leaving in it
+  kCode = 0x8A,         // (5) the coded batches' tables (core/node_coding.h), before the first
+  kCodedNodes = 0x8B,   // (5) a node batch, entropy-coded: count, then the coder's stream
 };
 
 bool message_type_known(uint8_t type);
@@ -129,6 +133,8 @@ inline constexpr uint8_t kWantNormals = 1, kWantColor = 2;
 // (3) In the attributes: resume frames follow the hello; the startup waits
 // for them.
 inline constexpr uint8_t kResuming = 0x80;
+// (5) In the attributes: node batches entropy-coded (kCode, then kCodedNodes).
+inline constexpr uint8_t kWantCoded = 4;
 inline constexpr size_t kMaxTokenBytes = 64;
 
 struct Hello {

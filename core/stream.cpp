@@ -2,6 +2,7 @@
 #include "core/stream.h"
 
 #include <algorithm>
+#include <new>
 
 #include "core/arena.h"
 
@@ -38,6 +39,14 @@ namespace {
 
 constexpr Field kClassField[3] = {Field::kSigmaP, Field::kSigmaN, Field::kSigmaC};
 
+// The first index of ascending ids[0 .. n) at or above `id` (n: none).
+uint32_t first_at_or_above(const uint32_t* ids, uint32_t n, uint32_t id) {
+  return static_cast<uint32_t>(std::lower_bound(ids, ids + n, id) - ids);
+}
+uint32_t first_at_or_above(const NodeId* ids, uint32_t n, uint32_t id) {
+  return static_cast<uint32_t>(std::lower_bound(ids, ids + n, id, [](NodeId a, uint32_t b) { return index_of(a) < b; }) - ids);
+}
+
 }  // namespace
 
 size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* out, size_t capacity) {
@@ -50,24 +59,27 @@ size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* o
 }
 
 size_t SenderScratch::bytes(uint32_t cut_capacity) {
-  return align8(kMaxPayload) + align8(kMaxFrameBytes) + 24 * size_t{cut_capacity} + CutScratch::bytes(cut_capacity);
+  return align8(kMaxPayload) + align8(kMaxFrameBytes) + align8(sizeof(CodeTableCache)) + 25 * (size_t{cut_capacity} + 8) +
+         CutScratch::bytes(cut_capacity + 8);
 }
 
 void SenderScratch::init(void* storage, size_t size) {
   uint8_t* base = static_cast<uint8_t*>(storage);
-  const size_t fixed = align8(kMaxPayload) + align8(kMaxFrameBytes);
+  const size_t fixed = align8(kMaxPayload) + align8(kMaxFrameBytes) + align8(sizeof(CodeTableCache));
   payload = size < fixed ? nullptr : base;
   frame = size < fixed ? nullptr : base + align8(kMaxPayload);
-  // The rest: 24 bytes a node for the order, 32 for the cut's scratch.
-  const size_t per_node = 24 + CutScratch::bytes(1);
+  codes = size < fixed ? nullptr : new (base + align8(kMaxPayload) + align8(kMaxFrameBytes)) CodeTableCache;
+  // The rest: 25 bytes a node for the order, 32 for the cut's scratch.
+  const size_t per_node = 25 + CutScratch::bytes(1);
   const size_t fit = size < fixed ? 0 : (size - fixed) / per_node;
-  const uint32_t n = static_cast<uint32_t>(fit < 0x7FFFFFFEu ? fit : 0x7FFFFFFEu) & ~1u;  // even: the cut's part stays 8-aligned
+  const uint32_t n = static_cast<uint32_t>(fit < 0x7FFFFFF0u ? fit : 0x7FFFFFF0u) & ~7u;  // the cut's part stays 8-aligned
   order_capacity = n;
   order = reinterpret_cast<uint64_t*>(base + fixed);
   left = reinterpret_cast<uint32_t*>(order + n);
   waiting = left + n;
   ready = waiting + n;
-  cut.init(ready + n, size < fixed ? 0 : size - fixed - 24 * size_t{n});
+  sent = reinterpret_cast<uint8_t*>(ready + n);
+  cut.init(sent + n, size < fixed ? 0 : size - fixed - 25 * size_t{n});
 }
 
 size_t StreamSender::storage_bytes(const SpgHeader& header) {
@@ -120,7 +132,8 @@ uint8_t StreamSender::adopt_hello(const Hello& hello) {
   capacity_ = hello.cache_capacity;
   pieces_ = hello.version >= 4 && class_bits_ != nullptr && class_bits_bytes_ >= class_bits_bytes(reduced_);
   for (size_t i = 0; pieces_ && i < class_bits_bytes(reduced_); ++i) class_bits_[i] = 0;
-  return attributes;
+  coded_ = pieces_ && hello.version >= 5 && (hello.attributes & kWantCoded) && scratch_->codes != nullptr;
+  return static_cast<uint8_t>(attributes & ~kWantCoded);
 }
 
 bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
@@ -135,7 +148,9 @@ bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
     const size_t n = write_reduced_startup(*view_, attributes, payload + kModelTagBytes, kMaxPayload - kModelTagBytes);
     if (n == 0) return started_ = false;
     store_u32le(payload, crc32(payload + kModelTagBytes, n));
-    return send(MessageType::kModel, payload, kModelTagBytes + spg_fixed_header_bytes(reduced_.version), sink, context);
+    if (!send(MessageType::kModel, payload, kModelTagBytes + spg_fixed_header_bytes(reduced_.version), sink, context))
+      return false;
+    return !coded_ || send_code_tables(sink, context);
   }
   const size_t n = write_reduced_startup(*view_, attributes, payload, kMaxPayload);
   if (n == 0) return started_ = false;
@@ -172,7 +187,71 @@ bool StreamSender::resume(const Hello& hello, const NodeId* held, uint32_t count
   sequence_ = 0;
   uint8_t payload[4];
   store_u32le(payload, count);
-  return send(MessageType::kResumed, payload, 4, sink, context);
+  return send(MessageType::kResumed, payload, 4, sink, context) && (!coded_ || send_code_tables(sink, context));
+}
+
+const CodeTables& StreamSender::code_tables() {
+  // Counted from a sample of the model's records, once per worker and
+  // attribute set: deterministic, so every worker counts the same tables.
+  constexpr uint32_t kSample = 32768;
+  CodeTableCache& c = *scratch_->codes;
+  if (c.view != view_) {
+    c.view = view_;
+    c.built = 0;
+  }
+  const int k = reduced_.flags & (kAttrNormals | kAttrColor);
+  if (!(c.built & (1u << k))) {
+    build_code_tables(*view_, cut_, reduced_.layout, kSample, &c.tables[k]);
+    c.built = static_cast<uint8_t>(c.built | (1u << k));
+  }
+  return c.tables[k];
+}
+
+bool StreamSender::send_code_tables(FrameSink sink, void* context) {
+  const size_t n = write_code_tables(code_tables(), scratch_->payload, kMaxPayload);
+  return n > 0 && send(MessageType::kCode, scratch_->payload, n, sink, context);
+}
+
+bool StreamSender::send_coded(const uint32_t* ids, uint32_t count, FrameSink sink, void* context) {
+  // Each entry's reference: the entering node with the largest id below it
+  // among those this part has sent (scratch_->sent, by the entering nodes'
+  // ascending ids), earlier entries of this batch included. The entries'
+  // fields, references and points bytes are laid out in the frame buffer,
+  // which send() fills only once a batch is coded into the payload.
+  constexpr uint32_t kMost = 1024;
+  static_assert(kMost * (2 * sizeof(NodeFields) + 5) <= kMaxFrameBytes);
+  NodeFields* fields = reinterpret_cast<NodeFields*>(scratch_->frame);
+  NodeFields* references = fields + kMost;
+  uint32_t* reference_ids = reinterpret_cast<uint32_t*>(references + kMost);
+  uint8_t* points = reinterpret_cast<uint8_t*>(reference_ids + kMost);
+  const NodeId* entered = cut_.entered();
+  const uint32_t entering = cut_.entered_count();
+  uint8_t* sent = scratch_->sent;
+  for (uint32_t done = 0; done < count;) {
+    const uint32_t n = count - done < kMost ? count - done : kMost;
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t id = ids[done + i];
+      uint32_t at = first_at_or_above(entered, entering, id);
+      if (at == entering || index_of(entered[at]) != id) return false;  // not an entering node
+      sent[at] = 1;
+      uint32_t below = at, above = at + 1;
+      while (below > 0 && !sent[below - 1]) --below;
+      while (above < entering && !sent[above]) ++above;
+      const uint32_t low = below > 0 ? index_of(entered[below - 1]) : 0xFFFFFFFFu;
+      const uint32_t high = above < entering ? index_of(entered[above]) : 0xFFFFFFFFu;
+      reference_ids[i] = coded_reference(id, low, high);
+      fields[i] = unpack_record(view_->header.layout, view_->records + size_t{id} * view_->record_bytes);
+      points[i] = cut_.points(NodeId{id});
+      references[i] = reference_ids[i] != 0xFFFFFFFFu
+                          ? unpack_record(view_->header.layout, view_->records + size_t{reference_ids[i]} * view_->record_bytes)
+                          : NodeFields{};
+    }
+    const size_t bytes = encode_coded_nodes(code_tables(), ids + done, points, fields, references, reference_ids, n,
+                                            scratch_->payload, kMaxPayload);
+    if (bytes == 0 || !send(MessageType::kCodedNodes, scratch_->payload, bytes, sink, context)) return false;
+    done += n;
+  }
+  return true;
 }
 
 bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink, void* context) {
@@ -264,6 +343,7 @@ bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink s
   if (count > 2048) return false;  // batches hold at most kNodeBatchBytes
   for (uint32_t i = 0; i < count; ++i) ids[i] = ~static_cast<uint32_t>(order[i]);
   if (pieces_) std::sort(ids, ids + count);
+  if (coded_ && part_sent_) return send_coded(ids, count, sink, context);
   store_u32le(payload, count);
   size_t at = 4;
   uint32_t previous = 0xFFFFFFFFu;
@@ -283,14 +363,6 @@ bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink s
 }
 
 namespace {
-
-// The first index of ascending ids[0 .. n) at or above `id` (n: none).
-uint32_t first_at_or_above(const uint32_t* ids, uint32_t n, uint32_t id) {
-  return static_cast<uint32_t>(std::lower_bound(ids, ids + n, id) - ids);
-}
-uint32_t first_at_or_above(const NodeId* ids, uint32_t n, uint32_t id) {
-  return static_cast<uint32_t>(std::lower_bound(ids, ids + n, id, [](NodeId a, uint32_t b) { return index_of(a) < b; }) - ids);
-}
 
 constexpr uint32_t kNoGroup = 0xFFFFFFFFu;
 
@@ -313,6 +385,10 @@ bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp
   // Entering nodes by projected size, largest first (ties: smaller id).
   // Without sizes (an incremental cut) or room, they keep the id order.
   const bool sized = cut_.sent_size_q4() != nullptr && entering <= s.order_capacity && leaving <= s.order_capacity;
+  // Coded batches refer to what this part sent before them: kept by the
+  // entering nodes' positions. Without room, the part's batches go compact.
+  part_sent_ = sized;
+  for (uint32_t i = 0; part_sent_ && i < entering; ++i) s.sent[i] = 0;
   if (!sized) {
     // The plain order: every drop, then the nodes in id order.
     uint32_t ids[1024];
@@ -457,7 +533,7 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
       const CacheStatus s = cache_->load_startup(f.payload, f.payload_bytes);
       if (s != CacheStatus::kOk) return refused(s);
       startup_crc_ = crc32(f.payload, f.payload_bytes);
-      compact_ = false;
+      compact_ = coded_ = false;
       has_update_end_ = false;
       return ReceiveStatus::kOk;
     }
@@ -467,6 +543,8 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
       if (s != CacheStatus::kOk) return refused(s);
       startup_crc_ = load_u32le(f.payload);
       compact_ = true;
+      coded_ = false;
+      part_count_ = 0;
       has_update_end_ = false;
       part_ = UpdateBegin{};
       return ReceiveStatus::kOk;
@@ -488,11 +566,20 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
       }
       return at == end ? ReceiveStatus::kOk : ReceiveStatus::kBadMessage;
     }
+    case MessageType::kCode: {
+      if (!cache_->ready() || !compact_ || part_ids_ == nullptr ||
+          !parse_code_tables(f.payload, f.payload_bytes, cache_->header().layout, &code_))
+        return ReceiveStatus::kBadMessage;
+      coded_ = true;
+      return ReceiveStatus::kOk;
+    }
+    case MessageType::kCodedNodes: return apply_coded(f);
     case MessageType::kUpdateBegin: {
       UpdateBegin u;
       if (!cache_->ready() || !parse_update_begin(f.payload, f.payload_bytes, &u)) return ReceiveStatus::kBadMessage;
       part_ = u;
       part_nodes_ = 0;
+      part_count_ = 0;
       return ReceiveStatus::kOk;
     }
     case MessageType::kNodes: {
@@ -566,6 +653,50 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
     }
     default: return ReceiveStatus::kBadMessage;  // a client -> server message
   }
+}
+
+ReceiveStatus StreamReceiver::apply_coded(const Frame& f) {
+  CodedBatchReader b;
+  if (!coded_ || !b.init(code_, f.payload, f.payload_bytes, cache_->header().node_count) ||
+      b.count() > part_capacity_ - part_count_)
+    return ReceiveStatus::kBadMessage;
+  // The part's ids and this batch's merge as they come: the ids so far lie
+  // at the end of the storage, and the merged list is written `count`
+  // places before them, never overtaking what it reads.
+  uint32_t* old = part_ids_ + (part_capacity_ - part_count_);
+  uint32_t* const old_end = part_ids_ + part_capacity_;
+  uint32_t* const first = old - b.count();
+  uint32_t* merged = first;
+  // Applied entry by entry as they are decoded: a batch that fails part
+  // way has put only whole, valid nodes, and the stream stops there.
+  for (uint32_t i = 0; i < b.count(); ++i) {
+    uint32_t id = 0;
+    uint8_t points = 0;
+    if (!b.next_id(&id, &points)) return ReceiveStatus::kBadMessage;
+    while (old < old_end && *old < id) *merged++ = *old++;
+    if (old < old_end && *old == id) return ReceiveStatus::kBadMessage;  // sent twice in one part
+    NodeFields reference{};
+    const uint32_t reference_id =
+        coded_reference(id, merged > first ? merged[-1] : 0xFFFFFFFFu, old < old_end ? *old : 0xFFFFFFFFu);
+    if (reference_id != 0xFFFFFFFFu && !cache_->fields_of(NodeId{reference_id}, &reference))
+      return ReceiveStatus::kBadMessage;
+    NodeFields fields;
+    if (!b.next_fields(reference, reference_id == id - 1u || reference_id == id + 1u, &fields))
+      return ReceiveStatus::kBadMessage;
+    *merged++ = id;
+    uint8_t record[kMaxRecordBytes];
+    pack_record(code_.layout, fields, record);
+    const CacheStatus s = cache_->put(NodeId{id}, record, cache_->record_bytes(), points);
+    if (s != CacheStatus::kOk) {
+      cache_status_ = s;
+      return ReceiveStatus::kCacheRefused;
+    }
+  }
+  if (!b.finish()) return ReceiveStatus::kBadMessage;
+  part_count_ += b.count();
+  nodes_ += b.count();
+  part_nodes_ += b.count();
+  return ReceiveStatus::kOk;
 }
 
 ReceiveStatus StreamReceiver::receive(const uint8_t* data, size_t size) {

@@ -17,6 +17,7 @@
 #include <cstdint>
 
 #include "core/node_cache.h"
+#include "core/node_coding.h"
 #include "core/protocol.h"
 #include "core/spg_format.h"
 #include "core/view_cut.h"
@@ -40,6 +41,15 @@ size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* o
 // write, a queue); false stops the update (the link is gone).
 using FrameSink = bool (*)(void* context, const uint8_t* frame, size_t size);
 
+// The coded batches' tables (protocol 5) of one model, per attribute set
+// (normals, colour), counted when a client first needs them: a sender
+// scratch keeps them, so each worker counts them once.
+struct CodeTableCache {
+  const SpgView* view = nullptr;
+  uint8_t built = 0;  // bit k: tables[k] holds attribute set k (kWantNormals | kWantColor)
+  CodeTables tables[4];
+};
+
 // What a sender works in during one update or send, beside its cut's
 // scratch: a payload and a frame buffer. Senders used from one thread, one
 // at a time, share one (a server: one per worker), so a client's own
@@ -50,12 +60,14 @@ struct SenderScratch {
   CutScratch cut;
   uint8_t* payload = nullptr;  // kMaxPayload
   uint8_t* frame = nullptr;    // kMaxFrameBytes
+  CodeTableCache* codes = nullptr;
   // The order a change is sent in (StreamSender::update), for changes of up
   // to `order_capacity` nodes each way: 24 bytes a node.
   uint64_t* order = nullptr;    // entering nodes: (projected size << 32 | ~id), then the left node each refines
   uint32_t* left = nullptr;     // the nodes that left, ascending
   uint32_t* waiting = nullptr;  // per left node: its entering descendants not yet sent
   uint32_t* ready = nullptr;    // left nodes whose replacements are all sent, to drop
+  uint8_t* sent = nullptr;      // (5) per entering node (ascending ids): sent in this part, for coded batches
   uint32_t order_capacity = 0;
 };
 
@@ -140,6 +152,9 @@ class StreamSender {
   bool send_drops(uint32_t* ids, uint32_t count, FrameSink sink, void* context);  // sorts them (compact batches)
   size_t put_id(uint8_t* out, uint32_t id, uint32_t previous) const;  // a batch's entry id: compact or u32
   bool send_nodes(const uint64_t* order, uint32_t count, FrameSink sink, void* context);  // ids in the low words, inverted
+  bool send_coded(const uint32_t* ids, uint32_t count, FrameSink sink, void* context);  // ascending
+  const CodeTables& code_tables();  // the client's, counted on first use
+  bool send_code_tables(FrameSink sink, void* context);
   const SpgView* view_ = nullptr;
   ViewCut cut_;
   SenderScratch own_scratch_;  // with the one-block init
@@ -149,6 +164,8 @@ class StreamSender {
   bool same_layout_ = true;  // the client takes every attribute: records are copied as they are
   uint32_t capacity_ = 0;
   bool pieces_ = false;         // protocol 4: each class before the first node that uses it
+  bool coded_ = false;          // protocol 5: node batches entropy-coded
+  bool part_sent_ = false;      // scratch_->sent tracks this part's entering nodes: its batches can be coded
   uint8_t* class_bits_ = nullptr;  // a bit a class of the reduced tables: sent
   size_t class_bits_bytes_ = 0;
   uint16_t sequence_ = 0;
@@ -171,6 +188,14 @@ class StreamReceiver {
  public:
   // `reader_storage` holds the frame reader's buffer (kMaxFrameBytes).
   void init(NodeCache* cache, uint8_t* reader_storage, size_t bytes);
+  // Storage for coded batches (protocol 5): a u32 a node of the cache's
+  // capacity. Without it, a code message is refused (ask for no coding).
+  void use_part_storage(uint32_t* ids, uint32_t capacity) {
+    part_ids_ = ids;
+    part_capacity_ = ids == nullptr ? 0 : capacity;
+    part_count_ = 0;
+  }
+  static size_t part_storage_bytes(uint32_t cache_capacity) { return 4 * size_t{cache_capacity}; }
   // Takes bytes from the link; applies every whole frame. A fault sticks.
   [[nodiscard]] ReceiveStatus receive(const uint8_t* data, size_t size);
   // The last update-end seen: the camera it answered and the cut's size.
@@ -184,6 +209,7 @@ class StreamReceiver {
   uint64_t bytes_received() const { return bytes_; }
   uint32_t frames() const { return frames_; }
   uint64_t nodes_received() const { return nodes_; }  // node entries in node batches
+  bool coded() const { return coded_; }  // (5) the stream's node batches come entropy-coded
   // Progress (protocol 4): the part of an update being received (its
   // camera, the nodes entering in it, the parts after it) and how many of its
   // nodes have come.
@@ -212,6 +238,14 @@ class StreamReceiver {
   UpdateBegin part_{};
   uint32_t part_nodes_ = 0;
   bool compact_ = false;  // the stream began with a model (protocol 4): compact batches; kept across a resume, as the cache
+  bool coded_ = false;    // (5) the code tables came: coded batches can be read
+  CodeTables code_{};
+  // (5) The ids this part of the update brought in coded batches,
+  // ascending, at the end of part_ids_[0 .. part_capacity_): a coded
+  // entry's reference is the largest of them below it.
+  uint32_t* part_ids_ = nullptr;
+  uint32_t part_capacity_ = 0, part_count_ = 0;
+  ReceiveStatus apply_coded(const Frame& f);
 };
 
 }  // namespace stipple

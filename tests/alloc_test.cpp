@@ -204,9 +204,12 @@ int main(int argc, char** argv) {
                    sender.init(view, bounds, sender_storage.data(), sender_storage.size() * 8) &&
                    cache.init(limits, cache_storage.data(), cache_storage.size() * 8) == stipple::CacheStatus::kOk;
   receiver.init(&cache, reader_storage.data(), reader_storage.size());
+  std::vector<uint32_t> part_storage(limits.node_capacity);
+  receiver.use_part_storage(part_storage.data(), limits.node_capacity);
   before = g_heap_calls.load();
   stipple::Hello hello;
   hello.cache_capacity = limits.node_capacity;
+  hello.attributes |= stipple::kWantCoded;  // protocol 5: the code tables counted and coded batches, both ends
   stream_ok = stream_ok && sender.start(hello, Link::sink, &link);
   for (uint32_t frame = 0; stream_ok && frame < 30; ++frame) {
     stipple::CameraUpdate u;
@@ -217,11 +220,11 @@ int main(int argc, char** argv) {
     orbit.yaw = frame * 0x04000000u;
     stream_ok = stipple::orbit_camera(orbit, 240, 320, &u.camera) && sender.update(u, true, Link::sink, &link) &&
                 receiver.receive(link.bytes.data(), link.used) == stipple::ReceiveStatus::kOk && receiver.converged(frame) &&
-                cache.count() == sender.cut().sent_count();
+                cache.count() == sender.cut().sent_count() && receiver.coded();
     link.used = 0;
   }
   check(stream_ok && g_heap_calls.load() - before == 0,
-        "stream: startup and 30 camera updates cut, sent and received after init", g_heap_calls.load() - before);
+        "stream: startup and 30 camera updates cut, sent (entropy-coded) and received after init", g_heap_calls.load() - before);
   std::printf("checksum %ld\n%d passed, %d failed\n", checksum, passed, failed);
   return failed == 0 ? 0 : 1;
 }

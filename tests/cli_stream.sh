@@ -24,7 +24,7 @@ for f in "$W"/loop/frame_*.png; do
 done
 "$S" image-diff "$W/single.png" "$W/loop/frame_0000.png" >/dev/null || { echo "frame 0 differs from stipple render"; exit 1; }
 [ "$(wc -l <"$W/tcp/frames.log")" -eq 6 ] || { echo "frames.log should have 6 lines"; exit 1; }
-for what in "connected" "hello 240x320 rgb565, attributes normals colour, cache 30000 nodes" "first cut" "removed after 6 updates"; do
+for what in "connected" "hello 240x320 rgb565, attributes normals colour coded, cache 30000 nodes" "first cut" "removed after 6 updates"; do
   grep -q "$what" "$W/serve.err" || { echo "the server log lacks '$what'"; cat "$W/serve.err"; exit 1; }
 done
 "$S" serve "$MODEL" --tcp 127.0.0.1:0 --once >"$W/serve2.out" 2>"$W/serve2.err" &
@@ -35,6 +35,15 @@ remote=$("$H" --connect "127.0.0.1:$port" --camera 90,20 --crc | grep '^crc32')
 wait $server
 local=$("$H" "$MODEL" --camera 90,20 --crc | grep '^crc32')
 [ "$remote" = "$local" ] || { echo "stipple-handheld --connect: $remote, from the file: $local"; exit 1; }
+# Without entropy coding (protocol 4's batches): the same picture.
+"$S" serve "$MODEL" --tcp 127.0.0.1:0 --once >"$W/serve4.out" 2>"$W/serve4.err" &
+server=$!
+for _ in $(seq 100); do grep -q "serving on port" "$W/serve4.out" && break; sleep 0.05; done
+port=$(sed -n 's/.*serving on port \([0-9]*\)$/\1/p' "$W/serve4.out")
+plain=$("$H" --connect "127.0.0.1:$port" --camera 90,20 --crc --no-coding | grep '^crc32')
+wait $server
+[ "$plain" = "$local" ] || { echo "stipple-handheld --connect --no-coding: $plain, from the file: $local"; exit 1; }
+grep -q "attributes normals colour, cache" "$W/serve4.err" || { echo "--no-coding still asked for coding"; cat "$W/serve4.err"; exit 1; }
 # The view as it comes: --at writes the frame shown at each time and a log;
 # over loopback the view has converged by 2 s, so that frame is the single
 # render's.

@@ -169,24 +169,36 @@ RemoteModel::Options serial_options(SerialLoop& loop, int timeout_ms) {
 
 TEST_F(ServerWithLog, LoopbackFramesEqualTheLocalRender) {
   const Local local;
-  LoopbackPipe pipe;
-  server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
-  RemoteModel remote;
-  RemoteModel::Options ro = stepping(server);
-  ASSERT_TRUE(remote.connect(pipe.client(), device(), ro, error)) << error;
-  for (double yaw : {30.0, 60.0, 90.0, 200.0, 30.0}) {
-    const std::vector<uint8_t> frame = remote_frame(remote, local, yaw, error);
-    ASSERT_FALSE(frame.empty()) << error;
-    const FixedRender expected = local.render(yaw);
-    EXPECT_EQ(frame, expected.frame) << "yaw " << yaw;
-    EXPECT_EQ(remote.client().node_count(), expected.cut.size());
+  // Entropy-coded batches (protocol 5, the default) and compact ones alike.
+  for (const bool coded : {true, false}) {
+    LoopbackPipe pipe;
+    server.add_client(std::make_unique<TransportRef>(pipe.server()), -1, "loopback");
+    RemoteModel remote;
+    RemoteModel::Options ro = stepping(server);
+    ro.coded = coded;
+    ASSERT_TRUE(remote.connect(pipe.client(), device(), ro, error)) << error;
+    for (double yaw : {30.0, 60.0, 90.0, 200.0, 30.0}) {
+      const std::vector<uint8_t> frame = remote_frame(remote, local, yaw, error);
+      ASSERT_FALSE(frame.empty()) << error;
+      const FixedRender expected = local.render(yaw);
+      EXPECT_EQ(frame, expected.frame) << "yaw " << yaw << (coded ? ", coded" : "");
+      EXPECT_EQ(remote.client().node_count(), expected.cut.size());
+    }
+    const std::vector<ClientReport> r = server.report();
+    ASSERT_EQ(r.size(), 1u);
+    EXPECT_EQ(r[0].updates, 5u);
+    EXPECT_EQ(r[0].bytes_out, remote.bytes_received());
+    remote.close();
+    for (int i = 0; i < 100 && !server.report().empty(); ++i) server.step(0);
   }
-  const std::vector<ClientReport> r = server.report();
-  ASSERT_EQ(r.size(), 1u);
-  EXPECT_EQ(r[0].updates, 5u);
-  EXPECT_EQ(r[0].bytes_out, remote.bytes_received());
   ASSERT_GE(log.size(), 2u);
-  EXPECT_NE(log[1].find("hello 240x320 rgb565, attributes normals colour, cache 8000 nodes"), std::string::npos) << log[1];
+  const auto logged = [&](const std::string& what) {
+    for (const std::string& line : log)
+      if (line.find(what) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(logged("hello 240x320 rgb565, attributes normals colour coded, cache 8000 nodes"));
+  EXPECT_TRUE(logged("hello 240x320 rgb565, attributes normals colour, cache 8000 nodes"));
 }
 
 // A valid model with 13-16-bit angle fields (a local render sizes its
@@ -1269,6 +1281,7 @@ TEST(Server, AVersion2ClientIsServedAsBefore) {
   TcpTransport t(connect_to(s.server.port()), "old");
   Hello h = hello_for(device());
   h.version = 2;
+  h.attributes = static_cast<uint8_t>(h.attributes & ~kWantCoded);  // a version 2 hello knows no coding
   uint8_t payload[kCameraUpdateBytes], frame[kCameraUpdateBytes + 16];
   size_t n = write_hello(h, payload), moved = 0;
   ASSERT_EQ(n, kHelloBytes);

@@ -73,6 +73,7 @@ int main(int argc, char** argv) {
   Link link;
   Hello hello;
   hello.cache_capacity = 64;  // a coarse cut: a few dozen nodes
+  hello.attributes |= kWantCoded;  // protocol 5: code tables and coded batches
   bool ok = sender.start(hello, Link::sink, &link);
   CameraUpdate u;
   u.camera = camera_at(decoder.extent_mu(), 0);

@@ -21,6 +21,7 @@ struct Harness {
   stipple::NodeCache cache;
   std::vector<uint8_t> reader_storage = std::vector<uint8_t>(stipple::kMaxFrameBytes);
   std::vector<uint8_t> cobs_storage = std::vector<uint8_t>(stipple::kMaxFrameBytes + 64);
+  std::vector<uint32_t> part_storage = std::vector<uint32_t>(512);  // coded batches (protocol 5)
   Harness() {
     stipple::NodeCacheLimits l;
     l.node_capacity = 512;
@@ -36,6 +37,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // As a socket stream, in pieces of a size the input chooses.
   stipple::StreamReceiver r;
   r.init(&h.cache, h.reader_storage.data(), h.reader_storage.size());
+  r.use_part_storage(h.part_storage.data(), static_cast<uint32_t>(h.part_storage.size()));
   const size_t piece = size > 0 ? 1 + data[0] % 97 : 1;
   for (size_t at = 0; at < size; at += piece) {
     const size_t n = size - at < piece ? size - at : piece;

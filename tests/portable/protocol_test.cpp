@@ -152,6 +152,13 @@ TEST(Protocol, MessagesParseOnlyInRange) {
   buf[7] = kWantNormals;
   EXPECT_TRUE(parse_hello(buf, kHelloBytes, &back));
   EXPECT_FALSE(parse_hello(buf, kHelloBytes + 4, &back));  // a token after a version 2 hello
+  buf[7] = kWantNormals | kWantCoded;  // version 5's coded batches
+  EXPECT_FALSE(parse_hello(buf, kHelloBytes, &back));
+  buf[0] = 4;
+  EXPECT_FALSE(parse_hello(buf, kHelloBytes, &back));
+  buf[0] = 5;
+  EXPECT_TRUE(parse_hello(buf, kHelloBytes, &back));
+  EXPECT_EQ(back.attributes, kWantNormals | kWantCoded);
 
   CameraUpdate c;
   c.sequence = 9;

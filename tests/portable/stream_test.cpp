@@ -68,7 +68,13 @@ Camera camera(double yaw, double pitch, double distance) {
   return c;
 }
 
-TEST(Stream, ClientFramesEqualAFreshLocalLoadAfterEveryUpdate) {
+// 24 cameras streamed to a client asking for coded batches or not; after
+// each, its frame equals a fresh local load's. The bytes: the cold start's
+// and the 23 updates'.
+struct OrbitBytes {
+  uint64_t cold = 0, orbit = 0;
+};
+void stream_an_orbit(bool coded, OrbitBytes& bytes) {
   const Model& m = bunny();
   std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
   StreamSender sender;
@@ -77,12 +83,19 @@ TEST(Stream, ClientFramesEqualAFreshLocalLoadAfterEveryUpdate) {
   std::vector<uint8_t> reader_storage(kMaxFrameBytes);
   StreamReceiver receiver;
   receiver.init(&client.cache, reader_storage.data(), reader_storage.size());
+  std::vector<uint32_t> part_storage(8000);
+  receiver.use_part_storage(part_storage.data(), 8000);
   Link link;
   Hello hello;
   hello.cache_capacity = 8000;
+  if (coded) hello.attributes |= kWantCoded;
   ASSERT_TRUE(sender.start(hello, Link::sink, &link));
   ASSERT_EQ(receiver.receive(link.bytes.data(), link.bytes.size()), ReceiveStatus::kOk);
-  uint64_t cold = link.bytes.size(), orbit = 0, resend = 0;
+  ASSERT_EQ(receiver.coded(), coded);
+  uint64_t& cold = bytes.cold;
+  uint64_t& orbit = bytes.orbit;
+  cold = link.bytes.size();
+  uint64_t resend = 0;
   std::vector<uint8_t> points(m.view.header.node_count);
   spg_node_points(m.view, points.data(), 1);
   for (uint32_t step = 0; step < 24; ++step) {
@@ -112,10 +125,90 @@ TEST(Stream, ClientFramesEqualAFreshLocalLoadAfterEveryUpdate) {
     }
     ASSERT_EQ(client.draw(u.camera), local.draw(u.camera)) << "step " << step;
   }
-  std::printf("cold start %llu bytes; 23 updates %llu bytes (%.1f %% of resending the cut each time)\n",
-              static_cast<unsigned long long>(cold), static_cast<unsigned long long>(orbit),
+  std::printf("%s: cold start %llu bytes; 23 updates %llu bytes (%.1f %% of resending the cut each time)\n",
+              coded ? "coded" : "compact", static_cast<unsigned long long>(cold), static_cast<unsigned long long>(orbit),
               100.0 * static_cast<double>(orbit) / static_cast<double>(resend));
   EXPECT_LT(orbit, resend / 10);
+}
+
+TEST(Stream, ClientFramesEqualAFreshLocalLoadAfterEveryUpdate) {
+  OrbitBytes b;
+  stream_an_orbit(false, b);
+}
+
+// Protocol 5's coded batches (core/node_coding.h) bring the same nodes, so
+// the same frames, in fewer bytes.
+TEST(Stream, CodedBatchesDrawTheSameFramesInFewerBytes) {
+  OrbitBytes compact, coded;
+  stream_an_orbit(false, compact);
+  stream_an_orbit(true, coded);
+  EXPECT_LT(coded.cold, compact.cold * 95 / 100);
+  EXPECT_LT(coded.orbit, compact.orbit * 95 / 100);
+}
+
+// A coded stream's receiver needs the tables before a coded batch, and its
+// part storage; a batch that names a node twice in a part is refused.
+TEST(Stream, CodedBatchesNeedTheirTablesAndTheirStorage) {
+  const Model& m = bunny();
+  std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
+  StreamSender sender;
+  ASSERT_TRUE(sender.init(m.view, m.bounds, sender_storage.data(), sender_storage.size() * 8));
+  Link link;
+  Hello hello;
+  hello.attributes |= kWantCoded;
+  ASSERT_TRUE(sender.start(hello, Link::sink, &link));
+  const std::vector<uint8_t> start = link.bytes;
+  CameraUpdate u;
+  u.camera = camera(30, 20, 3);
+  link.bytes.clear();
+  ASSERT_TRUE(sender.update(u, true, Link::sink, &link));
+  const std::vector<uint8_t> update = link.bytes;
+  // The frames: the model, then the code tables.
+  const size_t model_frame = kFrameHeaderBytes + load_u32le(start.data() + 4) + kFrameTrailerBytes;
+  ASSERT_EQ(start[model_frame], static_cast<uint8_t>(MessageType::kCode));
+  std::vector<uint8_t> reader_storage(kMaxFrameBytes);
+  std::vector<uint32_t> part(8000);
+  {  // Without part storage, the code message is refused.
+    Device client;
+    StreamReceiver r;
+    r.init(&client.cache, reader_storage.data(), reader_storage.size());
+    EXPECT_EQ(r.receive(start.data(), start.size()), ReceiveStatus::kBadMessage);
+  }
+  {  // Without the code message (its frame cut out, the sequence mended), the first coded batch is refused.
+    Device client;
+    StreamReceiver r;
+    r.init(&client.cache, reader_storage.data(), reader_storage.size());
+    r.use_part_storage(part.data(), 8000);
+    std::vector<uint8_t> skipped(start.begin(), start.begin() + static_cast<ptrdiff_t>(model_frame));
+    ASSERT_EQ(r.receive(skipped.data(), skipped.size()), ReceiveStatus::kOk);
+    std::vector<uint8_t> rest = update;
+    // Renumber the update's frames one lower and mend their CRCs.
+    for (size_t at = 0; at < rest.size();) {
+      const size_t n = kFrameHeaderBytes + load_u32le(rest.data() + at + 4);
+      rest[at + 2] = static_cast<uint8_t>(rest[at + 2] - 1);
+      store_u32le(rest.data() + at + n, crc32(rest.data() + at, n));
+      at += n + kFrameTrailerBytes;
+    }
+    EXPECT_EQ(r.receive(rest.data(), rest.size()), ReceiveStatus::kBadMessage);
+  }
+  {  // Part storage smaller than the part: refused, not overrun.
+    Device client;
+    StreamReceiver r;
+    r.init(&client.cache, reader_storage.data(), reader_storage.size());
+    r.use_part_storage(part.data(), 8);
+    ASSERT_EQ(r.receive(start.data(), start.size()), ReceiveStatus::kOk);
+    EXPECT_EQ(r.receive(update.data(), update.size()), ReceiveStatus::kBadMessage);
+  }
+  {  // Whole, it converges.
+    Device client;
+    StreamReceiver r;
+    r.init(&client.cache, reader_storage.data(), reader_storage.size());
+    r.use_part_storage(part.data(), 8000);
+    ASSERT_EQ(r.receive(start.data(), start.size()), ReceiveStatus::kOk);
+    ASSERT_EQ(r.receive(update.data(), update.size()), ReceiveStatus::kOk);
+    EXPECT_TRUE(r.converged(0));
+    EXPECT_EQ(client.cache.count(), sender.cut().sent_count());
+  }
 }
 
 TEST(Stream, FewerAttributesMeanSmallerRecordsAndTheirPicture) {

@@ -18,7 +18,7 @@ Hello hello_for(const ClientConfig& config) {
   h.height = config.raster.height;
   h.pixel_format = config.raster.format == PixelFormat::kRgb888 ? 1 : 0;
   h.attributes = static_cast<uint8_t>((config.normals && config.shading != ShadingMode::kNone ? kWantNormals : 0) |
-                                      (config.color && !config.grey ? kWantColor : 0));
+                                      (config.color && !config.grey ? kWantColor : 0) | kWantCoded);
   h.cache_capacity = config.node_capacity;
   return h;
 }
@@ -355,10 +355,13 @@ bool RemoteModel::connect(Transport& transport, const ClientConfig& config, cons
   reader_storage_.assign(kMaxFrameBytes, 0);
   frame_.assign(kMaxFrameBytes, 0);
   receiver_.init(&client_.cache(), reader_storage_.data(), reader_storage_.size());
+  part_storage_.assign(config.node_capacity, 0);
+  receiver_.use_part_storage(part_storage_.data(), config.node_capacity);
   cobs_storage_.assign(kMaxFrameBytes + 16, 0);
   cobs_out_.assign(cobs_bound(kMaxFrameBytes), 0);
   deframer_.init(cobs_storage_.data(), cobs_storage_.size());
   hello_ = hello_for(config);
+  if (!options.coded) hello_.attributes = static_cast<uint8_t>(hello_.attributes & ~kWantCoded);
   if (options.token.size() > kMaxTokenBytes)
     return error = "the token is longer than " + std::to_string(kMaxTokenBytes) + " bytes", false;
   hello_.token_bytes = static_cast<uint8_t>(options.token.size());

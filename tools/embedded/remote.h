@@ -43,6 +43,7 @@ class RemoteModel {
     Transport* (*reconnect)(void* context, int* fd) = nullptr;
     void* reconnect_context = nullptr;
     std::string token;  // a pre-shared token for a server started with --token (at most 64 bytes)
+    bool coded = true;  // (5) node batches entropy-coded; false: protocol 4's compact batches
   };
   // `config` sizes the client (screen, cache capacity, attributes asked for).
   // A startup that needs more than it allows — angle fields wider than its
@@ -126,6 +127,7 @@ class RemoteModel {
   uint32_t unacknowledged_ = 0;
   uint32_t resyncs_ = 0, reconnects_ = 0, resumes_ = 0;
   std::vector<uint32_t> held_;  // the ids a resume names
+  std::vector<uint32_t> part_storage_;  // coded batches: the ids of an update's part (StreamReceiver::use_part_storage)
   uint64_t damaged_ = 0;
   Hello hello_;
   CameraUpdate last_camera_;

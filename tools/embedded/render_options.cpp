@@ -42,6 +42,10 @@ const char kRenderOptionsHelp[] =
     "  --window X0,Y0,X1,Y1   refine only nodes that project into this rectangle (px;\n"
     "                         TOG05's on-demand mode)\n"
     "client:\n"
+    "  --no-coding            from a server: node batches as protocol 4's entries\n"
+    "                         (LEB128 ids, whole records), not entropy-coded\n"
+    "                         (protocol 5's default, ~15 % fewer bytes:\n"
+    "                         docs/protocol.md \"Coded batches\")\n"
     "  --projection affine|reciprocal|exact   per-point projection (default affine)\n"
     "  --shading point|surface|node|none      Lambert per sampled normal, per normal\n"
     "                                         following the surface (DP01), per node,\n"
@@ -192,6 +196,7 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
     o.tile_nodes_given = true;
   }
   if (args.flag("--no-cull")) o.rule.cull = false;
+  if (args.flag("--no-coding")) o.coded = false;
   if (args.value("--leaf-cone", v) && !parse_leaf_cone(v, o.rule.leaf_cone_q8, error)) return false;
   if (args.value("--window", v)) {
     double w[4];

@@ -21,6 +21,7 @@ struct RenderOptions {
   bool tile_nodes_given = false;  // --tile-nodes was given (the handheld's default is kHandheldTileNodes: its arena)
   bool lanes_given = false;       // --lanes was given (the handheld's default is its device's: baseline)
   std::string token;              // --connect: a pre-shared token for a server started with --token
+  bool coded = true;              // over a link: entropy-coded node batches (protocol 5); --no-coding
 };
 
 // The help lines of these options (view, cut, client), for a program's usage.

@@ -119,6 +119,7 @@ int run(int argc, char** argv) {
     std::unique_ptr<Transport> link;
     RemoteModel server;
     RemoteModel::Options ro;
+    ro.coded = o.coded;
     if (over_serial) {
       auto line = std::make_unique<SerialTransport>();
       if (!line->open(serial_dev, static_cast<uint32_t>(baud), error)) return fail("--serial " + error);

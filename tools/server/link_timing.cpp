@@ -11,7 +11,8 @@
 namespace stipple {
 
 bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, const LinkProfile& up,
-                    const ClientConfig& config, const std::vector<Camera>& cameras, LinkTiming& out, std::string& error) {
+                    const ClientConfig& config, const std::vector<Camera>& cameras, LinkTiming& out, std::string& error,
+                    bool coded) {
   Server server;
   if (!server.init(file, "model", ServerOptions{}, error)) return false;
   ShapedPipe pipe(down, up);
@@ -22,6 +23,8 @@ bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, c
   std::vector<uint8_t> reader_storage(kMaxFrameBytes), frame(kMaxFrameBytes);
   StreamReceiver receiver;
   receiver.init(&client.cache(), reader_storage.data(), reader_storage.size());
+  std::vector<uint32_t> part_storage(config.node_capacity);
+  receiver.use_part_storage(part_storage.data(), config.node_capacity);
   uint16_t sequence = 0;
   const auto send = [&](MessageType type, const uint8_t* payload, size_t size) {
     const size_t n = write_frame(type, sequence++, payload, size, frame.data(), frame.size());
@@ -66,7 +69,9 @@ bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, c
     return true;
   };
   uint8_t payload[kCameraUpdateBytes];
-  write_hello(hello_for(config), payload);
+  Hello hello = hello_for(config);
+  if (!coded) hello.attributes = static_cast<uint8_t>(hello.attributes & ~kWantCoded);
+  write_hello(hello, payload);
   send(MessageType::kHello, payload, kHelloBytes);
   CameraUpdate u;
   u.camera = cameras[0];

@@ -28,8 +28,10 @@ struct LinkTiming {
   std::vector<double> coverage;  // the share of the converged silhouette drawn, every 50 ms from the hello
 };
 
-// The first camera is `cameras[0]`; the rest are the orbit.
+// The first camera is `cameras[0]`; the rest are the orbit. `coded`: the
+// client asks for entropy-coded batches (protocol 5), else compact ones.
 bool time_over_link(const std::vector<uint8_t>& file, const LinkProfile& down, const LinkProfile& up,
-                    const ClientConfig& config, const std::vector<Camera>& cameras, LinkTiming& out, std::string& error);
+                    const ClientConfig& config, const std::vector<Camera>& cameras, LinkTiming& out, std::string& error,
+                    bool coded = true);
 
 }  // namespace stipple

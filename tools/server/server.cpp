@@ -278,9 +278,9 @@ void Server::handle(Client& c, const Frame& f) {
       c.class_bits.assign(StreamSender::class_bits_bytes(model_->view().header), 0);
       c.sender.use_class_bits(c.class_bits.data(), c.class_bits.size());
       char line[160];
-      std::snprintf(line, sizeof line, "%s: hello %ux%u %s, attributes%s%s, cache %u nodes%s", c.name.c_str(), h.width,
+      std::snprintf(line, sizeof line, "%s: hello %ux%u %s, attributes%s%s%s, cache %u nodes%s", c.name.c_str(), h.width,
                     h.height, h.pixel_format ? "rgb888" : "rgb565", h.attributes & kWantNormals ? " normals" : "",
-                    h.attributes & kWantColor ? " colour" : "", h.cache_capacity,
+                    h.attributes & kWantColor ? " colour" : "", h.attributes & kWantCoded ? " coded" : "", h.cache_capacity,
                     h.attributes & kResuming ? ", resuming" : "");
       log(line);
       if (h.attributes & kResuming) {  // the startup waits for the resume's parts

@@ -142,6 +142,7 @@ bool ViewerSource::open(const std::string& model, const std::string& connect, co
     name_ = slash == std::string::npos ? model : model.substr(slash + 1);
   }
   ro.token = o.token;
+  ro.coded = o.coded;
   if (!model_.connect(*link, o.config, ro, error)) return error = (model.empty() ? name_ : model) + ": " + error, false;
   return true;
 }

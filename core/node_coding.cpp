@@ -1,0 +1,402 @@
+// stipple core — entropy-coded node batches. See node_coding.h and
+// docs/protocol.md "Coded batches".
+#include "core/node_coding.h"
+
+#include "core/spg_format.h"
+#include "core/spg_writer.h"
+#include "core/view_cut.h"
+
+namespace stipple {
+namespace {
+
+constexpr uint32_t kStateLow = 1u << 23;  // the coder's state lies in [kStateLow, 256 kStateLow)
+constexpr int kPieceBits = kCodeProbabilityBits;  // raw bits go as uniform symbols of at most this many
+
+int bit_length_minus_one(uint32_t v) { return 31 - __builtin_clz(v); }  // v > 0
+
+// The hybrid integer of v: its token, and the raw bits below it.
+struct Hybrid {
+  uint32_t token;
+  int extra_bits;
+  uint32_t extra;
+};
+Hybrid hybrid(uint32_t v) {
+  if (v < 16) return {v, 0, 0};
+  const int n = bit_length_minus_one(v);  // >= 4
+  return {16u + 2u * static_cast<uint32_t>(n - 4) + ((v >> (n - 1)) & 1u), n - 1, v & ((1u << (n - 1)) - 1u)};
+}
+
+// A field's difference from the entry before, wrapped to its width and
+// zigzagged (0, -1, 1, -2, ... as 0, 1, 2, 3, ...), and back.
+uint32_t zigzag_delta(uint32_t v, uint32_t previous, int bits) {
+  const uint32_t mask = (1u << bits) - 1u;
+  const uint32_t d = (v - previous) & mask;
+  const uint32_t half = 1u << (bits - 1);
+  return d < half ? 2u * d : 2u * ((mask + 1u) - d) - 1u;
+}
+uint32_t undo_zigzag_delta(uint32_t z, uint32_t previous, int bits) {
+  const uint32_t mask = (1u << bits) - 1u;
+  const uint32_t d = (z & 1u) ? (0u - ((z + 1u) >> 1)) : (z >> 1);
+  return (previous + d) & mask;
+}
+
+int model_bits(int model, const RecordLayout& layout) {
+  if (model == kIdModel) return 32;
+  if (model == kPointsModel) return 8;
+  return layout.bits[(model - 2) / 2];
+}
+
+// Calls f(model) for every model a layout uses, in wire order.
+template <typename F>
+void for_each_model(const RecordLayout& layout, F&& f) {
+  f(kIdModel);
+  f(kPointsModel);
+  for (int field = 0; field < kFieldCount; ++field)
+    if (layout.bits[field] > 0) {
+      f(field_model(field, 0));
+      f(field_model(field, 1));
+    }
+}
+
+// log2(x) in 1/256 bits, within 0.09 bits (x > 0): enough to choose a coding.
+uint64_t log2_q8(uint64_t x) {
+  int n = 0;
+  while ((x >> n) > 1) ++n;
+  const uint64_t frac = n >= 8 ? (x >> (n - 8)) & 255u : (x << (8 - n)) & 255u;
+  return uint64_t(n) * 256u + frac;
+}
+
+// Bits (Q8) that coding these token counts costs at their own frequencies.
+uint64_t cost_q8(const uint32_t* counts, int n) {
+  uint64_t total = 0, cost = 0;
+  for (int t = 0; t < n; ++t) total += counts[t];
+  if (total == 0) return 0;
+  const uint64_t log_total = log2_q8(total);
+  for (int t = 0; t < n; ++t)
+    if (counts[t] > 0) cost += counts[t] * (log_total - log2_q8(counts[t]));
+  return cost;
+}
+
+// Frequencies summing to kCodeTotal from counts over the n possible tokens,
+// every one of them at least 1 (any value stays codable).
+void normalise(const uint32_t* counts, int n, CodeModel* m) {
+  uint64_t total = 0;
+  for (int t = 0; t < n; ++t) total += uint64_t{counts[t]} + 1u;
+  uint32_t f[kMaxTokens];
+  uint32_t sum = 0;
+  for (int t = 0; t < n; ++t) {
+    const uint64_t q = (uint64_t{counts[t]} + 1u) * kCodeTotal / total;
+    f[t] = q < 1 ? 1u : static_cast<uint32_t>(q);
+    sum += f[t];
+  }
+  while (sum != kCodeTotal) {
+    int largest = 0;
+    for (int t = 1; t < n; ++t)
+      if (f[t] > f[largest]) largest = t;
+    if (sum < kCodeTotal) {
+      f[largest] += kCodeTotal - sum;
+      sum = kCodeTotal;
+    } else {
+      const uint32_t take = sum - kCodeTotal < f[largest] - 1u ? sum - kCodeTotal : f[largest] - 1u;
+      f[largest] -= take;
+      sum -= take;
+    }
+  }
+  m->count = static_cast<uint8_t>(n);
+  m->cum[0] = 0;
+  for (int t = 0; t < n; ++t) m->cum[t + 1] = static_cast<uint16_t>(m->cum[t] + f[t]);
+}
+
+struct Symbol {
+  uint16_t start, freq;
+};
+
+// The symbols of one value: its token in `m`, then its raw bits in pieces, the top first.
+int push_value(const CodeModel& m, uint32_t v, Symbol* out) {
+  const Hybrid h = hybrid(v);
+  int n = 0;
+  out[n++] = Symbol{m.cum[h.token], static_cast<uint16_t>(m.cum[h.token + 1] - m.cum[h.token])};
+  for (int left = h.extra_bits; left > 0;) {
+    const int p = left < kPieceBits ? left : kPieceBits;
+    left -= p;
+    const uint32_t piece = (h.extra >> left) & ((1u << p) - 1u);
+    const uint32_t freq = kCodeTotal >> p;
+    out[n++] = Symbol{static_cast<uint16_t>(piece * freq), static_cast<uint16_t>(freq)};
+  }
+  return n;
+}
+
+bool read_leb(const uint8_t** at, const uint8_t* end, uint32_t* v) {
+  uint32_t value = 0;
+  for (int shift = 0; shift < 35; shift += 7) {
+    if (*at == end) return false;
+    const uint8_t b = *(*at)++;
+    if (shift == 28 && b > 15) return false;
+    value |= uint32_t{b & 0x7Fu} << shift;
+    if (!(b & 0x80)) {
+      *v = value;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+void build_code_tables(const SpgView& view, const ViewCut& cut, const RecordLayout& layout, uint32_t sample,
+                       CodeTables* out) {
+  out->layout = layout;
+  out->delta_fields = 0;
+  // Token counts: ids, points, and per field both ways (as it is, as a
+  // difference), two contexts each; and the raw bits each way costs.
+  uint32_t ids[kMaxTokens] = {}, points[kMaxTokens] = {};
+  uint32_t plain[kFieldCount][2][kMaxTokens] = {}, delta[kFieldCount][2][kMaxTokens] = {};
+  uint64_t plain_extra[kFieldCount] = {}, delta_extra[kFieldCount] = {};
+  const uint32_t n = view.header.node_count;
+  const uint32_t per_run = 32;
+  const uint32_t runs = sample / per_run > 0 ? sample / per_run : 1;
+  for (uint32_t r = 0; r < runs; ++r) {
+    // A run of entries with id gaps 1, 2, 4, ... 64 as often as 1/2, 1/4, ...
+    // (a cut's batch skips what it does not hold).
+    uint32_t id = static_cast<uint32_t>(uint64_t{r} * n / runs);
+    if (id >= n) break;
+    NodeFields last = unpack_record(view.header.layout, view.records + size_t{id} * view.record_bytes);
+    for (uint32_t k = 1; k < per_run; ++k) {
+      const int tz = __builtin_ctz(k + r);
+      const uint32_t gap = 1u << (tz < 6 ? tz : 6);
+      if (n - id <= gap) break;
+      id += gap;
+      const NodeFields f = unpack_record(view.header.layout, view.records + size_t{id} * view.record_bytes);
+      const int context = gap == 1;
+      const Hybrid p = hybrid(cut.points(NodeId{id}));
+      ++points[p.token];
+      for (int field = 0; field < kFieldCount; ++field) {
+        const int bits = layout.bits[field];
+        if (bits == 0) continue;
+        const Hybrid a = hybrid(f.v[field]);
+        const Hybrid d = hybrid(zigzag_delta(f.v[field], last.v[field], bits));
+        ++plain[field][context][a.token];
+        ++delta[field][context][d.token];
+        plain_extra[field] += static_cast<uint64_t>(a.extra_bits);
+        delta_extra[field] += static_cast<uint64_t>(d.extra_bits);
+      }
+      last = f;
+    }
+  }
+  // A batch's id gaps depend on how much of the model its part sends, which
+  // no sample knows: every gap below the node count alike, by its token.
+  const int id_bits = n > 1 ? bit_length_minus_one(n - 1) + 1 : 1;
+  for (int t = 0; t < tokens_for_bits(id_bits); ++t) ids[t] = runs;
+  normalise(ids, tokens_for_bits(32), &out->model[kIdModel]);
+  normalise(points, tokens_for_bits(8), &out->model[kPointsModel]);
+  for (int field = 0; field < kFieldCount; ++field) {
+    const int bits = layout.bits[field];
+    if (bits == 0) {
+      out->model[field_model(field, 0)] = CodeModel{};
+      out->model[field_model(field, 1)] = CodeModel{};
+      continue;
+    }
+    const int tokens = tokens_for_bits(bits);
+    const uint64_t as_is = cost_q8(plain[field][0], tokens) + cost_q8(plain[field][1], tokens) + 256 * plain_extra[field];
+    const uint64_t as_delta = cost_q8(delta[field][0], tokens) + cost_q8(delta[field][1], tokens) + 256 * delta_extra[field];
+    const bool d = as_delta < as_is;
+    if (d) out->delta_fields |= 1u << field;
+    for (int c = 0; c < 2; ++c) normalise(d ? delta[field][c] : plain[field][c], tokens, &out->model[field_model(field, c)]);
+  }
+}
+
+size_t write_code_tables(const CodeTables& t, uint8_t* out, size_t capacity) {
+  if (capacity < 4) return 0;
+  store_u32le(out, t.delta_fields);
+  size_t at = 4;
+  bool fits = true;
+  for_each_model(t.layout, [&](int model) {
+    const CodeModel& m = t.model[model];
+    if (!fits || capacity - at < 1 + 3 * size_t{m.count}) {
+      fits = false;
+      return;
+    }
+    out[at++] = m.count;
+    for (int k = 0; k < m.count; ++k) at += store_leb128(out + at, uint32_t{m.cum[k + 1]} - m.cum[k]);
+  });
+  return fits ? at : 0;
+}
+
+bool parse_code_tables(const uint8_t* payload, size_t size, const RecordLayout& layout, CodeTables* out) {
+  if (size < 4) return false;
+  *out = CodeTables{};
+  out->layout = layout;
+  out->delta_fields = load_u32le(payload);
+  for (int field = 0; field < 32; ++field)
+    if ((out->delta_fields >> field) & 1u)
+      if (field >= kFieldCount || layout.bits[field] == 0) return false;
+  const uint8_t* at = payload + 4;
+  const uint8_t* end = payload + size;
+  bool ok = true;
+  for_each_model(layout, [&](int model) {
+    if (!ok) return;
+    CodeModel& m = out->model[model];
+    if (at == end) {
+      ok = false;
+      return;
+    }
+    const uint8_t count = *at++;
+    if (count == 0 || count > tokens_for_bits(model_bits(model, layout))) {
+      ok = false;
+      return;
+    }
+    m.count = count;
+    uint32_t sum = 0;
+    for (int k = 0; k < count && ok; ++k) {
+      uint32_t f = 0;
+      ok = read_leb(&at, end, &f) && f <= kCodeTotal - sum;
+      sum += f;
+      m.cum[k + 1] = static_cast<uint16_t>(sum);
+    }
+    ok = ok && sum == kCodeTotal;
+  });
+  return ok && at == end;
+}
+
+size_t encode_coded_nodes(const CodeTables& t, const uint32_t* ids, const uint8_t* points, const NodeFields* fields,
+                          const NodeFields* references, const uint32_t* reference_ids, uint32_t count, uint8_t* out,
+                          size_t capacity) {
+  if (capacity < 8) return 0;
+  uint8_t* const floor = out + 8;
+  uint8_t* p = out + capacity;  // the stream grows down from the end
+  uint32_t x = kStateLow;
+  for (uint32_t i = count; i-- > 0;) {
+    // Entry i's symbols in decoding order, then coded last first.
+    Symbol s[64];
+    int n = 0;
+    const uint32_t previous = i > 0 ? ids[i - 1] : 0xFFFFFFFFu;
+    n += push_value(t.model[kIdModel], ids[i] - previous - 1u, s + n);
+    n += push_value(t.model[kPointsModel], points[i], s + n);
+    const int context = reference_ids[i] + 1u == ids[i] || reference_ids[i] == ids[i] + 1u;
+    for (int field = 0; field < kFieldCount; ++field) {
+      const int bits = t.layout.bits[field];
+      if (bits == 0) continue;
+      const uint32_t v = ((t.delta_fields >> field) & 1u)
+                             ? zigzag_delta(fields[i].v[field], references[i].v[field], bits)
+                             : uint32_t{fields[i].v[field]} & ((1u << bits) - 1u);
+      n += push_value(t.model[field_model(field, context)], v, s + n);
+    }
+    while (n-- > 0) {
+      const uint32_t freq = s[n].freq;
+      const uint32_t x_max = ((kStateLow >> kCodeProbabilityBits) << 8) * freq;
+      while (x >= x_max) {
+        if (p == floor) return 0;
+        *--p = static_cast<uint8_t>(x);
+        x >>= 8;
+      }
+      x = ((x / freq) << kCodeProbabilityBits) + (x % freq) + s[n].start;
+    }
+  }
+  const size_t stream = static_cast<size_t>(out + capacity - p);
+  for (size_t k = 0; k < stream; ++k) floor[k] = p[k];  // p >= floor: forwards is safe
+  store_u32le(out, count);
+  store_u32le(out + 4, x);
+  return 8 + stream;
+}
+
+bool CodedBatchReader::init(const CodeTables& tables, const uint8_t* payload, size_t size, uint32_t node_count) {
+  if (size < 8) return false;
+  t_ = &tables;
+  count_ = load_u32le(payload);
+  x_ = load_u32le(payload + 4);
+  at_ = payload + 8;
+  end_ = payload + size;
+  done_ = 0;
+  node_count_ = node_count;
+  previous_ = 0xFFFFFFFFu;
+  id_pending_ = false;
+  // Each entry costs at least its id token's renormalisation share; a
+  // count beyond the node count cannot be a batch.
+  return x_ >= kStateLow && x_ < (kStateLow << 8) && count_ <= node_count;
+}
+
+bool CodedBatchReader::token(int model, uint32_t* t) {
+  const CodeModel& m = t_->model[model];
+  const uint32_t slot = x_ & (kCodeTotal - 1u);
+  uint32_t lo = 0, hi = m.count;  // the largest token whose cum <= slot
+  while (hi - lo > 1) {
+    const uint32_t mid = (lo + hi) >> 1;
+    if (m.cum[mid] <= slot) lo = mid;
+    else hi = mid;
+  }
+  x_ = (uint32_t{m.cum[lo + 1]} - m.cum[lo]) * (x_ >> kCodeProbabilityBits) + slot - m.cum[lo];
+  while (x_ < kStateLow) {
+    if (at_ == end_) return false;
+    x_ = (x_ << 8) | *at_++;
+  }
+  *t = lo;
+  return true;
+}
+
+bool CodedBatchReader::raw(int bits, uint32_t* v) {
+  uint32_t value = 0;
+  while (bits > 0) {
+    const int p = bits < kPieceBits ? bits : kPieceBits;
+    bits -= p;
+    const uint32_t slot = x_ & (kCodeTotal - 1u);
+    const uint32_t piece = slot >> (kPieceBits - p);
+    x_ = (kCodeTotal >> p) * (x_ >> kCodeProbabilityBits) + slot - (piece << (kPieceBits - p));
+    while (x_ < kStateLow) {
+      if (at_ == end_) return false;
+      x_ = (x_ << 8) | *at_++;
+    }
+    value = (value << p) | piece;
+  }
+  *v = value;
+  return true;
+}
+
+// The model's token count (checked by parse_code_tables) keeps v below
+// 2^(the model's bits).
+bool CodedBatchReader::value(int model, uint32_t* v) {
+  uint32_t t = 0;
+  if (!token(model, &t)) return false;
+  if (t < 16) {
+    *v = t;
+    return true;
+  }
+  const int n = static_cast<int>((t - 16) >> 1) + 4;
+  uint32_t extra = 0;
+  if (!raw(n - 1, &extra)) return false;
+  *v = ((2u | ((t - 16) & 1u)) << (n - 1)) | extra;
+  return true;
+}
+
+bool CodedBatchReader::next_id(uint32_t* id, uint8_t* points) {
+  if (done_ == count_ || id_pending_) return false;
+  uint32_t gap = 0, p = 0;
+  if (!value(kIdModel, &gap) || !value(kPointsModel, &p)) return false;
+  const uint64_t next = done_ == 0 ? uint64_t{gap} : uint64_t{previous_} + 1u + gap;  // the first from -1
+  if (next >= node_count_) return false;
+  previous_ = static_cast<uint32_t>(next);
+  id_pending_ = true;
+  *id = previous_;
+  *points = static_cast<uint8_t>(p);
+  return true;
+}
+
+bool CodedBatchReader::next_fields(const NodeFields& reference, bool adjacent, NodeFields* fields) {
+  if (!id_pending_) return false;
+  NodeFields f{};
+  for (int field = 0; field < kFieldCount; ++field) {
+    const int bits = t_->layout.bits[field];
+    if (bits == 0) continue;
+    uint32_t v = 0;
+    if (!value(field_model(field, adjacent ? 1 : 0), &v)) return false;
+    if ((t_->delta_fields >> field) & 1u) v = undo_zigzag_delta(v, reference.v[field], bits);
+    f.v[field] = static_cast<uint16_t>(v);
+  }
+  id_pending_ = false;
+  ++done_;
+  *fields = f;
+  return true;
+}
+
+bool CodedBatchReader::finish() const { return done_ == count_ && !id_pending_ && at_ == end_ && x_ == kStateLow; }
+
+}  // namespace stipple

@@ -1,0 +1,223 @@
+// Entropy-coded node batches (core/node_coding.h, protocol 5): the encoder's
+// own trees coded and decoded exactly, every value at its extremes, the
+// tables' message round trip, and hostile tables and batches — truncated,
+// padded, oversized counts, a byte flipped anywhere — refused without a
+// value out of range.
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "core/node_coding.h"
+#include "core/spg_writer.h"
+#include "core/stream.h"
+#include "tests/portable/test_files.h"
+
+namespace stipple {
+namespace {
+
+struct Bunny : test::ParsedModel {
+  std::vector<uint64_t> bounds_storage, sender_storage;
+  CutBounds bounds;
+  StreamSender sender;  // for its cut's points bytes
+  Bunny() : ParsedModel("tests/golden/bunny_v1.spg") {
+    bounds_storage.resize(CutBounds::bytes(view.header) / 8 + 1);
+    EXPECT_EQ(bounds.init(view, decoder, bounds_storage.data(), bounds_storage.size() * 8), CutStatus::kOk);
+    sender_storage.resize(StreamSender::storage_bytes(view.header) / 8 + 1);
+    EXPECT_TRUE(sender.init(view, bounds, sender_storage.data(), sender_storage.size() * 8));
+  }
+  NodeFields fields(uint32_t id) const { return unpack_record(view.header.layout, view.records + size_t{id} * view.record_bytes); }
+};
+const Bunny& bunny() {
+  static const Bunny b;
+  return b;
+}
+
+// A batch as a sender makes it: ids, points, fields, references.
+struct Batch {
+  std::vector<uint32_t> ids, reference_ids;
+  std::vector<uint8_t> points;
+  std::vector<NodeFields> fields, references;
+  void add(uint32_t id, uint8_t p, const NodeFields& f, uint32_t reference_id, const NodeFields& reference) {
+    ids.push_back(id);
+    points.push_back(p);
+    fields.push_back(f);
+    reference_ids.push_back(reference_id);
+    references.push_back(reference);
+  }
+  std::vector<uint8_t> encode(const CodeTables& t) const {
+    std::vector<uint8_t> out(kMaxPayload);
+    const size_t n = encode_coded_nodes(t, ids.data(), points.data(), fields.data(), references.data(), reference_ids.data(),
+                                        static_cast<uint32_t>(ids.size()), out.data(), out.size());
+    EXPECT_GT(n, 0u);
+    out.resize(n);
+    return out;
+  }
+};
+
+// Decodes `payload` with the batch's references; true when it decodes whole
+// and exactly to the batch. Values out of range fail the test at once.
+bool decodes_to(const CodeTables& t, const std::vector<uint8_t>& payload, const Batch& b, uint32_t node_count) {
+  CodedBatchReader r;
+  if (!r.init(t, payload.data(), payload.size(), node_count)) return false;
+  bool same = r.count() == b.ids.size();
+  uint32_t previous = 0;
+  for (uint32_t i = 0; i < r.count(); ++i) {
+    uint32_t id = 0;
+    uint8_t points = 0;
+    if (!r.next_id(&id, &points)) return false;
+    EXPECT_LT(id, node_count);
+    if (i > 0) {
+      EXPECT_GT(id, previous);
+    }
+    previous = id;
+    const size_t k = i < b.ids.size() ? i : 0;
+    NodeFields f;
+    if (!r.next_fields(b.references[k], b.reference_ids[k] + 1u == id || b.reference_ids[k] == id + 1u, &f)) return false;
+    for (int field = 0; field < kFieldCount; ++field)
+      EXPECT_LT(uint32_t{f.v[field]}, 1u << t.layout.bits[field]) << "field " << field;
+    same = same && id == b.ids[k] && points == b.points[k];
+    for (int field = 0; field < kFieldCount; ++field) same = same && f.v[field] == b.fields[k].v[field];
+  }
+  return r.finish() && same;
+}
+
+TEST(NodeCoding, TheEncodersOwnTreeRoundTripsExactly) {
+  const Bunny& m = bunny();
+  CodeTables t;
+  build_code_tables(m.view, m.sender.cut(), m.view.header.layout, 32768, &t);
+  // Every node of the tree, in batches of 500 as a part sends them: each
+  // entry referring to the node before it.
+  const uint32_t n = m.view.header.node_count;
+  size_t coded = 0;
+  for (uint32_t first = 0; first < n; first += 500) {
+    Batch b;
+    for (uint32_t id = first; id < n && id < first + 500; ++id)
+      b.add(id, m.sender.cut().points(NodeId{id}), m.fields(id), id > 0 ? id - 1 : 0xFFFFFFFFu,
+            id > 0 ? m.fields(id - 1) : NodeFields{});
+    const std::vector<uint8_t> payload = b.encode(t);
+    coded += payload.size();
+    ASSERT_TRUE(decodes_to(t, payload, b, n)) << "batch at " << first;
+  }
+  // A record and its points byte (13 + 1 bytes) in fewer bytes, ids included.
+  std::printf("the bunny's %u nodes: %zu bytes coded, %.2f a node (records %zu)\n", n, coded,
+              static_cast<double>(coded) / n, m.view.record_bytes);
+  EXPECT_LT(coded, size_t{n} * (m.view.record_bytes + 1) * 7 / 8);
+  // The tables cross the wire and come back the same.
+  std::vector<uint8_t> message(4096);
+  message.resize(write_code_tables(t, message.data(), message.size()));
+  ASSERT_GT(message.size(), 4u);
+  CodeTables back;
+  ASSERT_TRUE(parse_code_tables(message.data(), message.size(), t.layout, &back));
+  EXPECT_EQ(back.delta_fields, t.delta_fields);
+  for (int k = 0; k < kCodeModels; ++k) {
+    ASSERT_EQ(back.model[k].count, t.model[k].count) << "model " << k;
+    for (int i = 0; i <= t.model[k].count; ++i) ASSERT_EQ(back.model[k].cum[i], t.model[k].cum[i]) << "model " << k;
+  }
+}
+
+// Tables with every token alike, for layouts no scan has.
+CodeTables flat_tables(const RecordLayout& layout, uint32_t delta_fields) {
+  CodeTables t;
+  t.layout = layout;
+  t.delta_fields = delta_fields;
+  for (int k = 0; k < kCodeModels; ++k) {
+    const int bits = k == kIdModel ? 32 : k == kPointsModel ? 8 : layout.bits[(k - 2) / 2];
+    if (bits == 0) continue;
+    CodeModel& m = t.model[k];
+    m.count = static_cast<uint8_t>(tokens_for_bits(bits));
+    for (int i = 0; i <= m.count; ++i) m.cum[i] = static_cast<uint16_t>(i * kCodeTotal / m.count);
+  }
+  return t;
+}
+
+TEST(NodeCoding, EveryValueAtItsExtremesRoundTrips) {
+  RecordLayout wide;
+  for (int f = 0; f < kFieldCount; ++f) wide.bits[f] = static_cast<uint8_t>(1 + f % 16);  // 1 .. 16 bits
+  wide.bits[5] = 16;
+  for (uint32_t delta : {0u, (1u << kFieldCount) - 1u, 0x2AAAAu}) {
+    const CodeTables t = flat_tables(wide, delta);
+    Batch b;
+    const uint32_t ids[] = {0, 1, 2, 17, 0x7FFFFFFFu, 0xFFFFFFF0u, 0xFFFFFFFDu};
+    for (size_t i = 0; i < std::size(ids); ++i) {
+      NodeFields f, r;
+      for (int k = 0; k < kFieldCount; ++k) {
+        const uint32_t max = (1u << wide.bits[k]) - 1u;
+        f.v[k] = static_cast<uint16_t>(i % 3 == 0 ? 0 : i % 3 == 1 ? max : (max / 3) * (i % 5));
+        r.v[k] = static_cast<uint16_t>(i % 2 ? max - f.v[k] : f.v[k] / 2);  // the largest differences both ways
+      }
+      b.add(ids[i], static_cast<uint8_t>(i % 2 ? 255 : i), f, i > 0 ? ids[i - 1] : 0xFFFFFFFFu, r);
+    }
+    ASSERT_TRUE(decodes_to(t, b.encode(t), b, 0xFFFFFFFEu)) << "deltas " << delta;
+    // The same batch in a model of fewer nodes is refused at its first id beyond.
+    EXPECT_FALSE(decodes_to(t, b.encode(t), b, 0x7FFFFFFFu));
+  }
+}
+
+TEST(NodeCoding, HostileTablesAreRefused) {
+  const RecordLayout layout = paper_layout(true, false, 2);
+  const CodeTables t = flat_tables(layout, 1u << static_cast<int>(Field::kPosX));
+  std::vector<uint8_t> good(4096);
+  good.resize(write_code_tables(t, good.data(), good.size()));
+  CodeTables out;
+  ASSERT_TRUE(parse_code_tables(good.data(), good.size(), layout, &out));
+  for (size_t n = 0; n < good.size(); ++n) EXPECT_FALSE(parse_code_tables(good.data(), n, layout, &out)) << "cut at " << n;
+  std::vector<uint8_t> longer = good;
+  longer.push_back(0);
+  EXPECT_FALSE(parse_code_tables(longer.data(), longer.size(), layout, &out));
+  // Tables for another layout (colour fields it lacks) do not parse as this one's.
+  EXPECT_FALSE(parse_code_tables(good.data(), good.size(), paper_layout(true, true, 2), &out));
+  // A difference for a field the layout lacks, or beyond the fields.
+  std::vector<uint8_t> bad = good;
+  bad[2] = 0x02;  // bit 17: sigma_c
+  EXPECT_FALSE(parse_code_tables(bad.data(), bad.size(), layout, &out));
+  bad = good;
+  bad[3] = 0x80;  // bit 31
+  EXPECT_FALSE(parse_code_tables(bad.data(), bad.size(), layout, &out));
+  // The id model: no tokens, more than its alphabet, frequencies that do not add up.
+  bad = good;
+  bad[4] = 0;
+  EXPECT_FALSE(parse_code_tables(bad.data(), bad.size(), layout, &out));
+  bad = good;
+  bad[4] = kMaxTokens + 1;
+  EXPECT_FALSE(parse_code_tables(bad.data(), bad.size(), layout, &out));
+  bad = good;
+  bad[5] = static_cast<uint8_t>(bad[5] + 1);  // the first frequency one more
+  EXPECT_FALSE(parse_code_tables(bad.data(), bad.size(), layout, &out));
+}
+
+TEST(NodeCoding, TruncatedPaddedAndDamagedBatchesAreRefused) {
+  const Bunny& m = bunny();
+  CodeTables t;
+  build_code_tables(m.view, m.sender.cut(), m.view.header.layout, 4096, &t);
+  Batch b;
+  for (uint32_t id = 200; id < 260; id += 2)
+    b.add(id, m.sender.cut().points(NodeId{id}), m.fields(id), id - 2, m.fields(id - 2));
+  const std::vector<uint8_t> payload = b.encode(t);
+  const uint32_t n = m.view.header.node_count;
+  ASSERT_TRUE(decodes_to(t, payload, b, n));
+  for (size_t k = 0; k < payload.size(); ++k) {
+    const std::vector<uint8_t> cut(payload.begin(), payload.begin() + static_cast<ptrdiff_t>(k));
+    EXPECT_FALSE(decodes_to(t, cut, b, n)) << "truncated to " << k;
+  }
+  std::vector<uint8_t> padded = payload;
+  padded.push_back(0);
+  EXPECT_FALSE(decodes_to(t, padded, b, n));
+  // A count beyond the model's nodes, or one more than the stream holds.
+  std::vector<uint8_t> more = payload;
+  store_u32le(more.data(), n + 1);
+  CodedBatchReader r;
+  EXPECT_FALSE(r.init(t, more.data(), more.size(), n));
+  store_u32le(more.data(), static_cast<uint32_t>(b.ids.size() + 1));
+  EXPECT_FALSE(decodes_to(t, more, b, n));
+  // A byte flipped anywhere: no value out of range (decodes_to checks each),
+  // and never the batch it was.
+  for (size_t k = 4; k < payload.size(); ++k)
+    for (const uint8_t bit : {uint8_t{1}, uint8_t{0x80}}) {
+      std::vector<uint8_t> damaged = payload;
+      damaged[k] ^= bit;
+      EXPECT_FALSE(decodes_to(t, damaged, b, n)) << "byte " << k << " bit " << int{bit};
+    }
+}
+
+}  // namespace
+}  // namespace stipple
