@@ -105,6 +105,7 @@ void normalise(const uint32_t* counts, int n, CodeModel* m) {
   m->count = static_cast<uint8_t>(n);
   m->cum[0] = 0;
   for (int t = 0; t < n; ++t) m->cum[t + 1] = static_cast<uint16_t>(m->cum[t] + f[t]);
+  index_code_model(m);
 }
 
 struct Symbol {
@@ -142,6 +143,17 @@ bool read_leb(const uint8_t** at, const uint8_t* end, uint32_t* v) {
 }
 
 }  // namespace
+
+void index_code_model(CodeModel* m) {
+  // The largest token whose cum is at or below each bucket's first slot
+  // (a token of frequency 0 is never the answer: the one after it starts there too).
+  uint32_t t = 0;
+  for (uint32_t b = 0; b < (1u << kCodeStartBits); ++b) {
+    const uint32_t slot = b << (kCodeProbabilityBits - kCodeStartBits);
+    while (t + 1 < m->count && m->cum[t + 1] <= slot) ++t;
+    m->start[b] = static_cast<uint8_t>(t);
+  }
+}
 
 void build_code_tables(const SpgView& view, const ViewCut& cut, const RecordLayout& layout, uint32_t sample,
                        CodeTables* out) {
@@ -254,6 +266,7 @@ bool parse_code_tables(const uint8_t* payload, size_t size, const RecordLayout& 
       m.cum[k + 1] = static_cast<uint16_t>(sum);
     }
     ok = ok && sum == kCodeTotal;
+    if (ok) index_code_model(&m);
   });
   return ok && at == end;
 }
@@ -318,12 +331,10 @@ bool CodedBatchReader::init(const CodeTables& tables, const uint8_t* payload, si
 bool CodedBatchReader::token(int model, uint32_t* t) {
   const CodeModel& m = t_->model[model];
   const uint32_t slot = x_ & (kCodeTotal - 1u);
-  uint32_t lo = 0, hi = m.count;  // the largest token whose cum <= slot
-  while (hi - lo > 1) {
-    const uint32_t mid = (lo + hi) >> 1;
-    if (m.cum[mid] <= slot) lo = mid;
-    else hi = mid;
-  }
+  // The largest token whose cum <= slot: from the slot's bucket, upwards
+  // (cum[count] = kCodeTotal > slot stops it).
+  uint32_t lo = m.start[slot >> (kCodeProbabilityBits - kCodeStartBits)];
+  while (m.cum[lo + 1] <= slot) ++lo;
   x_ = (uint32_t{m.cum[lo + 1]} - m.cum[lo]) * (x_ >> kCodeProbabilityBits) + slot - m.cum[lo];
   while (x_ < kStateLow) {
     if (at_ == end_) return false;

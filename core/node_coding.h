@@ -45,11 +45,16 @@ inline constexpr int kCodeModels = 2 + 2 * kFieldCount;
 constexpr int tokens_for_bits(int bits) { return bits <= 4 ? 1 << bits : 16 + 2 * (bits - 4); }
 static_assert(tokens_for_bits(32) == kMaxTokens);
 
-// One static model: cumulative frequencies, cum[0] = 0, cum[count] = kCodeTotal.
+// One static model: cumulative frequencies, cum[0] = 0, cum[count] =
+// kCodeTotal, and where a decoder starts looking for a slot's token.
+inline constexpr int kCodeStartBits = 6;
 struct CodeModel {
   uint8_t count = 0;  // tokens in use (0 .. count-1); those above have frequency 0
   uint16_t cum[kMaxTokens + 1] = {};
+  uint8_t start[1 << kCodeStartBits] = {};  // per slot >> (12 - 6): the token of the slot's first value
 };
+// Fills m.start from m.cum (a model made by hand must call it).
+void index_code_model(CodeModel* m);
 
 // Everything both ends need: the layout's present fields, which are coded
 // as differences, and the models.

@@ -133,6 +133,7 @@ uint8_t StreamSender::adopt_hello(const Hello& hello) {
   pieces_ = hello.version >= 4 && class_bits_ != nullptr && class_bits_bytes_ >= class_bits_bytes(reduced_);
   for (size_t i = 0; pieces_ && i < class_bits_bytes(reduced_); ++i) class_bits_[i] = 0;
   coded_ = pieces_ && hello.version >= 5 && (hello.attributes & kWantCoded) && scratch_->codes != nullptr;
+  tables_sent_ = false;
   return static_cast<uint8_t>(attributes & ~kWantCoded);
 }
 
@@ -148,9 +149,7 @@ bool StreamSender::start(const Hello& hello, FrameSink sink, void* context) {
     const size_t n = write_reduced_startup(*view_, attributes, payload + kModelTagBytes, kMaxPayload - kModelTagBytes);
     if (n == 0) return started_ = false;
     store_u32le(payload, crc32(payload + kModelTagBytes, n));
-    if (!send(MessageType::kModel, payload, kModelTagBytes + spg_fixed_header_bytes(reduced_.version), sink, context))
-      return false;
-    return !coded_ || send_code_tables(sink, context);
+    return send(MessageType::kModel, payload, kModelTagBytes + spg_fixed_header_bytes(reduced_.version), sink, context);
   }
   const size_t n = write_reduced_startup(*view_, attributes, payload, kMaxPayload);
   if (n == 0) return started_ = false;
@@ -187,7 +186,7 @@ bool StreamSender::resume(const Hello& hello, const NodeId* held, uint32_t count
   sequence_ = 0;
   uint8_t payload[4];
   store_u32le(payload, count);
-  return send(MessageType::kResumed, payload, 4, sink, context) && (!coded_ || send_code_tables(sink, context));
+  return send(MessageType::kResumed, payload, 4, sink, context);
 }
 
 const CodeTables& StreamSender::code_tables() {
@@ -209,7 +208,9 @@ const CodeTables& StreamSender::code_tables() {
 
 bool StreamSender::send_code_tables(FrameSink sink, void* context) {
   const size_t n = write_code_tables(code_tables(), scratch_->payload, kMaxPayload);
-  return n > 0 && send(MessageType::kCode, scratch_->payload, n, sink, context);
+  if (n == 0 || !send(MessageType::kCode, scratch_->payload, n, sink, context)) return false;
+  tables_sent_ = true;
+  return true;
 }
 
 bool StreamSender::send_coded(const uint32_t* ids, uint32_t count, FrameSink sink, void* context) {
@@ -227,6 +228,7 @@ bool StreamSender::send_coded(const uint32_t* ids, uint32_t count, FrameSink sin
   const NodeId* entered = cut_.entered();
   const uint32_t entering = cut_.entered_count();
   uint8_t* sent = scratch_->sent;
+  if (!tables_sent_ && !send_code_tables(sink, context)) return false;  // just before the first coded batch
   for (uint32_t done = 0; done < count;) {
     const uint32_t n = count - done < kMost ? count - done : kMost;
     for (uint32_t i = 0; i < n; ++i) {
@@ -268,7 +270,11 @@ bool StreamSender::update(const CameraUpdate& camera, bool cull, FrameSink sink,
     CutParams coarse = p;
     coarse.max_nodes = kCoarseNodes;
     cut_status_ = cut_.update(camera.camera, coarse);
-    if (cut_status_ != CutStatus::kOk || !send_change(camera.sequence, 1, true, sink, context)) return false;
+    // Its few batches go compact: the code tables wait for the refinement.
+    coarse_ = true;
+    const bool sent = cut_status_ == CutStatus::kOk && send_change(camera.sequence, 1, true, sink, context);
+    coarse_ = false;
+    if (!sent) return false;
   }
   cut_status_ = cut_.update(camera.camera, p);
   if (cut_status_ != CutStatus::kOk || !send_change(camera.sequence, 0, cold, sink, context)) return false;
@@ -387,7 +393,7 @@ bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp
   const bool sized = cut_.sent_size_q4() != nullptr && entering <= s.order_capacity && leaving <= s.order_capacity;
   // Coded batches refer to what this part sent before them: kept by the
   // entering nodes' positions. Without room, the part's batches go compact.
-  part_sent_ = sized;
+  part_sent_ = sized && !coarse_;
   for (uint32_t i = 0; part_sent_ && i < entering; ++i) s.sent[i] = 0;
   if (!sized) {
     // The plain order: every drop, then the nodes in id order.

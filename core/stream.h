@@ -166,6 +166,8 @@ class StreamSender {
   bool pieces_ = false;         // protocol 4: each class before the first node that uses it
   bool coded_ = false;          // protocol 5: node batches entropy-coded
   bool part_sent_ = false;      // scratch_->sent tracks this part's entering nodes: its batches can be coded
+  bool tables_sent_ = false;    // the code message went (just before the first coded batch)
+  bool coarse_ = false;         // a cold start's coarse part: compact batches, the code tables not yet
   uint8_t* class_bits_ = nullptr;  // a bit a class of the reduced tables: sent
   size_t class_bits_bytes_ = 0;
   uint16_t sequence_ = 0;

@@ -112,6 +112,7 @@ TEST(NodeCoding, TheEncodersOwnTreeRoundTripsExactly) {
   for (int k = 0; k < kCodeModels; ++k) {
     ASSERT_EQ(back.model[k].count, t.model[k].count) << "model " << k;
     for (int i = 0; i <= t.model[k].count; ++i) ASSERT_EQ(back.model[k].cum[i], t.model[k].cum[i]) << "model " << k;
+    for (int b = 0; b < (1 << kCodeStartBits); ++b) ASSERT_EQ(back.model[k].start[b], t.model[k].start[b]) << "model " << k;
   }
 }
 
@@ -126,6 +127,7 @@ CodeTables flat_tables(const RecordLayout& layout, uint32_t delta_fields) {
     CodeModel& m = t.model[k];
     m.count = static_cast<uint8_t>(tokens_for_bits(bits));
     for (int i = 0; i <= m.count; ++i) m.cum[i] = static_cast<uint16_t>(i * kCodeTotal / m.count);
+    index_code_model(&m);
   }
   return t;
 }

@@ -91,7 +91,6 @@ void stream_an_orbit(bool coded, OrbitBytes& bytes) {
   if (coded) hello.attributes |= kWantCoded;
   ASSERT_TRUE(sender.start(hello, Link::sink, &link));
   ASSERT_EQ(receiver.receive(link.bytes.data(), link.bytes.size()), ReceiveStatus::kOk);
-  ASSERT_EQ(receiver.coded(), coded);
   uint64_t& cold = bytes.cold;
   uint64_t& orbit = bytes.orbit;
   cold = link.bytes.size();
@@ -125,6 +124,7 @@ void stream_an_orbit(bool coded, OrbitBytes& bytes) {
     }
     ASSERT_EQ(client.draw(u.camera), local.draw(u.camera)) << "step " << step;
   }
+  EXPECT_EQ(receiver.coded(), coded);  // the code tables came with the first update
   std::printf("%s: cold start %llu bytes; 23 updates %llu bytes (%.1f %% of resending the cut each time)\n",
               coded ? "coded" : "compact", static_cast<unsigned long long>(cold), static_cast<unsigned long long>(orbit),
               100.0 * static_cast<double>(orbit) / static_cast<double>(resend));
@@ -163,33 +163,51 @@ TEST(Stream, CodedBatchesNeedTheirTablesAndTheirStorage) {
   link.bytes.clear();
   ASSERT_TRUE(sender.update(u, true, Link::sink, &link));
   const std::vector<uint8_t> update = link.bytes;
-  // The frames: the model, then the code tables.
-  const size_t model_frame = kFrameHeaderBytes + load_u32le(start.data() + 4) + kFrameTrailerBytes;
-  ASSERT_EQ(start[model_frame], static_cast<uint8_t>(MessageType::kCode));
+  // The code tables go just before the first coded batch: after a cold
+  // start's coarse part, which goes compact.
+  size_t code_at = 0, code_bytes = 0;
+  bool compact_nodes_before = false;
+  for (size_t at = 0; at < update.size();) {
+    const size_t n = kFrameHeaderBytes + load_u32le(update.data() + at + 4) + kFrameTrailerBytes;
+    if (update[at] == static_cast<uint8_t>(MessageType::kNodes)) compact_nodes_before = true;
+    if (update[at] == static_cast<uint8_t>(MessageType::kCode)) {
+      code_at = at;
+      code_bytes = n;
+      break;
+    }
+    ASSERT_NE(update[at], static_cast<uint8_t>(MessageType::kCodedNodes)) << "a coded batch before the tables";
+    at += n;
+  }
+  ASSERT_GT(code_bytes, 0u);
+  EXPECT_TRUE(compact_nodes_before);
+  EXPECT_EQ(update[code_at + code_bytes], static_cast<uint8_t>(MessageType::kCodedNodes));
   std::vector<uint8_t> reader_storage(kMaxFrameBytes);
   std::vector<uint32_t> part(8000);
   {  // Without part storage, the code message is refused.
     Device client;
     StreamReceiver r;
     r.init(&client.cache, reader_storage.data(), reader_storage.size());
-    EXPECT_EQ(r.receive(start.data(), start.size()), ReceiveStatus::kBadMessage);
+    ASSERT_EQ(r.receive(start.data(), start.size()), ReceiveStatus::kOk);
+    EXPECT_EQ(r.receive(update.data(), update.size()), ReceiveStatus::kBadMessage);
+    EXPECT_FALSE(r.coded());
   }
   {  // Without the code message (its frame cut out, the sequence mended), the first coded batch is refused.
     Device client;
     StreamReceiver r;
     r.init(&client.cache, reader_storage.data(), reader_storage.size());
     r.use_part_storage(part.data(), 8000);
-    std::vector<uint8_t> skipped(start.begin(), start.begin() + static_cast<ptrdiff_t>(model_frame));
-    ASSERT_EQ(r.receive(skipped.data(), skipped.size()), ReceiveStatus::kOk);
-    std::vector<uint8_t> rest = update;
-    // Renumber the update's frames one lower and mend their CRCs.
-    for (size_t at = 0; at < rest.size();) {
+    ASSERT_EQ(r.receive(start.data(), start.size()), ReceiveStatus::kOk);
+    std::vector<uint8_t> rest(update.begin(), update.begin() + static_cast<ptrdiff_t>(code_at));
+    rest.insert(rest.end(), update.begin() + static_cast<ptrdiff_t>(code_at + code_bytes), update.end());
+    // Renumber the frames after the cut one lower and mend their CRCs.
+    for (size_t at = code_at; at < rest.size();) {
       const size_t n = kFrameHeaderBytes + load_u32le(rest.data() + at + 4);
-      rest[at + 2] = static_cast<uint8_t>(rest[at + 2] - 1);
+      store_u16le(rest.data() + at + 2, static_cast<uint16_t>(load_u16le(rest.data() + at + 2) - 1));
       store_u32le(rest.data() + at + n, crc32(rest.data() + at, n));
       at += n + kFrameTrailerBytes;
     }
     EXPECT_EQ(r.receive(rest.data(), rest.size()), ReceiveStatus::kBadMessage);
+    EXPECT_GT(client.cache.count(), 0u);  // the coarse part came
   }
   {  // Part storage smaller than the part: refused, not overrun.
     Device client;
