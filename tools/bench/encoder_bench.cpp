@@ -601,7 +601,8 @@ BENCHMARK(BM_LinkTime)
 
 // One server core, N loopback clients each sending a camera per round (a
 // 120-step orbit each, staggered) and draining what comes back unread: the
-// server's cost per camera update. Counter: updates per second.
+// server's cost per camera update. Counter: updates per second. Args: N,
+// and 1 for clients asking for coded batches (protocol 5), 0 for compact.
 void BM_ServerClients(benchmark::State& state) {
   const std::vector<uint8_t>& spg = encoded_scan();
   const SpgView view = parsed_scan();
@@ -636,7 +637,9 @@ void BM_ServerClients(benchmark::State& state) {
   for (int k = 0; k < n; ++k) {
     pipes.push_back(std::make_unique<LoopbackPipe>(1 << 22));
     server.add_client(std::make_unique<TransportRef>(pipes.back()->server()), -1, "bench");
-    write_hello(Hello{}, payload);
+    Hello hello;
+    if (state.range(1) == 1) hello.attributes |= kWantCoded;
+    write_hello(hello, payload);
     send(k, MessageType::kHello, kHelloBytes);
   }
   server.step(0);
@@ -659,7 +662,7 @@ void BM_ServerClients(benchmark::State& state) {
   state.counters["updates_per_s"] =
       benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_ServerClients)->Arg(64)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+BENCHMARK(BM_ServerClients)->Args({64, 0})->Args({64, 1})->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 void BM_KdNearest(benchmark::State& state) {
   const PointCloud& c = scan();
