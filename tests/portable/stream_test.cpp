@@ -147,7 +147,7 @@ TEST(Stream, CodedBatchesDrawTheSameFramesInFewerBytes) {
 }
 
 // A coded stream's receiver needs the tables before a coded batch, and its
-// part storage; a batch that names a node twice in a part is refused.
+// part storage, and refuses a stream that lacks either.
 TEST(Stream, CodedBatchesNeedTheirTablesAndTheirStorage) {
   const Model& m = bunny();
   std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
