@@ -183,11 +183,12 @@ uint32_t NodeCache::find(uint32_t id) const {
 
 bool NodeCache::has(NodeId id) const { return ready_ && entry(find(index_of(id))) != 0; }
 
-bool NodeCache::fields_of(NodeId id, NodeFields* out) const {
+bool NodeCache::fields_of(NodeId id, NodeFields* out, uint8_t* points) const {
   if (!ready_) return false;
   const uint32_t e = entry(find(index_of(id)));
   if (e == 0) return false;
   *out = decoded() ? fields_at(e - 1) : unpack_record(header_.layout, record_at(e - 1));
+  if (points != nullptr) *points = points_[e - 1];
   return true;
 }
 

@@ -90,8 +90,8 @@ class NodeCache {
   [[nodiscard]] CacheStatus put(NodeId id, const uint8_t* record, size_t size, uint8_t points = 0);
   [[nodiscard]] CacheStatus drop(NodeId id);
   bool has(NodeId id) const;
-  // The held node's record fields; false when it is not held.
-  [[nodiscard]] bool fields_of(NodeId id, NodeFields* out) const;
+  // The held node's record fields (and its points byte); false when it is not held.
+  [[nodiscard]] bool fields_of(NodeId id, NodeFields* out, uint8_t* points = nullptr) const;
   uint32_t count() const { return count_; }
   // Forgets every node, keeps the startup.
   void clear();

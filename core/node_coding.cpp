@@ -41,9 +41,10 @@ uint32_t undo_zigzag_delta(uint32_t z, uint32_t previous, int bits) {
 }
 
 int model_bits(int model, const RecordLayout& layout) {
-  if (model == kIdModel) return 32;
+  if (model == kIdModel || model == kParentModel) return 32;
   if (model == kPointsModel) return 8;
-  return layout.bits[(model - 2) / 2];
+  if (model == kKindModel) return 1;
+  return layout.bits[(model - 4) / 4];
 }
 
 // Calls f(model) for every model a layout uses, in wire order.
@@ -51,11 +52,11 @@ template <typename F>
 void for_each_model(const RecordLayout& layout, F&& f) {
   f(kIdModel);
   f(kPointsModel);
+  f(kKindModel);
+  f(kParentModel);
   for (int field = 0; field < kFieldCount; ++field)
-    if (layout.bits[field] > 0) {
-      f(field_model(field, 0));
-      f(field_model(field, 1));
-    }
+    if (layout.bits[field] > 0)
+      for (int c = 0; c < (is_position_field(field) ? 4 : 3); ++c) f(field_model(field, c));
 }
 
 // log2(x) in 1/256 bits, within 0.09 bits (x > 0): enough to choose a coding.
@@ -157,64 +158,97 @@ void index_code_model(CodeModel* m) {
 
 void build_code_tables(const SpgView& view, const ViewCut& cut, const RecordLayout& layout, uint32_t sample,
                        CodeTables* out) {
+  *out = CodeTables{};
   out->layout = layout;
-  out->delta_fields = 0;
-  // Token counts: ids, points, and per field both ways (as it is, as a
-  // difference), two contexts each; and the raw bits each way costs.
-  uint32_t ids[kMaxTokens] = {}, points[kMaxTokens] = {};
-  uint32_t plain[kFieldCount][2][kMaxTokens] = {}, delta[kFieldCount][2][kMaxTokens] = {};
+  // Token counts: points, and per field and context both ways (as it is, as
+  // a difference); and the raw bits each way costs.
+  uint32_t points[kMaxTokens] = {};
+  uint32_t plain[kFieldCount][4][kMaxTokens] = {}, delta[kFieldCount][4][kMaxTokens] = {};
   uint64_t plain_extra[kFieldCount] = {}, delta_extra[kFieldCount] = {};
+  const auto count = [&](int field, int context, uint32_t v, uint32_t base) {
+    const Hybrid a = hybrid(v);
+    const Hybrid d = hybrid(zigzag_delta(v, base, layout.bits[field]));
+    ++plain[field][context][a.token];
+    ++delta[field][context][d.token];
+    plain_extra[field] += static_cast<uint64_t>(a.extra_bits);
+    delta_extra[field] += static_cast<uint64_t>(d.extra_bits);
+  };
+  const auto fields_of = [&](uint32_t id) { return unpack_record(view.header.layout, view.records + size_t{id} * view.record_bytes); };
   const uint32_t n = view.header.node_count;
   const uint32_t per_run = 32;
   const uint32_t runs = sample / per_run > 0 ? sample / per_run : 1;
   for (uint32_t r = 0; r < runs; ++r) {
     // A run of entries with id gaps 1, 2, 4, ... 64 as often as 1/2, 1/4, ...
-    // (a cut's batch skips what it does not hold).
+    // (a cut's batch skips what it does not hold), and the splits of the
+    // run's nodes that have two children.
     uint32_t id = static_cast<uint32_t>(uint64_t{r} * n / runs);
     if (id >= n) break;
-    NodeFields last = unpack_record(view.header.layout, view.records + size_t{id} * view.record_bytes);
+    NodeFields last = fields_of(id);
     for (uint32_t k = 1; k < per_run; ++k) {
       const int tz = __builtin_ctz(k + r);
       const uint32_t gap = 1u << (tz < 6 ? tz : 6);
       if (n - id <= gap) break;
       id += gap;
-      const NodeFields f = unpack_record(view.header.layout, view.records + size_t{id} * view.record_bytes);
-      const int context = gap == 1;
-      const Hybrid p = hybrid(cut.points(NodeId{id}));
-      ++points[p.token];
-      for (int field = 0; field < kFieldCount; ++field) {
-        const int bits = layout.bits[field];
-        if (bits == 0) continue;
-        const Hybrid a = hybrid(f.v[field]);
-        const Hybrid d = hybrid(zigzag_delta(f.v[field], last.v[field], bits));
-        ++plain[field][context][a.token];
-        ++delta[field][context][d.token];
-        plain_extra[field] += static_cast<uint64_t>(a.extra_bits);
-        delta_extra[field] += static_cast<uint64_t>(d.extra_bits);
-      }
+      const NodeFields f = fields_of(id);
+      ++points[hybrid(cut.points(NodeId{id})).token];
+      for (int field = 0; field < kFieldCount; ++field)
+        if (layout.bits[field] > 0) count(field, gap == 1 ? kAdjacentContext : kFarContext, f.v[field], last.v[field]);
       last = f;
+      const uint32_t child = cut.first_child(id);
+      if (id + 1 < n && cut.first_child(id + 1) == child + 2) {
+        const NodeFields c1 = fields_of(child), c2 = fields_of(child + 1);
+        const uint32_t pp = cut.points(NodeId{id}), p1 = cut.points(NodeId{child});
+        for (int field = 0; field < kFieldCount; ++field) {
+          const int bits = layout.bits[field];
+          if (bits == 0) continue;
+          count(field, kChildContext, c1.v[field], f.v[field]);
+          if (is_position_field(field))
+            count(field, kSplitContext, c2.v[field], split_prediction(f.v[field], c1.v[field], pp, p1, bits));
+          else
+            count(field, kAdjacentContext, c2.v[field], c1.v[field]);
+        }
+      }
     }
   }
   // A batch's id gaps depend on how much of the model its part sends, which
-  // no sample knows: every gap below the node count alike, by its token.
+  // no sample knows: every gap below the node count alike, by its token;
+  // the same for splits' parents, and either kind of entry alike.
+  uint32_t ids[kMaxTokens] = {};
   const int id_bits = n > 1 ? bit_length_minus_one(n - 1) + 1 : 1;
   for (int t = 0; t < tokens_for_bits(id_bits); ++t) ids[t] = runs;
   normalise(ids, tokens_for_bits(32), &out->model[kIdModel]);
+  normalise(ids, tokens_for_bits(32), &out->model[kParentModel]);
+  // Splits are a refinement's (an orbit's) entries, few of a cold start's.
+  const uint32_t kinds[2] = {15 * runs, runs};
+  normalise(kinds, 2, &out->model[kKindModel]);
   normalise(points, tokens_for_bits(8), &out->model[kPointsModel]);
   for (int field = 0; field < kFieldCount; ++field) {
     const int bits = layout.bits[field];
-    if (bits == 0) {
-      out->model[field_model(field, 0)] = CodeModel{};
-      out->model[field_model(field, 1)] = CodeModel{};
-      continue;
-    }
+    if (bits == 0) continue;
     const int tokens = tokens_for_bits(bits);
-    const uint64_t as_is = cost_q8(plain[field][0], tokens) + cost_q8(plain[field][1], tokens) + 256 * plain_extra[field];
-    const uint64_t as_delta = cost_q8(delta[field][0], tokens) + cost_q8(delta[field][1], tokens) + 256 * delta_extra[field];
+    const int contexts = is_position_field(field) ? 4 : 3;
+    uint64_t as_is = 256 * plain_extra[field], as_delta = 256 * delta_extra[field];
+    for (int c = 0; c < contexts; ++c) {
+      as_is += cost_q8(plain[field][c], tokens);
+      as_delta += cost_q8(delta[field][c], tokens);
+    }
     const bool d = as_delta < as_is;
     if (d) out->delta_fields |= 1u << field;
-    for (int c = 0; c < 2; ++c) normalise(d ? delta[field][c] : plain[field][c], tokens, &out->model[field_model(field, c)]);
+    for (int c = 0; c < contexts; ++c)
+      normalise(d ? delta[field][c] : plain[field][c], tokens, &out->model[field_model(field, c)]);
   }
+}
+
+uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_points, uint32_t first_points, int bits) {
+  const int32_t p = static_cast<int32_t>(parent), c = static_cast<int32_t>(first);
+  int32_t guess = 2 * p - c;
+  if (parent_points < 255 && first_points > 0 && parent_points > first_points) {
+    const int32_t n = static_cast<int32_t>(parent_points), n1 = static_cast<int32_t>(first_points), n2 = n - n1;
+    const int32_t twice = 2 * (n * p - n1 * c) + n2;  // rounded: floor((2 num + n2) / (2 n2))
+    guess = twice >= 0 ? twice / (2 * n2) : -((-twice + 2 * n2 - 1) / (2 * n2));
+  }
+  const int32_t most = static_cast<int32_t>((1u << bits) - 1u);
+  return static_cast<uint32_t>(guess < 0 ? 0 : guess > most ? most : guess);
 }
 
 size_t write_code_tables(const CodeTables& t, uint8_t* out, size_t capacity) {
@@ -224,12 +258,16 @@ size_t write_code_tables(const CodeTables& t, uint8_t* out, size_t capacity) {
   bool fits = true;
   for_each_model(t.layout, [&](int model) {
     const CodeModel& m = t.model[model];
-    if (!fits || capacity - at < 1 + 3 * size_t{m.count}) {
+    if (!fits || capacity - at < 2 + 3 * size_t{m.count}) {
       fits = false;
       return;
     }
-    out[at++] = m.count;
-    for (int k = 0; k < m.count; ++k) at += store_leb128(out + at, uint32_t{m.cum[k + 1]} - m.cum[k]);
+    // The tokens after the last one above the floor (frequency 1) go as a count.
+    int ones = 0;
+    while (ones < m.count && m.cum[m.count - ones] - m.cum[m.count - ones - 1] == 1) ++ones;
+    out[at++] = static_cast<uint8_t>(m.count - ones);
+    for (int k = 0; k < m.count - ones; ++k) at += store_leb128(out + at, uint32_t{m.cum[k + 1]} - m.cum[k]);
+    out[at++] = static_cast<uint8_t>(ones);
   });
   return fits ? at : 0;
 }
@@ -252,48 +290,99 @@ bool parse_code_tables(const uint8_t* payload, size_t size, const RecordLayout& 
       ok = false;
       return;
     }
-    const uint8_t count = *at++;
-    if (count == 0 || count > tokens_for_bits(model_bits(model, layout))) {
-      ok = false;
-      return;
-    }
-    m.count = count;
+    const uint8_t listed = *at++;
+    const int alphabet = tokens_for_bits(model_bits(model, layout));
     uint32_t sum = 0;
-    for (int k = 0; k < count && ok; ++k) {
+    for (int k = 0; k < listed && ok; ++k) {
       uint32_t f = 0;
-      ok = read_leb(&at, end, &f) && f <= kCodeTotal - sum;
+      ok = k < alphabet && read_leb(&at, end, &f) && f <= kCodeTotal - sum;
       sum += f;
       m.cum[k + 1] = static_cast<uint16_t>(sum);
     }
-    ok = ok && sum == kCodeTotal;
+    if (!ok || at == end) {
+      ok = false;
+      return;
+    }
+    const uint8_t ones = *at++;
+    const int count = listed + ones;
+    ok = count > 0 && count <= alphabet && sum + ones == kCodeTotal;
+    for (int k = listed; ok && k < count; ++k) m.cum[k + 1] = static_cast<uint16_t>(++sum);
+    m.count = static_cast<uint8_t>(ok ? count : 0);
     if (ok) index_code_model(&m);
   });
   return ok && at == end;
 }
 
-size_t encode_coded_nodes(const CodeTables& t, const uint32_t* ids, const uint8_t* points, const NodeFields* fields,
-                          const NodeFields* references, const uint32_t* reference_ids, uint32_t count, uint8_t* out,
-                          size_t capacity) {
+namespace {
+
+// A field's value as coded: its difference from `base` or itself.
+uint32_t field_value(const CodeTables& t, int field, uint32_t v, uint32_t base) {
+  const int bits = t.layout.bits[field];
+  return ((t.delta_fields >> field) & 1u) ? zigzag_delta(v, base, bits) : v & ((1u << bits) - 1u);
+}
+
+// The symbols of entries[first ..] (a node, or a split's two) in decoding order.
+int unit_symbols(const CodeTables& t, const CodedEntry* e, uint32_t previous_id, uint32_t previous_parent, Symbol* s) {
+  int n = 0;
+  if (e[0].kind == 0) {
+    n += push_value(t.model[kKindModel], 0, s + n);
+    n += push_value(t.model[kIdModel], e[0].id - previous_id - 1u, s + n);
+    n += push_value(t.model[kPointsModel], e[0].points, s + n);
+    const uint32_t r = e[0].reference_id;
+    const int context = r + 1u == e[0].id || r == e[0].id + 1u ? kAdjacentContext : kFarContext;
+    for (int f = 0; f < kFieldCount; ++f)
+      if (t.layout.bits[f] > 0)
+        n += push_value(t.model[field_model(f, context)], field_value(t, f, e[0].fields.v[f], e[0].reference.v[f]), s + n);
+    return n;
+  }
+  const CodedEntry& first = e[0];
+  const CodedEntry& second = e[1];
+  const NodeFields& parent = first.reference;
+  n += push_value(t.model[kKindModel], 1, s + n);
+  n += push_value(t.model[kParentModel], first.reference_id - previous_parent - 1u, s + n);
+  n += push_value(t.model[kIdModel], first.id - previous_id - 1u, s + n);
+  n += push_value(t.model[kPointsModel], first.points, s + n);
+  for (int f = 0; f < kFieldCount; ++f)
+    if (t.layout.bits[f] > 0)
+      n += push_value(t.model[field_model(f, kChildContext)], field_value(t, f, first.fields.v[f], parent.v[f]), s + n);
+  if (split_points(first.reference_points, first.points) > 255) n += push_value(t.model[kPointsModel], second.points, s + n);
+  for (int f = 0; f < kFieldCount; ++f) {
+    const int bits = t.layout.bits[f];
+    if (bits == 0) continue;
+    if (is_position_field(f))
+      n += push_value(t.model[field_model(f, kSplitContext)],
+                      field_value(t, f, second.fields.v[f],
+                                  split_prediction(parent.v[f], first.fields.v[f], first.reference_points, first.points, bits)),
+                      s + n);
+    else
+      n += push_value(t.model[field_model(f, kAdjacentContext)], field_value(t, f, second.fields.v[f], first.fields.v[f]), s + n);
+  }
+  return n;
+}
+
+}  // namespace
+
+size_t encode_coded_nodes(const CodeTables& t, const CodedEntry* entries, uint32_t count, uint8_t* out, size_t capacity) {
   if (capacity < 8) return 0;
   uint8_t* const floor = out + 8;
   uint8_t* p = out + capacity;  // the stream grows down from the end
   uint32_t x = kStateLow;
-  for (uint32_t i = count; i-- > 0;) {
-    // Entry i's symbols in decoding order, then coded last first.
-    Symbol s[64];
-    int n = 0;
-    const uint32_t previous = i > 0 ? ids[i - 1] : 0xFFFFFFFFu;
-    n += push_value(t.model[kIdModel], ids[i] - previous - 1u, s + n);
-    n += push_value(t.model[kPointsModel], points[i], s + n);
-    const int context = reference_ids[i] + 1u == ids[i] || reference_ids[i] == ids[i] + 1u;
-    for (int field = 0; field < kFieldCount; ++field) {
-      const int bits = t.layout.bits[field];
-      if (bits == 0) continue;
-      const uint32_t v = ((t.delta_fields >> field) & 1u)
-                             ? zigzag_delta(fields[i].v[field], references[i].v[field], bits)
-                             : uint32_t{fields[i].v[field]} & ((1u << bits) - 1u);
-      n += push_value(t.model[field_model(field, context)], v, s + n);
-    }
+  for (uint32_t end = count; end > 0;) {
+    // The last unit before `end`: a node, or a split's two entries.
+    const bool split = entries[end - 1].kind == 2;
+    const uint32_t first = split ? end - 2 : end - 1;
+    if (split ? end < 2 || entries[first].kind != 1 || entries[end - 1].id != entries[first].id + 1u
+              : entries[first].kind != 0)
+      return 0;
+    // The last split's parent before it (the first from -1).
+    uint32_t previous_parent = 0xFFFFFFFFu;
+    for (uint32_t k = first; k-- > 0;)
+      if (entries[k].kind == 1) {
+        previous_parent = entries[k].reference_id;
+        break;
+      }
+    Symbol s[128];
+    int n = unit_symbols(t, entries + first, first > 0 ? entries[first - 1].id : 0xFFFFFFFFu, previous_parent, s);
     while (n-- > 0) {
       const uint32_t freq = s[n].freq;
       const uint32_t x_max = ((kStateLow >> kCodeProbabilityBits) << 8) * freq;
@@ -304,6 +393,7 @@ size_t encode_coded_nodes(const CodeTables& t, const uint32_t* ids, const uint8_
       }
       x = ((x / freq) << kCodeProbabilityBits) + (x % freq) + s[n].start;
     }
+    end = first;
   }
   const size_t stream = static_cast<size_t>(out + capacity - p);
   for (size_t k = 0; k < stream; ++k) floor[k] = p[k];  // p >= floor: forwards is safe
@@ -321,10 +411,8 @@ bool CodedBatchReader::init(const CodeTables& tables, const uint8_t* payload, si
   end_ = payload + size;
   done_ = 0;
   node_count_ = node_count;
-  previous_ = 0xFFFFFFFFu;
-  id_pending_ = false;
-  // Each entry costs at least its id token's renormalisation share; a
-  // count beyond the node count cannot be a batch.
+  previous_ = parent_ = 0xFFFFFFFFu;
+  pending_ = 0;
   return x_ >= kStateLow && x_ < (kStateLow << 8) && count_ <= node_count;
 }
 
@@ -378,36 +466,77 @@ bool CodedBatchReader::value(int model, uint32_t* v) {
   return true;
 }
 
-bool CodedBatchReader::next_id(uint32_t* id, uint8_t* points) {
-  if (done_ == count_ || id_pending_) return false;
-  uint32_t gap = 0, p = 0;
-  if (!value(kIdModel, &gap) || !value(kPointsModel, &p)) return false;
-  const uint64_t next = done_ == 0 ? uint64_t{gap} : uint64_t{previous_} + 1u + gap;  // the first from -1
-  if (next >= node_count_) return false;
-  previous_ = static_cast<uint32_t>(next);
-  id_pending_ = true;
-  *id = previous_;
-  *points = static_cast<uint8_t>(p);
+bool CodedBatchReader::next(Entry* e) {
+  if (done_ == count_ || pending_ != 0) return false;
+  uint32_t kind = 0, gap = 0, points = 0;
+  if (!value(kKindModel, &kind)) return false;
+  if (kind == 1) {
+    if (count_ - done_ < 2 || !value(kParentModel, &gap)) return false;
+    const uint64_t parent = uint64_t{parent_} + 1u + gap - (parent_ == 0xFFFFFFFFu ? uint64_t{1} << 32 : 0);
+    if (parent >= node_count_) return false;
+    parent_ = static_cast<uint32_t>(parent);
+    e->parent = parent_;
+  }
+  if (!value(kIdModel, &gap) || !value(kPointsModel, &points)) return false;
+  const uint64_t id = done_ == 0 ? uint64_t{gap} : uint64_t{previous_} + 1u + gap;  // the first from -1
+  if (id + kind >= node_count_) return false;
+  e->kind = static_cast<uint8_t>(kind);
+  e->id = previous_ = static_cast<uint32_t>(id);
+  e->points = first_points_ = static_cast<uint8_t>(points);
+  pending_ = static_cast<uint8_t>(1 + kind);
   return true;
 }
 
-bool CodedBatchReader::next_fields(const NodeFields& reference, bool adjacent, NodeFields* fields) {
-  if (!id_pending_) return false;
+bool CodedBatchReader::field(int f, int context, uint32_t base, uint32_t* v) {
+  if (!value(field_model(f, context), v)) return false;
+  if ((t_->delta_fields >> f) & 1u) *v = undo_zigzag_delta(*v, base, t_->layout.bits[f]);
+  return true;
+}
+
+bool CodedBatchReader::node(const NodeFields& reference, bool adjacent, NodeFields* fields) {
+  if (pending_ != 1) return false;
   NodeFields f{};
-  for (int field = 0; field < kFieldCount; ++field) {
-    const int bits = t_->layout.bits[field];
-    if (bits == 0) continue;
+  for (int k = 0; k < kFieldCount; ++k) {
+    if (t_->layout.bits[k] == 0) continue;
     uint32_t v = 0;
-    if (!value(field_model(field, adjacent ? 1 : 0), &v)) return false;
-    if ((t_->delta_fields >> field) & 1u) v = undo_zigzag_delta(v, reference.v[field], bits);
-    f.v[field] = static_cast<uint16_t>(v);
+    if (!field(k, adjacent ? kAdjacentContext : kFarContext, reference.v[k], &v)) return false;
+    f.v[k] = static_cast<uint16_t>(v);
   }
-  id_pending_ = false;
+  pending_ = 0;
   ++done_;
   *fields = f;
   return true;
 }
 
-bool CodedBatchReader::finish() const { return done_ == count_ && !id_pending_ && at_ == end_ && x_ == kStateLow; }
+bool CodedBatchReader::split(const NodeFields& parent, uint8_t parent_points, NodeFields* first, NodeFields* second,
+                             uint8_t* second_points) {
+  if (pending_ != 2) return false;
+  NodeFields a{}, b{};
+  uint32_t v = 0;
+  for (int k = 0; k < kFieldCount; ++k) {
+    if (t_->layout.bits[k] == 0) continue;
+    if (!field(k, kChildContext, parent.v[k], &v)) return false;
+    a.v[k] = static_cast<uint16_t>(v);
+  }
+  uint32_t points = split_points(parent_points, first_points_);
+  if (points > 255 && !value(kPointsModel, &points)) return false;
+  for (int k = 0; k < kFieldCount; ++k) {
+    const int bits = t_->layout.bits[k];
+    if (bits == 0) continue;
+    const bool position = is_position_field(k);
+    const uint32_t base = position ? split_prediction(parent.v[k], a.v[k], parent_points, first_points_, bits) : a.v[k];
+    if (!field(k, position ? kSplitContext : kAdjacentContext, base, &v)) return false;
+    b.v[k] = static_cast<uint16_t>(v);
+  }
+  pending_ = 0;
+  done_ += 2;
+  previous_ += 1;  // the second child
+  *first = a;
+  *second = b;
+  *second_points = static_cast<uint8_t>(points);
+  return true;
+}
+
+bool CodedBatchReader::finish() const { return done_ == count_ && pending_ == 0 && at_ == end_ && x_ == kStateLow; }
 
 }  // namespace stipple

@@ -35,11 +35,17 @@ inline constexpr int kCodeProbabilityBits = 12;
 inline constexpr uint32_t kCodeTotal = 1u << kCodeProbabilityBits;
 // Tokens of a 32-bit value (the id model's alphabet; fields' and points' are shorter).
 inline constexpr int kMaxTokens = 72;
-// The models: ids, points bytes, then two a field (indexed by Field; the
-// fields a layout lacks have none on the wire).
-inline constexpr int kIdModel = 0, kPointsModel = 1;
-constexpr int field_model(int field, int context) { return 2 + 2 * field + context; }
-inline constexpr int kCodeModels = 2 + 2 * kFieldCount;
+// The models: ids, points bytes, entry kinds, parents' ids, then four a
+// field, by context: after a reference (0), after an adjacent one (1: its id
+// differs by one, most often a sibling), a split's first child against its
+// parent (2), a split's second child's mean against its prediction from the
+// parent and the first child (3; position fields only). The fields a layout
+// lacks have none on the wire.
+inline constexpr int kIdModel = 0, kPointsModel = 1, kKindModel = 2, kParentModel = 3;
+inline constexpr int kFarContext = 0, kAdjacentContext = 1, kChildContext = 2, kSplitContext = 3;
+constexpr int field_model(int field, int context) { return 4 + 4 * field + context; }
+inline constexpr int kCodeModels = 4 + 4 * kFieldCount;
+constexpr bool is_position_field(int field) { return field <= static_cast<int>(Field::kPosZ); }
 
 // Tokens a model needs for values below 2^bits.
 constexpr int tokens_for_bits(int bits) { return bits <= 4 ? 1 << bits : 16 + 2 * (bits - 4); }
@@ -72,28 +78,39 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const RecordLayo
                        CodeTables* out);
 
 // The code message (kCode): u32 the delta-field bits, then per model in use
-// (ids, points, then each field of the layout in order, its two contexts):
-// u8 token count n (1..the model's alphabet), then n LEB128 frequencies
-// summing to kCodeTotal.
+// (ids, points, kinds, parents, then each field of the layout in order, its
+// contexts: three, four for the mean's): u8 n, n LEB128 frequencies, u8 m:
+// m more tokens of frequency 1 — n + m tokens, 1 .. the model's alphabet,
+// frequencies summing to kCodeTotal.
 size_t write_code_tables(const CodeTables& t, uint8_t* out, size_t capacity);
 // Reads it for records of `layout`; false (and *out unusable) for a
 // message that is short, long, or whose models do not add up.
 [[nodiscard]] bool parse_code_tables(const uint8_t* payload, size_t size, const RecordLayout& layout, CodeTables* out);
 
-// kCodedNodes: u32 count, then the rANS stream of the count entries (the
-// coder's final state, u32, first). An entry: its id (the difference from
-// the entry before, less one; the first as it is), its points byte, then its
-// fields, each as it is or as its difference from the same field of the
-// entry's *reference* — the node with the largest id below it among those
-// that came before it in the same part of the update (update-begin), in
-// this batch or an earlier one, or the smallest above it from an earlier
-// batch, whichever id is nearer (coded_reference; none: zeros). The context
-// of an entry's fields is 1 when the two ids differ by one (most often
-// siblings).
+// kCodedNodes: u32 count (nodes), then the rANS stream of its entries (the
+// coder's final state, u32, first). An entry is one node, or a *split*: the
+// two children of a node the client holds (they replace it), coded against
+// it. Each begins with its kind (0 a node, 1 a split) and then:
 //
-// Encodes ids[0 .. count) (ascending) with their points bytes, fields and
-// references (reference_ids[i]: 0xFFFFFFFF for none) into out[0 ..
-// capacity); returns the payload's length, 0 when it did not fit.
+// - a node: its id (the difference from the last id before it, less one;
+//   the first as it is), its points byte, and its fields, each as it is or
+//   as its difference from the same field of its *reference* — the node
+//   with the nearest id to it, below or above (the lower on a tie), among
+//   those this part of the update (update-begin) sent before it
+//   (coded_reference; none: zeros), in context 1 when the two ids differ by
+//   one, else 0;
+// - a split: its parent's id (the difference from the last split's parent
+//   in the batch, less one; the first as it is), the first child's id (as a
+//   node's) and points byte, its fields against the parent's (context 2),
+//   the second child's points byte unless the parent's (below 255) gives it,
+//   then the second child's fields: the mean against its prediction from
+//   the parent and the first child (split_prediction; context 3), the rest
+//   against the first child's (context 1). The second child's id is the
+//   first's plus one.
+//
+// Fields the code message marks as differences are wrapped to their width
+// and zigzagged; the others go as they are, in the same contexts.
+
 // An entry's reference: of the nearest ids below and above it that this
 // part sent before it (0xFFFFFFFF: none), the nearer; the lower one on a tie.
 constexpr uint32_t coded_reference(uint32_t id, uint32_t below, uint32_t above) {
@@ -102,34 +119,71 @@ constexpr uint32_t coded_reference(uint32_t id, uint32_t below, uint32_t above) 
   return above - id < id - below ? above : below;
 }
 
-size_t encode_coded_nodes(const CodeTables& t, const uint32_t* ids, const uint8_t* points, const NodeFields* fields,
-                          const NodeFields* references, const uint32_t* reference_ids, uint32_t count, uint8_t* out,
-                          size_t capacity);
+// The second child's points byte from its parent's and its sibling's, when
+// the parent's is not saturated; 256 when it must be sent.
+constexpr uint32_t split_points(uint32_t parent, uint32_t first) {
+  return parent < 255 && parent >= first ? parent - first : 256u;
+}
 
-// Walks a coded batch entry by entry: next_id() and then, with the
-// entry's reference, next_fields(). Every value is checked as it is
-// decoded: ids ascending below node_count, fields within their widths; the
-// stream must end exactly where the payload does, in the encoder's first
-// state (a truncated, padded or corrupt batch fails, at the latest in finish()).
+// A split's second child's mean, one axis, from its parent's and its first
+// sibling's (TOG05's count-weighted mix: the parent holds both children's
+// points) within the field's `bits`: (n p - n1 c1) / (n - n1) rounded, with
+// the points bytes as counts; 2 p - c1 (equal counts) where they are
+// saturated or unknown. One division a split, no floating point.
+uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_points, uint32_t first_points, int bits);
+
+// One entry to encode. `kind` 0: a node, with its reference; 1: a split's
+// first child, with its parent as the reference (`reference_points` the
+// parent's points byte) — the next entry must be its sibling (kind 2, id + 1,
+// its reference unused).
+struct CodedEntry {
+  uint32_t id = 0;
+  uint8_t points = 0, kind = 0, reference_points = 0;
+  uint32_t reference_id = 0xFFFFFFFFu;
+  NodeFields fields, reference;
+};
+
+// Encodes entries[0 .. count) (ids ascending) into out[0 .. capacity);
+// returns the payload's length, 0 when it did not fit or a split is malformed.
+size_t encode_coded_nodes(const CodeTables& t, const CodedEntry* entries, uint32_t count, uint8_t* out, size_t capacity);
+
+// Walks a coded batch: next() gives an entry's kind and ids; then, with its
+// reference's fields (a node's reference, or a split's parent, which the
+// caller looks up), node() or split() decodes the rest. Every value is
+// checked as it is decoded: ids ascending below node_count, fields within
+// their widths; the stream must end exactly where the payload does, in the
+// encoder's first state (a truncated, padded or corrupt batch fails, at the
+// latest in finish()).
 class CodedBatchReader {
  public:
+  struct Entry {
+    uint8_t kind = 0;       // 0 a node, 1 a split
+    uint32_t id = 0;        // the node, or the split's first child (the second is id + 1)
+    uint8_t points = 0;     // the node's or the first child's
+    uint32_t parent = 0;    // a split's
+  };
   [[nodiscard]] bool init(const CodeTables& tables, const uint8_t* payload, size_t size, uint32_t node_count);
   uint32_t count() const { return count_; }
-  [[nodiscard]] bool next_id(uint32_t* id, uint8_t* points);
-  // `reference`: the fields of the entry's reference (zeros for none);
-  // `adjacent`: its id is one less than the entry's.
-  [[nodiscard]] bool next_fields(const NodeFields& reference, bool adjacent, NodeFields* fields);
+  uint32_t done() const { return done_; }  // nodes decoded
+  [[nodiscard]] bool next(Entry* e);
+  // A node's fields; `reference`: zeros for none, `adjacent`: its id differs by one.
+  [[nodiscard]] bool node(const NodeFields& reference, bool adjacent, NodeFields* fields);
+  // A split's children's fields and the second's points byte, against the parent's.
+  [[nodiscard]] bool split(const NodeFields& parent, uint8_t parent_points, NodeFields* first, NodeFields* second,
+                           uint8_t* second_points);
   [[nodiscard]] bool finish() const;
 
  private:
   bool token(int model, uint32_t* t);
   bool raw(int bits, uint32_t* v);
   bool value(int model, uint32_t* v);
+  bool field(int field, int context, uint32_t base, uint32_t* v);
   const CodeTables* t_ = nullptr;
   const uint8_t* at_ = nullptr;
   const uint8_t* end_ = nullptr;
-  uint32_t x_ = 0, count_ = 0, done_ = 0, node_count_ = 0, previous_ = 0xFFFFFFFFu;
-  bool id_pending_ = false;  // next_id() gave an id whose fields are still to come
+  uint32_t x_ = 0, count_ = 0, done_ = 0, node_count_ = 0, previous_ = 0xFFFFFFFFu, parent_ = 0xFFFFFFFFu;
+  uint8_t pending_ = 0;  // 1 a node, 2 a split whose fields are still to come
+  uint8_t first_points_ = 0;
 };
 
 }  // namespace stipple

@@ -38,6 +38,7 @@ void transcode_record(const RecordLayout& from, const RecordLayout& to, const ui
 namespace {
 
 constexpr Field kClassField[3] = {Field::kSigmaP, Field::kSigmaN, Field::kSigmaC};
+constexpr uint32_t kNoGroup = 0xFFFFFFFFu;
 
 // The first index of ascending ids[0 .. n) at or above `id` (n: none).
 uint32_t first_at_or_above(const uint32_t* ids, uint32_t n, uint32_t id) {
@@ -213,43 +214,70 @@ bool StreamSender::send_code_tables(FrameSink sink, void* context) {
   return true;
 }
 
-bool StreamSender::send_coded(const uint32_t* ids, uint32_t count, FrameSink sink, void* context) {
-  // Each entry's reference: the entering node with the largest id below it
-  // among those this part has sent (scratch_->sent, by the entering nodes'
-  // ascending ids), earlier entries of this batch included. The entries'
-  // fields, references and points bytes are laid out in the frame buffer,
-  // which send() fills only once a batch is coded into the payload.
+bool StreamSender::send_coded(const uint64_t* keyed, uint32_t count, FrameSink sink, void* context) {
+  // keyed[i]: an entering node's id (high word, ascending) and the node that
+  // left which it refines (low word: its index in scratch_->left, or
+  // kNoGroup). Two that are the only children of the node they refine go
+  // as a split against it: the client holds it until they have come. Any
+  // other entry's reference is the entering node nearest to it among those
+  // this part has sent (scratch_->sent, by the entering nodes' ascending
+  // ids), earlier entries of this batch included. The entries are laid
+  // out in the frame buffer, which send() fills only once a batch is coded
+  // into the payload.
   constexpr uint32_t kMost = 1024;
-  static_assert(kMost * (2 * sizeof(NodeFields) + 5) <= kMaxFrameBytes);
-  NodeFields* fields = reinterpret_cast<NodeFields*>(scratch_->frame);
-  NodeFields* references = fields + kMost;
-  uint32_t* reference_ids = reinterpret_cast<uint32_t*>(references + kMost);
-  uint8_t* points = reinterpret_cast<uint8_t*>(reference_ids + kMost);
+  static_assert(kMost * sizeof(CodedEntry) <= kMaxFrameBytes);
+  CodedEntry* entries = reinterpret_cast<CodedEntry*>(scratch_->frame);
   const NodeId* entered = cut_.entered();
   const uint32_t entering = cut_.entered_count();
   uint8_t* sent = scratch_->sent;
+  const auto fields_of = [&](uint32_t id) {
+    return unpack_record(view_->header.layout, view_->records + size_t{id} * view_->record_bytes);
+  };
+  const auto parent_of_split = [&](uint32_t i) {  // the parent when keyed[i], keyed[i + 1] are a split
+    if (!splits_ || i + 1 >= count) return kNoGroup;
+    const uint32_t id = static_cast<uint32_t>(keyed[i] >> 32), group = static_cast<uint32_t>(keyed[i]);
+    if (group == kNoGroup || keyed[i + 1] != ((uint64_t{id + 1} << 32) | group)) return kNoGroup;
+    const uint32_t parent = scratch_->left[group];
+    return cut_.first_child(parent) == id && cut_.first_child(parent + 1) == id + 2 ? parent : kNoGroup;
+  };
   if (!tables_sent_ && !send_code_tables(sink, context)) return false;  // just before the first coded batch
   for (uint32_t done = 0; done < count;) {
-    const uint32_t n = count - done < kMost ? count - done : kMost;
-    for (uint32_t i = 0; i < n; ++i) {
-      const uint32_t id = ids[done + i];
+    uint32_t n = 0;
+    while (done + n < count && n < kMost) {
+      const uint32_t id = static_cast<uint32_t>(keyed[done + n] >> 32);
       uint32_t at = first_at_or_above(entered, entering, id);
       if (at == entering || index_of(entered[at]) != id) return false;  // not an entering node
+      CodedEntry& e = entries[n];
+      e.id = id;
+      e.points = cut_.points(NodeId{id});
+      e.fields = fields_of(id);
+      const uint32_t parent = n + 2 <= kMost ? parent_of_split(done + n) : kNoGroup;
+      if (parent != kNoGroup) {
+        e.kind = 1;
+        e.reference_id = parent;
+        e.reference = fields_of(parent);
+        e.reference_points = cut_.points(NodeId{parent});
+        CodedEntry& second = entries[n + 1];
+        second.kind = 2;
+        second.id = id + 1;
+        second.points = cut_.points(NodeId{id + 1});
+        second.fields = fields_of(id + 1);
+        sent[at] = sent[at + 1] = 1;  // entered[at + 1] is id + 1: both enter
+        ++splits_sent_;
+        n += 2;
+        continue;
+      }
       sent[at] = 1;
       uint32_t below = at, above = at + 1;
       while (below > 0 && !sent[below - 1]) --below;
       while (above < entering && !sent[above]) ++above;
-      const uint32_t low = below > 0 ? index_of(entered[below - 1]) : 0xFFFFFFFFu;
-      const uint32_t high = above < entering ? index_of(entered[above]) : 0xFFFFFFFFu;
-      reference_ids[i] = coded_reference(id, low, high);
-      fields[i] = unpack_record(view_->header.layout, view_->records + size_t{id} * view_->record_bytes);
-      points[i] = cut_.points(NodeId{id});
-      references[i] = reference_ids[i] != 0xFFFFFFFFu
-                          ? unpack_record(view_->header.layout, view_->records + size_t{reference_ids[i]} * view_->record_bytes)
-                          : NodeFields{};
+      e.kind = 0;
+      e.reference_id = coded_reference(id, below > 0 ? index_of(entered[below - 1]) : 0xFFFFFFFFu,
+                                       above < entering ? index_of(entered[above]) : 0xFFFFFFFFu);
+      e.reference = e.reference_id != 0xFFFFFFFFu ? fields_of(e.reference_id) : NodeFields{};
+      ++n;
     }
-    const size_t bytes = encode_coded_nodes(code_tables(), ids + done, points, fields, references, reference_ids, n,
-                                            scratch_->payload, kMaxPayload);
+    const size_t bytes = encode_coded_nodes(code_tables(), entries, n, scratch_->payload, kMaxPayload);
     if (bytes == 0 || !send(MessageType::kCodedNodes, scratch_->payload, bytes, sink, context)) return false;
     done += n;
   }
@@ -347,9 +375,15 @@ bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink s
   // different: a batch is applied whole).
   uint32_t ids[2048];
   if (count > 2048) return false;  // batches hold at most kNodeBatchBytes
+  if (coded_ && part_sent_) {
+    // Each id with the node that left which it refines (the order's high word).
+    uint64_t keyed[2048];
+    for (uint32_t i = 0; i < count; ++i) keyed[i] = (uint64_t{~static_cast<uint32_t>(order[i])} << 32) | (order[i] >> 32);
+    std::sort(keyed, keyed + count);
+    return send_coded(keyed, count, sink, context);
+  }
   for (uint32_t i = 0; i < count; ++i) ids[i] = ~static_cast<uint32_t>(order[i]);
   if (pieces_) std::sort(ids, ids + count);
-  if (coded_ && part_sent_) return send_coded(ids, count, sink, context);
   store_u32le(payload, count);
   size_t at = 4;
   uint32_t previous = 0xFFFFFFFFu;
@@ -369,8 +403,6 @@ bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink s
 }
 
 namespace {
-
-constexpr uint32_t kNoGroup = 0xFFFFFFFFu;
 
 }  // namespace
 
@@ -468,6 +500,8 @@ bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp
   }
   // A cache that cannot hold both what it has and what comes: drops first.
   const bool room = uint64_t{held_before} + entering <= capacity_;
+  // Splits (coded batches) refer to their parent: only while it is held.
+  splits_ = room && split_deltas_;
   uint32_t* ready = s.ready;
   uint32_t ready_count = 0;
   if (!room) {
@@ -673,26 +707,42 @@ ReceiveStatus StreamReceiver::apply_coded(const Frame& f) {
   uint32_t* const old_end = part_ids_ + part_capacity_;
   uint32_t* const first = old - b.count();
   uint32_t* merged = first;
-  // Applied entry by entry as they are decoded: a batch that fails part
-  // way has put only whole, valid nodes, and the stream stops there.
-  for (uint32_t i = 0; i < b.count(); ++i) {
-    uint32_t id = 0;
-    uint8_t points = 0;
-    if (!b.next_id(&id, &points)) return ReceiveStatus::kBadMessage;
+  const auto take = [&](uint32_t id) {  // false: the part brought it before
     while (old < old_end && *old < id) *merged++ = *old++;
-    if (old < old_end && *old == id) return ReceiveStatus::kBadMessage;  // sent twice in one part
-    NodeFields reference{};
-    const uint32_t reference_id =
-        coded_reference(id, merged > first ? merged[-1] : 0xFFFFFFFFu, old < old_end ? *old : 0xFFFFFFFFu);
-    if (reference_id != 0xFFFFFFFFu && !cache_->fields_of(NodeId{reference_id}, &reference))
-      return ReceiveStatus::kBadMessage;
-    NodeFields fields;
-    if (!b.next_fields(reference, reference_id == id - 1u || reference_id == id + 1u, &fields))
-      return ReceiveStatus::kBadMessage;
+    if (old < old_end && *old == id) return false;
     *merged++ = id;
+    return true;
+  };
+  const auto put = [&](uint32_t id, const NodeFields& fields, uint8_t points) {
     uint8_t record[kMaxRecordBytes];
     pack_record(code_.layout, fields, record);
-    const CacheStatus s = cache_->put(NodeId{id}, record, cache_->record_bytes(), points);
+    return cache_->put(NodeId{id}, record, cache_->record_bytes(), points);
+  };
+  // Applied entry by entry as they are decoded: a batch that fails part
+  // way has put only whole, valid nodes, and the stream stops there.
+  while (b.done() < b.count()) {
+    CodedBatchReader::Entry e;
+    if (!b.next(&e)) return ReceiveStatus::kBadMessage;
+    CacheStatus s = CacheStatus::kOk;
+    if (e.kind == 0) {
+      while (old < old_end && *old < e.id) *merged++ = *old++;
+      const uint32_t reference_id =
+          coded_reference(e.id, merged > first ? merged[-1] : 0xFFFFFFFFu, old < old_end ? *old : 0xFFFFFFFFu);
+      NodeFields reference{}, fields;
+      if ((reference_id != 0xFFFFFFFFu && !cache_->fields_of(NodeId{reference_id}, &reference)) ||
+          !b.node(reference, reference_id == e.id - 1u || reference_id == e.id + 1u, &fields) || !take(e.id))
+        return ReceiveStatus::kBadMessage;
+      s = put(e.id, fields, e.points);
+    } else {
+      // A split: the parent the client holds, then its two children.
+      NodeFields parent, one, two;
+      uint8_t parent_points = 0, second_points = 0;
+      if (!cache_->fields_of(NodeId{e.parent}, &parent, &parent_points) ||
+          !b.split(parent, parent_points, &one, &two, &second_points) || !take(e.id) || !take(e.id + 1))
+        return ReceiveStatus::kBadMessage;
+      s = put(e.id, one, e.points);
+      if (s == CacheStatus::kOk) s = put(e.id + 1, two, second_points);
+    }
     if (s != CacheStatus::kOk) {
       cache_status_ = s;
       return ReceiveStatus::kCacheRefused;

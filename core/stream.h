@@ -141,6 +141,11 @@ class StreamSender {
   bool started() const { return started_; }
   uint64_t bytes_sent() const { return bytes_sent_; }
   uint16_t next_sequence() const { return sequence_; }
+  // Coded batches (protocol 5) send a node's two children that replace it
+  // as a split against it (split deltas); off: each child as a node of its
+  // own (to measure what splits save). The splits sent so far.
+  void use_split_deltas(bool on) { split_deltas_ = on; }
+  uint64_t splits_sent() const { return splits_sent_; }
 
  private:
   uint8_t adopt_hello(const Hello& hello);  // the reduced layout and capacity; the attributes wanted
@@ -152,7 +157,7 @@ class StreamSender {
   bool send_drops(uint32_t* ids, uint32_t count, FrameSink sink, void* context);  // sorts them (compact batches)
   size_t put_id(uint8_t* out, uint32_t id, uint32_t previous) const;  // a batch's entry id: compact or u32
   bool send_nodes(const uint64_t* order, uint32_t count, FrameSink sink, void* context);  // ids in the low words, inverted
-  bool send_coded(const uint32_t* ids, uint32_t count, FrameSink sink, void* context);  // ascending
+  bool send_coded(const uint64_t* keyed, uint32_t count, FrameSink sink, void* context);  // (id << 32 | group), ascending
   const CodeTables& code_tables();  // the client's, counted on first use
   bool send_code_tables(FrameSink sink, void* context);
   const SpgView* view_ = nullptr;
@@ -168,6 +173,9 @@ class StreamSender {
   bool part_sent_ = false;      // scratch_->sent tracks this part's entering nodes: its batches can be coded
   bool tables_sent_ = false;    // the code message went (just before the first coded batch)
   bool coarse_ = false;         // a cold start's coarse part: compact batches, the code tables not yet
+  bool splits_ = false;         // this part's batches may send splits (their parents stay until they come)
+  bool split_deltas_ = true;
+  uint64_t splits_sent_ = 0;
   uint8_t* class_bits_ = nullptr;  // a bit a class of the reduced tables: sent
   size_t class_bits_bytes_ = 0;
   uint16_t sequence_ = 0;

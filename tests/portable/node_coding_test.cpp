@@ -32,51 +32,74 @@ const Bunny& bunny() {
   return b;
 }
 
-// A batch as a sender makes it: ids, points, fields, references.
+// A batch as a sender makes it: nodes with their references, splits with their parents.
 struct Batch {
-  std::vector<uint32_t> ids, reference_ids;
-  std::vector<uint8_t> points;
-  std::vector<NodeFields> fields, references;
+  std::vector<CodedEntry> e;
   void add(uint32_t id, uint8_t p, const NodeFields& f, uint32_t reference_id, const NodeFields& reference) {
-    ids.push_back(id);
-    points.push_back(p);
-    fields.push_back(f);
-    reference_ids.push_back(reference_id);
-    references.push_back(reference);
+    CodedEntry x;
+    x.id = id;
+    x.points = p;
+    x.fields = f;
+    x.reference_id = reference_id;
+    x.reference = reference;
+    e.push_back(x);
+  }
+  void add_split(uint32_t parent, uint8_t parent_points, const NodeFields& pf, uint32_t id, uint8_t p1, const NodeFields& f1,
+                 uint8_t p2, const NodeFields& f2) {
+    add(id, p1, f1, parent, pf);
+    e.back().kind = 1;
+    e.back().reference_points = parent_points;
+    add(id + 1, p2, f2, 0xFFFFFFFFu, NodeFields{});
+    e.back().kind = 2;
   }
   std::vector<uint8_t> encode(const CodeTables& t) const {
     std::vector<uint8_t> out(kMaxPayload);
-    const size_t n = encode_coded_nodes(t, ids.data(), points.data(), fields.data(), references.data(), reference_ids.data(),
-                                        static_cast<uint32_t>(ids.size()), out.data(), out.size());
+    const size_t n = encode_coded_nodes(t, e.data(), static_cast<uint32_t>(e.size()), out.data(), out.size());
     EXPECT_GT(n, 0u);
     out.resize(n);
     return out;
   }
 };
 
-// Decodes `payload` with the batch's references; true when it decodes whole
-// and exactly to the batch. Values out of range fail the test at once.
+bool same_fields(const NodeFields& a, const NodeFields& b) {
+  for (int k = 0; k < kFieldCount; ++k)
+    if (a.v[k] != b.v[k]) return false;
+  return true;
+}
+
+// Decodes `payload` with the batch's references and parents; true when it
+// decodes whole and exactly to the batch. Values out of range fail the
+// test at once.
 bool decodes_to(const CodeTables& t, const std::vector<uint8_t>& payload, const Batch& b, uint32_t node_count) {
   CodedBatchReader r;
   if (!r.init(t, payload.data(), payload.size(), node_count)) return false;
-  bool same = r.count() == b.ids.size();
+  bool same = r.count() == b.e.size();
   uint32_t previous = 0;
-  for (uint32_t i = 0; i < r.count(); ++i) {
-    uint32_t id = 0;
-    uint8_t points = 0;
-    if (!r.next_id(&id, &points)) return false;
-    EXPECT_LT(id, node_count);
-    if (i > 0) {
-      EXPECT_GT(id, previous);
+  while (r.done() < r.count()) {
+    const size_t k = r.done() < b.e.size() ? r.done() : 0;
+    CodedBatchReader::Entry x;
+    if (!r.next(&x)) return false;
+    EXPECT_LT(x.id + x.kind, node_count);
+    if (r.done() > 0) {
+      EXPECT_GT(x.id, previous);
     }
-    previous = id;
-    const size_t k = i < b.ids.size() ? i : 0;
-    NodeFields f;
-    if (!r.next_fields(b.references[k], b.reference_ids[k] + 1u == id || b.reference_ids[k] == id + 1u, &f)) return false;
-    for (int field = 0; field < kFieldCount; ++field)
-      EXPECT_LT(uint32_t{f.v[field]}, 1u << t.layout.bits[field]) << "field " << field;
-    same = same && id == b.ids[k] && points == b.points[k];
-    for (int field = 0; field < kFieldCount; ++field) same = same && f.v[field] == b.fields[k].v[field];
+    const CodedEntry& want = b.e[k];
+    NodeFields one, two;
+    if (x.kind == 0) {
+      if (!r.node(want.reference, want.reference_id + 1u == x.id || want.reference_id == x.id + 1u, &one)) return false;
+      same = same && want.kind == 0 && x.id == want.id && x.points == want.points && same_fields(one, want.fields);
+      previous = x.id;
+    } else {
+      uint8_t second_points = 0;
+      if (!r.split(want.reference, want.reference_points, &one, &two, &second_points)) return false;
+      EXPECT_LT(x.parent, node_count);
+      same = same && want.kind == 1 && k + 1 < b.e.size() && x.parent == want.reference_id && x.id == want.id &&
+             x.points == want.points && same_fields(one, want.fields) && second_points == b.e[k + 1].points &&
+             same_fields(two, b.e[k + 1].fields);
+      for (int field = 0; field < kFieldCount; ++field) EXPECT_LT(uint32_t{two.v[field]}, 1u << t.layout.bits[field]);
+      previous = x.id + 1;
+    }
+    for (int field = 0; field < kFieldCount; ++field) EXPECT_LT(uint32_t{one.v[field]}, 1u << t.layout.bits[field]);
   }
   return r.finish() && same;
 }
@@ -122,7 +145,12 @@ CodeTables flat_tables(const RecordLayout& layout, uint32_t delta_fields) {
   t.layout = layout;
   t.delta_fields = delta_fields;
   for (int k = 0; k < kCodeModels; ++k) {
-    const int bits = k == kIdModel ? 32 : k == kPointsModel ? 8 : layout.bits[(k - 2) / 2];
+    const int field = (k - 4) / 4;
+    const int bits = k == kIdModel || k == kParentModel ? 32
+                     : k == kPointsModel                ? 8
+                     : k == kKindModel                  ? 1
+                     : (k - 4) % 4 == kSplitContext && !is_position_field(field) ? 0
+                                                                                  : layout.bits[field];
     if (bits == 0) continue;
     CodeModel& m = t.model[k];
     m.count = static_cast<uint8_t>(tokens_for_bits(bits));
@@ -148,11 +176,47 @@ TEST(NodeCoding, EveryValueAtItsExtremesRoundTrips) {
         r.v[k] = static_cast<uint16_t>(i % 2 ? max - f.v[k] : f.v[k] / 2);  // the largest differences both ways
       }
       b.add(ids[i], static_cast<uint8_t>(i % 2 ? 255 : i), f, i > 0 ? ids[i - 1] : 0xFFFFFFFFu, r);
+      if (ids[i] == 17) {
+        // Two splits: a saturated parent (the second child's points sent)
+        // and one that gives them; children at the field's ends.
+        NodeFields lo, hi;
+        for (int k = 0; k < kFieldCount; ++k) hi.v[k] = static_cast<uint16_t>((1u << wide.bits[k]) - 1u);
+        b.add_split(5, 255, hi, 20, 3, lo, 200, hi);
+        b.add_split(6, 30, lo, 22, 10, hi, 20, lo);
+      }
     }
     ASSERT_TRUE(decodes_to(t, b.encode(t), b, 0xFFFFFFFEu)) << "deltas " << delta;
     // The same batch in a model of fewer nodes is refused at its first id beyond.
     EXPECT_FALSE(decodes_to(t, b.encode(t), b, 0x7FFFFFFFu));
   }
+}
+
+// A node's two children as a split against it cost less than as two nodes
+// against each other (what a refinement saves: split deltas).
+TEST(NodeCoding, SplitsCostLessThanTheirChildrenAsNodes) {
+  const Bunny& m = bunny();
+  CodeTables t;
+  build_code_tables(m.view, m.sender.cut(), m.view.header.layout, 32768, &t);
+  const ViewCut& cut = m.sender.cut();
+  Batch splits, nodes;
+  uint32_t pairs = 0;
+  for (uint32_t parent = 300; parent < 1500; ++parent) {
+    const uint32_t c = cut.first_child(parent);
+    if (cut.first_child(parent + 1) != c + 2) continue;
+    const auto points = [&](uint32_t id) { return cut.points(NodeId{id}); };
+    splits.add_split(parent, points(parent), m.fields(parent), c, points(c), m.fields(c), points(c + 1), m.fields(c + 1));
+    nodes.add(c, points(c), m.fields(c), nodes.e.empty() ? 0xFFFFFFFFu : nodes.e.back().id,
+              nodes.e.empty() ? NodeFields{} : nodes.e.back().fields);
+    nodes.add(c + 1, points(c + 1), m.fields(c + 1), c, m.fields(c));
+    ++pairs;
+  }
+  const std::vector<uint8_t> as_splits = splits.encode(t), as_nodes = nodes.encode(t);
+  ASSERT_TRUE(decodes_to(t, as_splits, splits, m.view.header.node_count));
+  ASSERT_TRUE(decodes_to(t, as_nodes, nodes, m.view.header.node_count));
+  std::printf("%u refinements: %zu bytes as splits, %zu as nodes (%.2f bytes saved a refinement)\n", pairs,
+              as_splits.size(), as_nodes.size(),
+              static_cast<double>(as_nodes.size() - as_splits.size()) / pairs);
+  EXPECT_LT(as_splits.size(), as_nodes.size() * 9 / 10);
 }
 
 TEST(NodeCoding, HostileTablesAreRefused) {
@@ -209,7 +273,7 @@ TEST(NodeCoding, TruncatedPaddedAndDamagedBatchesAreRefused) {
   store_u32le(more.data(), n + 1);
   CodedBatchReader r;
   EXPECT_FALSE(r.init(t, more.data(), more.size(), n));
-  store_u32le(more.data(), static_cast<uint32_t>(b.ids.size() + 1));
+  store_u32le(more.data(), static_cast<uint32_t>(b.e.size() + 1));
   EXPECT_FALSE(decodes_to(t, more, b, n));
   // A byte flipped anywhere: no value out of range (decodes_to checks each),
   // and never the batch it was.

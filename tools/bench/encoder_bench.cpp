@@ -24,6 +24,7 @@
 #ifdef STIPPLE_BENCH_GL
 #include "platform/gl/gl_renderer.h"
 #endif
+#include "core/stream.h"
 #include "core/view_cut.h"
 #include "raster/client.h"
 #include "tools/server/link_timing.h"
@@ -598,6 +599,64 @@ BENCHMARK(BM_LinkTime)
     ->Args({0, 0, 1})->Args({2, 0, 1})->Args({0, 1, 1})->Args({2, 1, 1})->Args({1, 0, 1})
     ->Args({0, 0, 0})->Args({0, 1, 0})
     ->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// Split deltas (protocol 5's coded batches): a 240x320 client with a
+// 60,000-node cache follows a 60-step orbit of 3-degree steps, its entering
+// nodes sent with splits (arg 1) or each child as a node (arg 0). Counters:
+// bytes a step, splits a step (a node's two children against it), and, with
+// splits, the bytes a refinement saves against the run without.
+void BM_SplitDeltas(benchmark::State& state) {
+  const SpgView view = parsed_scan();
+  std::vector<uint32_t> decoder_storage(node_decoder_bytes(view.header) / 4 + 1);
+  NodeDecoder decoder;
+  std::vector<uint64_t> bounds_storage(CutBounds::bytes(view.header) / 8 + 1);
+  CutBounds bounds;
+  if (decoder.init(view, decoder_storage.data(), decoder_storage.size() * 4) != DecodeStatus::kOk ||
+      bounds.init(view, decoder, bounds_storage.data(), bounds_storage.size() * 8) != CutStatus::kOk)
+    std::abort();
+  const auto run = [&](bool splits, double* step_bytes, double* step_splits) {
+    std::vector<uint64_t> storage(StreamSender::storage_bytes(view.header) / 8 + 1);
+    StreamSender sender;
+    if (!sender.init(view, bounds, storage.data(), storage.size() * 8)) std::abort();
+    sender.use_split_deltas(splits);
+    uint64_t bytes = 0;
+    const FrameSink sink = [](void* total, const uint8_t*, size_t size) {
+      *static_cast<uint64_t*>(total) += size;
+      return true;
+    };
+    Hello hello;
+    hello.cache_capacity = 60000;
+    hello.attributes |= kWantCoded;
+    if (!sender.start(hello, sink, &bytes)) std::abort();
+    uint64_t cold = 0, cold_splits = 0;
+    for (uint32_t step = 0; step <= 60; ++step) {
+      ViewSpec s;
+      s.yaw = 30 + 3.0 * step;
+      CameraUpdate u;
+      u.sequence = step;
+      if (!orbit_camera(orbit_view(decoder.extent_mu(), s), 240, 320, &u.camera) || !sender.update(u, true, sink, &bytes))
+        std::abort();
+      if (step == 0) {
+        cold = bytes;
+        cold_splits = sender.splits_sent();
+      }
+    }
+    *step_bytes = static_cast<double>(bytes - cold) / 60;
+    *step_splits = static_cast<double>(sender.splits_sent() - cold_splits) / 60;
+  };
+  double bytes = 0, splits = 0, without = 0, none = 0;
+  for (auto _ : state) {
+    run(state.range(0) == 1, &bytes, &splits);
+    if (state.range(0) == 1) run(false, &without, &none);
+  }
+  state.counters["step_bytes"] = bytes;
+  state.counters["step_splits"] = splits;
+  if (state.range(0) == 1) {
+    state.counters["step_bytes_without"] = without;
+    state.counters["saved_per_split"] = splits > 0 ? (without - bytes) / splits : 0;
+  }
+}
+BENCHMARK(BM_SplitDeltas)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // One server core, N loopback clients each sending a camera per round (a
 // 120-step orbit each, staggered) and draining what comes back unread: the
