@@ -296,6 +296,7 @@ bool parse_code_tables(const uint8_t* payload, size_t size, const RecordLayout& 
     for (int k = 0; k < listed && ok; ++k) {
       uint32_t f = 0;
       ok = k < alphabet && read_leb(&at, end, &f) && f <= kCodeTotal - sum;
+      if (!ok) break;
       sum += f;
       m.cum[k + 1] = static_cast<uint16_t>(sum);
     }

@@ -73,4 +73,13 @@ if [ "$GOLDEN" = "-" ]; then
   "$E" "$MODEL" --camera 90,20,3,35 --headless -o "$GOLDEN"
 fi
 "$S" image-diff "$GOLDEN" "$W/connect.png"
-echo "window $(size idle1): idle, orbit and stylus as scripted; --connect draws $GOLDEN"
+# Without entropy-coded batches (protocol 4's): the same picture.
+"$S" serve "$MODEL" --tcp 127.0.0.1:0 --once >"$W/serve2.out" 2>"$W/serve2.err" &
+server=$!
+for _ in $(seq 100); do grep -q "serving on port" "$W/serve2.out" && break; sleep 0.05; done
+port=$(sed -n 's/.*serving on port \([0-9]*\)$/\1/p' "$W/serve2.out")
+[ -n "$port" ] || { echo "the second server did not start"; cat "$W/serve2.err"; exit 1; }
+"$E" --connect "127.0.0.1:$port" --camera 90,20,3,35 --headless --no-coding -o "$W/connect_plain.png"
+wait $server
+"$S" image-diff "$GOLDEN" "$W/connect_plain.png"
+echo "window $(size idle1): idle, orbit and stylus as scripted; --connect draws $GOLDEN, coded or not"
