@@ -156,9 +156,85 @@ void index_code_model(CodeModel* m) {
   }
 }
 
-void build_code_tables(const SpgView& view, const ViewCut& cut, const RecordLayout& layout, uint32_t sample,
+namespace {
+
+// The classes messages' models from every class of the header's tables:
+// index gaps (a piece's are small once a view has sent many, and any below
+// the count is possible), each value as it is or as its difference from the
+// value before it in its class, whichever costs fewer bits.
+void build_class_models(const SpgView& view, const SpgHeader& header, CodeTables* out) {
+  out->classes = header.version >= 2;
+  if (!out->classes) return;
+  uint32_t gaps[kMaxTokens] = {};
+  const int index_bits = 16;
+  for (int t = 0; t < tokens_for_bits(index_bits); ++t) gaps[t] = t < 4 ? 64 : 1;
+  normalise(gaps, tokens_for_bits(index_bits), &out->class_model[0]);
+  const uint8_t* tables[3] = {view.sigma_p, view.sigma_n, view.sigma_c};
+  for (int t = 0; t < 3; ++t) {
+    out->class_count[t] = header.class_count[t];
+    if (header.class_count[t] == 0) continue;
+    const uint32_t k = spg_class_values(t);
+    for (uint32_t j = 0; j < k; ++j) {
+      uint32_t plain[kMaxTokens] = {}, delta[kMaxTokens] = {};
+      uint64_t plain_extra = 0, delta_extra = 0;
+      for (uint32_t c = 0; c < header.class_count[t]; ++c) {
+        const uint8_t* v = tables[t] + 2 * (k * c + j);
+        const uint32_t value = load_u16le(v);
+        const Hybrid a = hybrid(value);
+        ++plain[a.token];
+        plain_extra += static_cast<uint64_t>(a.extra_bits);
+        if (j > 0) {
+          const Hybrid d = hybrid(zigzag_delta(value, load_u16le(v - 2), 16));
+          ++delta[d.token];
+          delta_extra += static_cast<uint64_t>(d.extra_bits);
+        }
+      }
+      const int tokens = tokens_for_bits(16);
+      const bool d = j > 0 && cost_q8(delta, tokens) + 256 * delta_extra < cost_q8(plain, tokens) + 256 * plain_extra;
+      if (d) out->class_delta = static_cast<uint16_t>(out->class_delta | (1u << (3 * t + j)));
+      normalise(d ? delta : plain, tokens, &out->class_model[1 + 3 * t + j]);
+    }
+  }
+}
+
+// Writes one model: u8 n, n LEB128 frequencies, u8 m (a tail of m ones).
+size_t write_model(const CodeModel& m, uint8_t* out) {
+  int ones = 0;
+  while (ones < m.count && m.cum[m.count - ones] - m.cum[m.count - ones - 1] == 1) ++ones;
+  size_t at = 0;
+  out[at++] = static_cast<uint8_t>(m.count - ones);
+  for (int k = 0; k < m.count - ones; ++k) at += store_leb128(out + at, uint32_t{m.cum[k + 1]} - m.cum[k]);
+  out[at++] = static_cast<uint8_t>(ones);
+  return at;
+}
+
+// Reads one model of at most `alphabet` tokens; false when it does not add up.
+bool read_model(const uint8_t** at, const uint8_t* end, int alphabet, CodeModel* m) {
+  if (*at == end) return false;
+  const uint8_t listed = *(*at)++;
+  uint32_t sum = 0;
+  for (int k = 0; k < listed; ++k) {
+    uint32_t f = 0;
+    if (k >= alphabet || !read_leb(at, end, &f) || f > kCodeTotal - sum) return false;
+    sum += f;
+    m->cum[k + 1] = static_cast<uint16_t>(sum);
+  }
+  if (*at == end) return false;
+  const uint8_t ones = *(*at)++;
+  const int count = listed + ones;
+  if (count == 0 || count > alphabet || sum + ones != kCodeTotal) return false;
+  for (int k = listed; k < count; ++k) m->cum[k + 1] = static_cast<uint16_t>(++sum);
+  m->count = static_cast<uint8_t>(count);
+  index_code_model(m);
+  return true;
+}
+
+}  // namespace
+
+void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader& header, uint32_t sample,
                        CodeTables* out) {
   *out = CodeTables{};
+  const RecordLayout& layout = header.layout;
   out->layout = layout;
   // Token counts: points, and per field and context both ways (as it is, as
   // a difference); and the raw bits each way costs.
@@ -237,6 +313,7 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const RecordLayo
     for (int c = 0; c < contexts; ++c)
       normalise(d ? delta[field][c] : plain[field][c], tokens, &out->model[field_model(field, c)]);
   }
+  build_class_models(view, header, out);
 }
 
 uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_points, uint32_t first_points, int bits) {
@@ -256,25 +333,27 @@ size_t write_code_tables(const CodeTables& t, uint8_t* out, size_t capacity) {
   store_u32le(out, t.delta_fields);
   size_t at = 4;
   bool fits = true;
-  for_each_model(t.layout, [&](int model) {
-    const CodeModel& m = t.model[model];
-    if (!fits || capacity - at < 2 + 3 * size_t{m.count}) {
-      fits = false;
-      return;
-    }
-    // The tokens after the last one above the floor (frequency 1) go as a count.
-    int ones = 0;
-    while (ones < m.count && m.cum[m.count - ones] - m.cum[m.count - ones - 1] == 1) ++ones;
-    out[at++] = static_cast<uint8_t>(m.count - ones);
-    for (int k = 0; k < m.count - ones; ++k) at += store_leb128(out + at, uint32_t{m.cum[k + 1]} - m.cum[k]);
-    out[at++] = static_cast<uint8_t>(ones);
-  });
+  const auto put = [&](const CodeModel& m) {  // a model takes at most 2 + 3 x its tokens
+    fits = fits && capacity - at >= 5 + 3 * size_t{m.count};
+    if (fits) at += write_model(m, out + at);
+  };
+  for_each_model(t.layout, [&](int model) { put(t.model[model]); });
+  if (!fits) return 0;
+  out[at++] = t.classes ? 1 : 0;
+  if (t.classes) {
+    store_u16le(out + at, t.class_delta);
+    at += 2;
+    put(t.class_model[0]);
+    for (int k = 0; k < 3; ++k)
+      for (uint32_t j = 0; t.class_count[k] > 0 && j < spg_class_values(k); ++j) put(t.class_model[1 + 3 * k + j]);
+  }
   return fits ? at : 0;
 }
 
-bool parse_code_tables(const uint8_t* payload, size_t size, const RecordLayout& layout, CodeTables* out) {
+bool parse_code_tables(const uint8_t* payload, size_t size, const SpgHeader& header, CodeTables* out) {
   if (size < 4) return false;
   *out = CodeTables{};
+  const RecordLayout& layout = header.layout;
   out->layout = layout;
   out->delta_fields = load_u32le(payload);
   for (int field = 0; field < 32; ++field)
@@ -284,34 +363,28 @@ bool parse_code_tables(const uint8_t* payload, size_t size, const RecordLayout& 
   const uint8_t* end = payload + size;
   bool ok = true;
   for_each_model(layout, [&](int model) {
-    if (!ok) return;
-    CodeModel& m = out->model[model];
-    if (at == end) {
-      ok = false;
-      return;
-    }
-    const uint8_t listed = *at++;
-    const int alphabet = tokens_for_bits(model_bits(model, layout));
-    uint32_t sum = 0;
-    for (int k = 0; k < listed && ok; ++k) {
-      uint32_t f = 0;
-      ok = k < alphabet && read_leb(&at, end, &f) && f <= kCodeTotal - sum;
-      if (!ok) break;
-      sum += f;
-      m.cum[k + 1] = static_cast<uint16_t>(sum);
-    }
-    if (!ok || at == end) {
-      ok = false;
-      return;
-    }
-    const uint8_t ones = *at++;
-    const int count = listed + ones;
-    ok = count > 0 && count <= alphabet && sum + ones == kCodeTotal;
-    for (int k = listed; ok && k < count; ++k) m.cum[k + 1] = static_cast<uint16_t>(++sum);
-    m.count = static_cast<uint8_t>(ok ? count : 0);
-    if (ok) index_code_model(&m);
+    ok = ok && read_model(&at, end, tokens_for_bits(model_bits(model, layout)), &out->model[model]);
   });
-  return ok && at == end;
+  if (!ok || at == end) return false;
+  const uint8_t classes = *at++;
+  if (classes > 1 || (classes == 1) != (header.version >= 2)) return false;
+  out->classes = classes == 1;
+  if (out->classes) {
+    if (end - at < 2) return false;
+    out->class_delta = load_u16le(at);
+    at += 2;
+    if (!read_model(&at, end, tokens_for_bits(16), &out->class_model[0])) return false;
+    for (int k = 0; k < 3; ++k) {
+      out->class_count[k] = header.class_count[k];
+      for (uint32_t j = 0; j < 3; ++j) {
+        const bool present = header.class_count[k] > 0 && j < spg_class_values(k);
+        if (((out->class_delta >> (3 * k + j)) & 1u) && (!present || j == 0)) return false;
+        if (present && !read_model(&at, end, tokens_for_bits(16), &out->class_model[1 + 3 * k + j])) return false;
+      }
+    }
+    if (out->class_delta >> 9) return false;
+  }
+  return at == end;
 }
 
 namespace {
@@ -361,12 +434,36 @@ int unit_symbols(const CodeTables& t, const CodedEntry* e, uint32_t previous_id,
   return n;
 }
 
+// Codes symbols s[n - 1] .. s[0] (the decoder reads them s[0] first) onto
+// the stream growing down from *p to `floor`; false when it is full.
+bool put_symbols(const Symbol* s, int n, uint32_t* x, uint8_t** p, uint8_t* floor) {
+  while (n-- > 0) {
+    const uint32_t freq = s[n].freq;
+    const uint32_t x_max = ((kStateLow >> kCodeProbabilityBits) << 8) * freq;
+    while (*x >= x_max) {
+      if (*p == floor) return false;
+      *--*p = static_cast<uint8_t>(*x);
+      *x >>= 8;
+    }
+    *x = ((*x / freq) << kCodeProbabilityBits) + (*x % freq) + s[n].start;
+  }
+  return true;
+}
+
+// The stream from p to `end` moved down to just after the state, at `state`.
+size_t close_stream(uint32_t x, const uint8_t* p, const uint8_t* end, uint8_t* state) {
+  const size_t stream = static_cast<size_t>(end - p);
+  for (size_t k = 0; k < stream; ++k) state[4 + k] = p[k];  // p >= state + 4: forwards is safe
+  store_u32le(state, x);
+  return 4 + stream;
+}
+
 }  // namespace
 
 size_t encode_coded_nodes(const CodeTables& t, const CodedEntry* entries, uint32_t count, uint8_t* out, size_t capacity) {
   if (capacity < 8) return 0;
   uint8_t* const floor = out + 8;
-  uint8_t* p = out + capacity;  // the stream grows down from the end
+  uint8_t* p = out + capacity;  // the stream grows down from the end, then moves to its start
   uint32_t x = kStateLow;
   for (uint32_t end = count; end > 0;) {
     // The last unit before `end`: a node, or a split's two entries.
@@ -383,42 +480,92 @@ size_t encode_coded_nodes(const CodeTables& t, const CodedEntry* entries, uint32
         break;
       }
     Symbol s[128];
-    int n = unit_symbols(t, entries + first, first > 0 ? entries[first - 1].id : 0xFFFFFFFFu, previous_parent, s);
-    while (n-- > 0) {
-      const uint32_t freq = s[n].freq;
-      const uint32_t x_max = ((kStateLow >> kCodeProbabilityBits) << 8) * freq;
-      while (x >= x_max) {
-        if (p == floor) return 0;
-        *--p = static_cast<uint8_t>(x);
-        x >>= 8;
-      }
-      x = ((x / freq) << kCodeProbabilityBits) + (x % freq) + s[n].start;
-    }
+    const int n = unit_symbols(t, entries + first, first > 0 ? entries[first - 1].id : 0xFFFFFFFFu, previous_parent, s);
+    if (!put_symbols(s, n, &x, &p, floor)) return 0;
     end = first;
   }
-  const size_t stream = static_cast<size_t>(out + capacity - p);
-  for (size_t k = 0; k < stream; ++k) floor[k] = p[k];  // p >= floor: forwards is safe
   store_u32le(out, count);
-  store_u32le(out + 4, x);
-  return 8 + stream;
+  return 4 + close_stream(x, p, out + capacity, out + 4);
+}
+
+size_t encode_coded_classes(const CodeTables& t, int table, const uint16_t* indices, const uint8_t* values,
+                            uint32_t count, uint8_t* out, size_t capacity) {
+  if (!t.classes || table < 0 || table > 2 || t.class_count[table] == 0 || count == 0 || count > 0xFFFFu ||
+      capacity < kCodedClassesHeaderBytes + 4)
+    return 0;
+  const uint32_t k = spg_class_values(table);
+  uint8_t* const floor = out + kCodedClassesHeaderBytes + 4;
+  uint8_t* p = out + capacity;
+  uint32_t x = kStateLow;
+  for (uint32_t i = count; i-- > 0;) {
+    Symbol s[16];
+    int n = push_value(t.class_model[0], indices[i] - (i > 0 ? indices[i - 1] : 0xFFFFFFFFu) - 1u, s);
+    for (uint32_t j = 0; j < k; ++j) {
+      const uint32_t v = load_u16le(values + 2 * (k * i + j));
+      const bool d = (t.class_delta >> (3 * table + j)) & 1u;
+      n += push_value(t.class_model[1 + 3 * table + j], d ? zigzag_delta(v, load_u16le(values + 2 * (k * i + j - 1)), 16) : v,
+                      s + n);
+    }
+    if (!put_symbols(s, n, &x, &p, floor)) return 0;
+  }
+  out[0] = static_cast<uint8_t>(table);
+  out[1] = 0;
+  store_u16le(out + 2, static_cast<uint16_t>(count));
+  return kCodedClassesHeaderBytes + close_stream(x, p, out + capacity, out + kCodedClassesHeaderBytes);
+}
+
+bool CodedClassesReader::init(const CodeTables& tables, const uint8_t* payload, size_t size) {
+  if (size < kCodedClassesHeaderBytes || !tables.classes || payload[0] > 2 || payload[1] != 0) return false;
+  t_ = &tables;
+  table_ = payload[0];
+  count_ = load_u16le(payload + 2);
+  done_ = 0;
+  previous_ = 0xFFFFFFFFu;
+  return tables.class_count[table_] > 0 && count_ > 0 && count_ <= tables.class_count[table_] &&
+         in_.init(payload + kCodedClassesHeaderBytes, size - kCodedClassesHeaderBytes);
+}
+
+bool CodedClassesReader::next(uint32_t* index, uint8_t values[6]) {
+  if (done_ == count_) return false;
+  uint32_t gap = 0;
+  if (!in_.value(t_->class_model[0], &gap)) return false;
+  const uint64_t i = uint64_t{previous_} + 1u + gap - (done_ == 0 ? uint64_t{1} << 32 : 0);  // the first from -1
+  if (i >= t_->class_count[table_]) return false;
+  const uint32_t k = spg_class_values(table_);
+  uint32_t last = 0;
+  for (uint32_t j = 0; j < k; ++j) {
+    uint32_t v = 0;
+    if (!in_.value(t_->class_model[1 + 3 * table_ + j], &v)) return false;
+    if ((t_->class_delta >> (3 * table_ + j)) & 1u) v = undo_zigzag_delta(v, last, 16);
+    store_u16le(values + 2 * j, static_cast<uint16_t>(v));
+    last = v;
+  }
+  previous_ = static_cast<uint32_t>(i);
+  ++done_;
+  *index = previous_;
+  return true;
 }
 
 bool CodedBatchReader::init(const CodeTables& tables, const uint8_t* payload, size_t size, uint32_t node_count) {
   if (size < 8) return false;
   t_ = &tables;
   count_ = load_u32le(payload);
-  x_ = load_u32le(payload + 4);
-  at_ = payload + 8;
-  end_ = payload + size;
   done_ = 0;
   node_count_ = node_count;
   previous_ = parent_ = 0xFFFFFFFFu;
   pending_ = 0;
-  return x_ >= kStateLow && x_ < (kStateLow << 8) && count_ <= node_count;
+  return in_.init(payload + 4, size - 4) && count_ <= node_count;
 }
 
-bool CodedBatchReader::token(int model, uint32_t* t) {
-  const CodeModel& m = t_->model[model];
+bool RansReader::init(const uint8_t* stream, size_t size) {
+  if (size < 4) return false;
+  x_ = load_u32le(stream);
+  at_ = stream + 4;
+  end_ = stream + size;
+  return x_ >= kStateLow && x_ < (kStateLow << 8);
+}
+
+bool RansReader::token(const CodeModel& m, uint32_t* t) {
   const uint32_t slot = x_ & (kCodeTotal - 1u);
   // The largest token whose cum <= slot: from the slot's bucket, upwards
   // (cum[count] = kCodeTotal > slot stops it).
@@ -433,7 +580,7 @@ bool CodedBatchReader::token(int model, uint32_t* t) {
   return true;
 }
 
-bool CodedBatchReader::raw(int bits, uint32_t* v) {
+bool RansReader::raw(int bits, uint32_t* v) {
   uint32_t value = 0;
   while (bits > 0) {
     const int p = bits < kPieceBits ? bits : kPieceBits;
@@ -453,9 +600,9 @@ bool CodedBatchReader::raw(int bits, uint32_t* v) {
 
 // The model's token count (checked by parse_code_tables) keeps v below
 // 2^(the model's bits).
-bool CodedBatchReader::value(int model, uint32_t* v) {
+bool RansReader::value(const CodeModel& m, uint32_t* v) {
   uint32_t t = 0;
-  if (!token(model, &t)) return false;
+  if (m.count == 0 || !token(m, &t)) return false;
   if (t < 16) {
     *v = t;
     return true;
@@ -466,6 +613,10 @@ bool CodedBatchReader::value(int model, uint32_t* v) {
   *v = ((2u | ((t - 16) & 1u)) << (n - 1)) | extra;
   return true;
 }
+
+bool RansReader::finished() const { return at_ == end_ && x_ == kStateLow; }
+
+bool CodedBatchReader::value(int model, uint32_t* v) { return in_.value(t_->model[model], v); }
 
 bool CodedBatchReader::next(Entry* e) {
   if (done_ == count_ || pending_ != 0) return false;
@@ -538,6 +689,6 @@ bool CodedBatchReader::split(const NodeFields& parent, uint8_t parent_points, No
   return true;
 }
 
-bool CodedBatchReader::finish() const { return done_ == count_ && pending_ == 0 && at_ == end_ && x_ == kStateLow; }
+bool CodedBatchReader::finish() const { return done_ == count_ && pending_ == 0 && in_.finished(); }
 
 }  // namespace stipple

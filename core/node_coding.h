@@ -25,10 +25,10 @@
 #include <cstdint>
 
 #include "core/node_format.h"
+#include "core/spg_format.h"
 
 namespace stipple {
 
-struct SpgView;
 class ViewCut;
 
 inline constexpr int kCodeProbabilityBits = 12;
@@ -68,24 +68,83 @@ struct CodeTables {
   RecordLayout layout;
   uint32_t delta_fields = 0;  // bit f: field f as its difference from the entry before
   CodeModel model[kCodeModels];
+  // Coded classes (format version 2 and later: 16-bit class values): the
+  // tables' class counts, the models of index gaps (0) and of value j of
+  // table t (1 + 3 t + j), and bit 3 t + j of class_delta: that value as
+  // its difference from value j - 1 of the same class.
+  bool classes = false;
+  uint16_t class_count[3] = {};
+  uint16_t class_delta = 0;
+  CodeModel class_model[10];
 };
+inline constexpr size_t kCodedClassesHeaderBytes = 4;
 
-// Counts the tables for records of `layout` (the full layout or a reduced
-// one: fields it lacks are left out) from a sample of up to `sample` of the
-// model's nodes, taken in a deterministic order with id gaps like a cut's.
-// The points model from cut.points(). Integer-only; host or server side.
-void build_code_tables(const SpgView& view, const ViewCut& cut, const RecordLayout& layout, uint32_t sample,
+// Counts the tables for records of `header`'s layout (the full header or a
+// reduced one: fields and class tables it lacks are left out) from a
+// sample of up to `sample` of the model's nodes, taken in a deterministic
+// order with id gaps like a cut's, and (format version 2 on) from every
+// class of its tables. The points model from cut.points(). Integer-only;
+// host or server side.
+void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader& header, uint32_t sample,
                        CodeTables* out);
+
+// The decoding end of the coder over one stream: its final state (u32),
+// then its bytes.
+class RansReader {
+ public:
+  [[nodiscard]] bool init(const uint8_t* stream, size_t size);
+  // A hybrid integer in model m (a model without tokens decodes nothing).
+  [[nodiscard]] bool value(const CodeModel& m, uint32_t* v);
+  // Every byte taken, and the encoder's first state reached.
+  bool finished() const;
+
+ private:
+  bool token(const CodeModel& m, uint32_t* t);
+  bool raw(int bits, uint32_t* v);
+  const uint8_t* at_ = nullptr;
+  const uint8_t* end_ = nullptr;
+  uint32_t x_ = 0;
+};
 
 // The code message (kCode): u32 the delta-field bits, then per model in use
 // (ids, points, kinds, parents, then each field of the layout in order, its
 // contexts: three, four for the mean's): u8 n, n LEB128 frequencies, u8 m:
 // m more tokens of frequency 1 — n + m tokens, 1 .. the model's alphabet,
-// frequencies summing to kCodeTotal.
+// frequencies summing to kCodeTotal. Then u8 1 and the class models (u16
+// class_delta, the index gaps' model, each present table's values' models,
+// as above), or u8 0: none (a format version 1 header).
 size_t write_code_tables(const CodeTables& t, uint8_t* out, size_t capacity);
 // Reads it for records of `layout`; false (and *out unusable) for a
 // message that is short, long, or whose models do not add up.
-[[nodiscard]] bool parse_code_tables(const uint8_t* payload, size_t size, const RecordLayout& layout, CodeTables* out);
+[[nodiscard]] bool parse_code_tables(const uint8_t* payload, size_t size, const SpgHeader& header, CodeTables* out);
+
+// kCodedClasses (with class models): u8 table, u8 0, u16 count (>= 1), then
+// the rANS stream (final state first) of count classes, indices ascending:
+// each the index's difference from the one before, less one (the first as
+// it is), then its values, each as it is or as its difference from the
+// value before it (class_delta), 16-bit. `values`: the classes' values as
+// in .spg §2, spg_class_values(table) little-endian u16 each. Returns the
+// payload's length, 0 when it did not fit.
+size_t encode_coded_classes(const CodeTables& t, int table, const uint16_t* indices, const uint8_t* values,
+                            uint32_t count, uint8_t* out, size_t capacity);
+class CodedClassesReader {
+ public:
+  // False for a table the tables have no models for, a count of 0 or beyond
+  // the table's classes, or a short payload.
+  [[nodiscard]] bool init(const CodeTables& tables, const uint8_t* payload, size_t size);
+  int table() const { return table_; }
+  uint32_t count() const { return count_; }
+  // The next class: its index (ascending, below the table's count) and its
+  // values as .spg §2 stores them (little-endian u16 each).
+  [[nodiscard]] bool next(uint32_t* index, uint8_t values[6]);
+  [[nodiscard]] bool finish() const { return done_ == count_ && in_.finished(); }
+
+ private:
+  const CodeTables* t_ = nullptr;
+  RansReader in_;
+  int table_ = 0;
+  uint32_t count_ = 0, done_ = 0, previous_ = 0xFFFFFFFFu;
+};
 
 // kCodedNodes: u32 count (nodes), then the rANS stream of its entries (the
 // coder's final state, u32, first). An entry is one node, or a *split*: the
@@ -174,14 +233,11 @@ class CodedBatchReader {
   [[nodiscard]] bool finish() const;
 
  private:
-  bool token(int model, uint32_t* t);
-  bool raw(int bits, uint32_t* v);
   bool value(int model, uint32_t* v);
   bool field(int field, int context, uint32_t base, uint32_t* v);
   const CodeTables* t_ = nullptr;
-  const uint8_t* at_ = nullptr;
-  const uint8_t* end_ = nullptr;
-  uint32_t x_ = 0, count_ = 0, done_ = 0, node_count_ = 0, previous_ = 0xFFFFFFFFu, parent_ = 0xFFFFFFFFu;
+  RansReader in_;
+  uint32_t count_ = 0, done_ = 0, node_count_ = 0, previous_ = 0xFFFFFFFFu, parent_ = 0xFFFFFFFFu;
   uint8_t pending_ = 0;  // 1 a node, 2 a split whose fields are still to come
   uint8_t first_points_ = 0;
 };

@@ -27,6 +27,7 @@ bool message_type_known(uint8_t t) {
     case MessageType::kUpdateBegin:
     case MessageType::kCode:
     case MessageType::kCodedNodes:
+    case MessageType::kCodedClasses:
     case MessageType::kStartup:
     case MessageType::kNodes:
     case MessageType::kDrop:
@@ -51,6 +52,7 @@ const char* message_type_name(uint8_t t) {
     case MessageType::kUpdateBegin: return "update-begin";
     case MessageType::kCode: return "code";
     case MessageType::kCodedNodes: return "coded nodes";
+    case MessageType::kCodedClasses: return "coded classes";
     case MessageType::kStartup: return "startup";
     case MessageType::kNodes: return "nodes";
     case MessageType::kDrop: return "drop";

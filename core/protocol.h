@@ -63,6 +63,7 @@ enum class MessageType : uint8_t {
   kUpdateBegin = 0x89,  // (4) a part of an update begins: the nodes entering and leaving in it
   kCode = 0x8A,         // (5) the coded batches' tables (core/node_coding.h), before the first
   kCodedNodes = 0x8B,   // (5) a node batch, entropy-coded: count, then the coder's stream
+  kCodedClasses = 0x8C, // (5) a piece of one class table, entropy-coded (format version 2 on)
 };
 
 bool message_type_known(uint8_t type);

@@ -201,7 +201,7 @@ const CodeTables& StreamSender::code_tables() {
   }
   const int k = reduced_.flags & (kAttrNormals | kAttrColor);
   if (!(c.built & (1u << k))) {
-    build_code_tables(*view_, cut_, reduced_.layout, kSample, &c.tables[k]);
+    build_code_tables(*view_, cut_, reduced_, kSample, &c.tables[k]);
     c.built = static_cast<uint8_t>(c.built | (1u << k));
   }
   return c.tables[k];
@@ -325,9 +325,21 @@ bool StreamSender::send_classes(const uint64_t* order, uint32_t count, FrameSink
   }
   const uint8_t* tables[3] = {view_->sigma_p, view_->sigma_n, view_->sigma_c};
   uint8_t* payload = scratch_->payload;
+  // Once the code tables went (protocol 5, format version 2 on), classes go coded.
+  const CodeTables* code = tables_sent_ && reduced_.version >= 2 ? &code_tables() : nullptr;
   for (int t = 0; t < 3; ++t) {
     if (n[t] == 0) continue;
     std::sort(fresh[t], fresh[t] + n[t]);
+    if (code != nullptr) {
+      // The values in index order, laid out in the frame buffer until send() fills it.
+      const size_t per = 2 * spg_class_values(t);
+      uint8_t* values = scratch_->frame;
+      for (uint32_t k = 0; k < n[t]; ++k)
+        for (size_t b = 0; b < per; ++b) values[per * k + b] = tables[t][per * fresh[t][k] + b];
+      const size_t bytes = encode_coded_classes(*code, t, fresh[t], values, n[t], payload, kMaxPayload);
+      if (bytes == 0 || !send(MessageType::kCodedClasses, payload, bytes, sink, context)) return false;
+      continue;
+    }
     const size_t per = spg_class_values(t) * spg_class_value_bytes(view_->header.version);
     size_t at = kClassesHeaderBytes;
     uint32_t previous = 0xFFFFFFFFu;
@@ -369,6 +381,8 @@ bool StreamSender::send_drops(uint32_t* ids, uint32_t count, FrameSink sink, voi
 }
 
 bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink sink, void* context) {
+  // The code tables just before the first coded batch and its classes.
+  if (coded_ && part_sent_ && !tables_sent_ && !send_code_tables(sink, context)) return false;
   if (pieces_ && !send_classes(order, count, sink, context)) return false;
   uint8_t* payload = scratch_->payload;
   // Compact batches go in id order (the order within a batch draws nothing
@@ -608,12 +622,24 @@ ReceiveStatus StreamReceiver::apply(const Frame& f) {
     }
     case MessageType::kCode: {
       if (!cache_->ready() || !compact_ || part_ids_ == nullptr ||
-          !parse_code_tables(f.payload, f.payload_bytes, cache_->header().layout, &code_))
+          !parse_code_tables(f.payload, f.payload_bytes, cache_->header(), &code_))
         return ReceiveStatus::kBadMessage;
       coded_ = true;
       return ReceiveStatus::kOk;
     }
     case MessageType::kCodedNodes: return apply_coded(f);
+    case MessageType::kCodedClasses: {
+      CodedClassesReader c;
+      if (!coded_ || !c.init(code_, f.payload, f.payload_bytes)) return ReceiveStatus::kBadMessage;
+      for (uint32_t i = 0; i < c.count(); ++i) {
+        uint32_t index = 0;
+        uint8_t values[6];
+        if (!c.next(&index, values)) return ReceiveStatus::kBadMessage;
+        const CacheStatus s = cache_->add_class(c.table(), index, values, cache_->class_value_bytes(c.table()));
+        if (s != CacheStatus::kOk) return refused(s);
+      }
+      return c.finish() ? ReceiveStatus::kOk : ReceiveStatus::kBadMessage;
+    }
     case MessageType::kUpdateBegin: {
       UpdateBegin u;
       if (!cache_->ready() || !parse_update_begin(f.payload, f.payload_bytes, &u)) return ReceiveStatus::kBadMessage;

@@ -5,6 +5,7 @@
 // value out of range.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <vector>
 
 #include "core/node_coding.h"
@@ -107,7 +108,7 @@ bool decodes_to(const CodeTables& t, const std::vector<uint8_t>& payload, const 
 TEST(NodeCoding, TheEncodersOwnTreeRoundTripsExactly) {
   const Bunny& m = bunny();
   CodeTables t;
-  build_code_tables(m.view, m.sender.cut(), m.view.header.layout, 32768, &t);
+  build_code_tables(m.view, m.sender.cut(), m.view.header, 32768, &t);
   // Every node of the tree, in batches of 500 as a part sends them: each
   // entry referring to the node before it.
   const uint32_t n = m.view.header.node_count;
@@ -130,7 +131,7 @@ TEST(NodeCoding, TheEncodersOwnTreeRoundTripsExactly) {
   message.resize(write_code_tables(t, message.data(), message.size()));
   ASSERT_GT(message.size(), 4u);
   CodeTables back;
-  ASSERT_TRUE(parse_code_tables(message.data(), message.size(), t.layout, &back));
+  ASSERT_TRUE(parse_code_tables(message.data(), message.size(), m.view.header, &back));
   EXPECT_EQ(back.delta_fields, t.delta_fields);
   for (int k = 0; k < kCodeModels; ++k) {
     ASSERT_EQ(back.model[k].count, t.model[k].count) << "model " << k;
@@ -196,7 +197,7 @@ TEST(NodeCoding, EveryValueAtItsExtremesRoundTrips) {
 TEST(NodeCoding, SplitsCostLessThanTheirChildrenAsNodes) {
   const Bunny& m = bunny();
   CodeTables t;
-  build_code_tables(m.view, m.sender.cut(), m.view.header.layout, 32768, &t);
+  build_code_tables(m.view, m.sender.cut(), m.view.header, 32768, &t);
   const ViewCut& cut = m.sender.cut();
   Batch splits, nodes;
   uint32_t pairs = 0;
@@ -219,9 +220,87 @@ TEST(NodeCoding, SplitsCostLessThanTheirChildrenAsNodes) {
   EXPECT_LT(as_splits.size(), as_nodes.size() * 9 / 10);
 }
 
+// Coded classes (format version 2): the bunny's class tables in two
+// pieces a table, exact; every truncation, a padded piece, every bit flip,
+// a count beyond the table and a table without classes refused.
+TEST(NodeCoding, ClassPiecesRoundTripExactly) {
+  const test::ParsedModel m("tests/golden/bunny_v2.spg");
+  std::vector<uint64_t> bounds_storage(CutBounds::bytes(m.view.header) / 8 + 1), sender_storage;
+  CutBounds bounds;
+  ASSERT_EQ(bounds.init(m.view, m.decoder, bounds_storage.data(), bounds_storage.size() * 8), CutStatus::kOk);
+  sender_storage.resize(StreamSender::storage_bytes(m.view.header) / 8 + 1);
+  StreamSender sender;
+  ASSERT_TRUE(sender.init(m.view, bounds, sender_storage.data(), sender_storage.size() * 8));
+  CodeTables t;
+  build_code_tables(m.view, sender.cut(), m.view.header, 32768, &t);
+  ASSERT_TRUE(t.classes);
+  // The tables with class models cross the wire and come back the same.
+  std::vector<uint8_t> message(8192);
+  message.resize(write_code_tables(t, message.data(), message.size()));
+  CodeTables back;
+  ASSERT_TRUE(parse_code_tables(message.data(), message.size(), m.view.header, &back));
+  EXPECT_EQ(back.class_delta, t.class_delta);
+  const uint8_t* tables[3] = {m.view.sigma_p, m.view.sigma_n, m.view.sigma_c};
+  size_t coded = 0, plain = 0;
+  for (int table = 0; table < 2; ++table) {
+    const uint32_t k = spg_class_values(table), n = m.view.header.class_count[table];
+    for (int piece = 0; piece < 2; ++piece) {
+      std::vector<uint16_t> indices;
+      std::vector<uint8_t> values;
+      for (uint32_t c = 0; c < n; ++c)
+        if ((c % 3 == 0) == (piece == 0)) {
+          indices.push_back(static_cast<uint16_t>(c));
+          values.insert(values.end(), tables[table] + 2 * k * c, tables[table] + 2 * k * (c + 1));
+        }
+      std::vector<uint8_t> payload(kMaxPayload);
+      payload.resize(encode_coded_classes(back, table, indices.data(), values.data(),
+                                          static_cast<uint32_t>(indices.size()), payload.data(), payload.size()));
+      ASSERT_GT(payload.size(), 0u);
+      coded += payload.size();
+      plain += 4 + indices.size() * (1 + 2 * k);
+      const auto decodes = [&](const std::vector<uint8_t>& bytes) {
+        CodedClassesReader r;
+        if (!r.init(back, bytes.data(), bytes.size())) return false;
+        bool same = r.table() == table && r.count() == indices.size();
+        for (uint32_t i = 0; i < r.count(); ++i) {
+          uint32_t index = 0;
+          uint8_t v[6];
+          if (!r.next(&index, v)) return false;
+          EXPECT_LT(index, n);
+          same = same && i < indices.size() && index == indices[i] && std::equal(v, v + 2 * k, values.begin() + 2 * k * i);
+        }
+        return r.finish() && same;
+      };
+      ASSERT_TRUE(decodes(payload)) << "table " << table << " piece " << piece;
+      for (size_t cut = 0; cut < payload.size(); cut += 7)
+        EXPECT_FALSE(decodes(std::vector<uint8_t>(payload.begin(), payload.begin() + static_cast<ptrdiff_t>(cut))));
+      std::vector<uint8_t> padded = payload;
+      padded.push_back(0);
+      EXPECT_FALSE(decodes(padded));
+      for (size_t at = 4; at < payload.size(); at += 5) {
+        std::vector<uint8_t> damaged = payload;
+        damaged[at] ^= 0x10;
+        EXPECT_FALSE(decodes(damaged)) << "byte " << at;
+      }
+      std::vector<uint8_t> more = payload;
+      store_u16le(more.data() + 2, static_cast<uint16_t>(n + 1));
+      EXPECT_FALSE(decodes(more));
+      more = payload;
+      more[0] = 2;  // sigma_c: the bunny has none
+      EXPECT_FALSE(decodes(more));
+    }
+  }
+  std::printf("the bunny's %u + %u classes: %zu bytes coded, %zu as classes messages\n", m.view.header.class_count[0],
+              m.view.header.class_count[1], coded, plain);
+  EXPECT_LT(coded, plain * 9 / 10);
+}
+
 TEST(NodeCoding, HostileTablesAreRefused) {
-  const RecordLayout layout = paper_layout(true, false, 2);
-  const CodeTables t = flat_tables(layout, 1u << static_cast<int>(Field::kPosX));
+  SpgHeader header;  // format version 1: no class models
+  header.version = 1;
+  header.layout = paper_layout(true, false, 2);
+  const SpgHeader& layout = header;
+  const CodeTables t = flat_tables(header.layout, 1u << static_cast<int>(Field::kPosX));
   std::vector<uint8_t> good(4096);
   good.resize(write_code_tables(t, good.data(), good.size()));
   CodeTables out;
@@ -231,7 +310,13 @@ TEST(NodeCoding, HostileTablesAreRefused) {
   longer.push_back(0);
   EXPECT_FALSE(parse_code_tables(longer.data(), longer.size(), layout, &out));
   // Tables for another layout (colour fields it lacks) do not parse as this one's.
-  EXPECT_FALSE(parse_code_tables(good.data(), good.size(), paper_layout(true, true, 2), &out));
+  SpgHeader colour = header;
+  colour.layout = paper_layout(true, true, 2);
+  EXPECT_FALSE(parse_code_tables(good.data(), good.size(), colour, &out));
+  // A version 2 header expects class models, which these tables lack.
+  SpgHeader v2 = header;
+  v2.version = 2;
+  EXPECT_FALSE(parse_code_tables(good.data(), good.size(), v2, &out));
   // A difference for a field the layout lacks, or beyond the fields.
   std::vector<uint8_t> bad = good;
   bad[2] = 0x02;  // bit 17: sigma_c
@@ -254,7 +339,7 @@ TEST(NodeCoding, HostileTablesAreRefused) {
 TEST(NodeCoding, TruncatedPaddedAndDamagedBatchesAreRefused) {
   const Bunny& m = bunny();
   CodeTables t;
-  build_code_tables(m.view, m.sender.cut(), m.view.header.layout, 4096, &t);
+  build_code_tables(m.view, m.sender.cut(), m.view.header, 4096, &t);
   Batch b;
   for (uint32_t id = 200; id < 260; id += 2)
     b.add(id, m.sender.cut().points(NodeId{id}), m.fields(id), id - 2, m.fields(id - 2));
