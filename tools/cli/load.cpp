@@ -28,7 +28,7 @@ namespace {
 
 const char kLoadHelp[] =
     "usage: stipple load HOST:PORT MODEL.spg [--clients N] [--rate HZ] [--seconds S] [--step DEG]\n"
-    "                    [--size WxH] [--cache N] [--json]\n"
+    "                    [--size WxH] [--cache N] [--no-coding] [--json]\n"
     "\n"
     "Plays N viewers of a running `stipple serve` of MODEL.spg (the same file:\n"
     "its extent places the cameras): each connects, says hello and sends a camera\n"
@@ -44,6 +44,8 @@ const char kLoadHelp[] =
     "  --step DEG     orbit step between a viewer's cameras (default 3)\n"
     "  --size WxH     the viewers' screen (default 240x320)\n"
     "  --cache N      the node capacity they declare (default 30000)\n"
+    "  --no-coding    viewers asking for protocol 4's compact batches (default:\n"
+    "                 entropy-coded ones, as every stipple client does)\n"
     "  --json         one JSON object instead of the text\n";
 
 using Clock = std::chrono::steady_clock;
@@ -91,6 +93,7 @@ int cmd_load(int argc, char** argv) {
                                   width > 4096 || height > 4096))
     return cli::fail("load: --size: expected WxH up to 4096x4096, got '" + v + "'");
   const bool json = args.flag("--json");
+  const bool coded = !args.flag("--no-coding");
   const std::vector<std::string> files = args.positionals();
   if (args.bad()) return cli::fail("load: " + args.error());
   if (!args.unknown_option().empty()) return cli::fail("load: " + args.unknown_option_message());
@@ -115,6 +118,7 @@ int cmd_load(int argc, char** argv) {
   hello.width = static_cast<uint16_t>(width);
   hello.height = static_cast<uint16_t>(height);
   hello.cache_capacity = static_cast<uint32_t>(cache);
+  if (coded) hello.attributes |= kWantCoded;
   const auto queue = [](Viewer& c, MessageType type, const uint8_t* payload, size_t size) {
     uint8_t frame[kFrameHeaderBytes + kCameraUpdateBytes + kFrameTrailerBytes];
     const size_t n = write_frame(type, c.sequence++, payload, size, frame, sizeof frame);
