@@ -44,7 +44,7 @@ const char kRenderOptionsHelp[] =
     "client:\n"
     "  --no-coding            from a server: node batches as protocol 4's entries\n"
     "                         (LEB128 ids, whole records), not entropy-coded\n"
-    "                         (protocol 5's default, ~14 % fewer bytes:\n"
+    "                         (protocol 5's default, ~16 % fewer bytes:\n"
     "                         docs/protocol.md \"Coded batches\")\n"
     "  --projection affine|reciprocal|exact   per-point projection (default affine)\n"
     "  --shading point|surface|node|none      Lambert per sampled normal, per normal\n"
