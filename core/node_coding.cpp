@@ -128,21 +128,6 @@ int push_value(const CodeModel& m, uint32_t v, Symbol* out) {
   return n;
 }
 
-bool read_leb(const uint8_t** at, const uint8_t* end, uint32_t* v) {
-  uint32_t value = 0;
-  for (int shift = 0; shift < 35; shift += 7) {
-    if (*at == end) return false;
-    const uint8_t b = *(*at)++;
-    if (shift == 28 && b > 15) return false;
-    value |= uint32_t{b & 0x7Fu} << shift;
-    if (!(b & 0x80)) {
-      *v = value;
-      return true;
-    }
-  }
-  return false;
-}
-
 }  // namespace
 
 void index_code_model(CodeModel* m) {
@@ -215,7 +200,7 @@ bool read_model(const uint8_t** at, const uint8_t* end, int alphabet, CodeModel*
   uint32_t sum = 0;
   for (int k = 0; k < listed; ++k) {
     uint32_t f = 0;
-    if (k >= alphabet || !read_leb(at, end, &f) || f > kCodeTotal - sum) return false;
+    if (k >= alphabet || !load_leb128(at, end, &f) || f > kCodeTotal - sum) return false;
     sum += f;
     m->cum[k + 1] = static_cast<uint16_t>(sum);
   }

@@ -3,22 +3,23 @@
 //
 // A node batch's entries (id, points byte, record fields) are turned into
 // small integers — the id as its difference from the one before, each field
-// either as it is or as its difference from the same field of the entry
-// before (wrapped to the field's width, zigzagged), whichever the model's
-// own records say is cheaper — and each integer into a token and raw extra
-// bits (the "hybrid integer" of Brotli and JPEG XL: values below 16 are
-// their own token; above, the token holds the bit length and the bit below
-// the top one, and the bits under those go raw). The tokens are coded with
-// a static-model range coder (rANS, Duda 2013; 32-bit state, bytes out,
-// 12-bit probabilities): one model for ids, one for points bytes, and two a
-// field — after an entry whose id is one less (most often its sibling) and
-// after any other. The models are counted once a model and attribute set
-// from a sample of its records and go to the client in one small message
-// before the first coded batch (well under a kilobyte).
+// either as it is or as its difference from the same field of the entry's
+// reference (a node the client already holds: the nearest one this part of
+// the update sent, or a split's parent), wrapped to the field's width and
+// zigzagged, whichever the model's own records say is cheaper — and each
+// integer into a token and raw extra bits (the "hybrid integer" of Brotli
+// and JPEG XL: values below 16 are their own token; above, the token holds
+// the bit length and the bit below the top one, and the bits under those go
+// raw). The tokens are coded with a static-model range coder (rANS, Duda
+// 2013; 32-bit state, bytes out, 12-bit probabilities), a model per kind of
+// value and context (below). Class pieces go the same way (format version
+// 2 on). The models are counted once a model and attribute set from a
+// sample of its records and its classes, and go to the client in one
+// message (1.7 KB for the dragon) before the first coded batch.
 //
-// A client decodes with shifts, one multiply and a binary search of at most
-// 72 cumulative frequencies a token: no division, no heap, no floating
-// point; the tables are fixed-size members.
+// A client decodes with shifts, one multiply and a short scan from a
+// 64-entry start table a token, and one integer division a split: no heap,
+// no floating point; the tables are fixed-size members.
 #pragma once
 
 #include <cstddef>
@@ -66,7 +67,7 @@ void index_code_model(CodeModel* m);
 // as differences, and the models.
 struct CodeTables {
   RecordLayout layout;
-  uint32_t delta_fields = 0;  // bit f: field f as its difference from the entry before
+  uint32_t delta_fields = 0;  // bit f: field f as its difference from the entry's reference
   CodeModel model[kCodeModels];
   // Coded classes (format version 2 and later: 16-bit class values): the
   // tables' class counts, the models of index gaps (0) and of value j of

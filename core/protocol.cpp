@@ -229,13 +229,8 @@ bool parse_resume_part(const uint8_t* p, size_t size, ResumePart* out) {
 
 ResumeId next_resume_id(const uint8_t** at, const uint8_t* end, uint32_t* previous, uint32_t* id) {
   if (*at >= end) return ResumeId::kEnd;
-  uint64_t gap = 0;
-  for (int shift = 0;; shift += 7) {
-    if (*at >= end || shift > 28) return ResumeId::kMalformed;
-    const uint8_t b = *(*at)++;
-    gap |= uint64_t{b & 0x7Fu} << shift;
-    if (!(b & 0x80)) break;
-  }
+  uint32_t gap = 0;
+  if (!load_leb128(at, end, &gap)) return ResumeId::kMalformed;
   const int64_t before = *previous == 0xFFFFFFFFu ? -1 : int64_t{*previous};
   const int64_t next = before + static_cast<int64_t>(gap);
   if (gap == 0) return ResumeId::kRepeated;

@@ -221,6 +221,22 @@ inline uint32_t load_u32le(const uint8_t* p) {
   return static_cast<uint32_t>(p[0]) | (static_cast<uint32_t>(p[1]) << 8) |
          (static_cast<uint32_t>(p[2]) << 16) | (static_cast<uint32_t>(p[3]) << 24);
 }
+// A little-endian base-128 (LEB128) u32 from *at: at most 5 bytes, below
+// 2^32; advances *at past it. False when it runs past `end` or does not fit.
+inline bool load_leb128(const uint8_t** at, const uint8_t* end, uint32_t* v) {
+  uint32_t value = 0;
+  for (int shift = 0; shift < 35; shift += 7) {
+    if (*at >= end) return false;
+    const uint8_t b = *(*at)++;
+    if (shift == 28 && b > 15) return false;
+    value |= uint32_t{b & 0x7Fu} << shift;
+    if (!(b & 0x80)) {
+      *v = value;
+      return true;
+    }
+  }
+  return false;
+}
 
 // CRC-32 (ISO-HDLC, the zlib/PNG polynomial 0xEDB88320).
 uint32_t crc32(const uint8_t* data, size_t size);

@@ -240,7 +240,6 @@ bool StreamSender::send_coded(const uint64_t* keyed, uint32_t count, FrameSink s
     const uint32_t parent = scratch_->left[group];
     return cut_.first_child(parent) == id && cut_.first_child(parent + 1) == id + 2 ? parent : kNoGroup;
   };
-  if (!tables_sent_ && !send_code_tables(sink, context)) return false;  // just before the first coded batch
   for (uint32_t done = 0; done < count;) {
     uint32_t n = 0;
     while (done + n < count && n < kMost) {
@@ -415,10 +414,6 @@ bool StreamSender::send_nodes(const uint64_t* order, uint32_t count, FrameSink s
   }
   return send(MessageType::kNodes, payload, at, sink, context);
 }
-
-namespace {
-
-}  // namespace
 
 bool StreamSender::send_change(uint32_t sequence, uint8_t parts_after, bool ramp, FrameSink sink, void* context) {
   const SenderScratch& s = *scratch_;
@@ -733,8 +728,11 @@ ReceiveStatus StreamReceiver::apply_coded(const Frame& f) {
   uint32_t* const old_end = part_ids_ + part_capacity_;
   uint32_t* const first = old - b.count();
   uint32_t* merged = first;
-  const auto take = [&](uint32_t id) {  // false: the part brought it before
+  const auto merge_below = [&](uint32_t id) {  // the part's ids below id, into the merged list
     while (old < old_end && *old < id) *merged++ = *old++;
+  };
+  const auto take = [&](uint32_t id) {  // false: the part brought it before
+    merge_below(id);
     if (old < old_end && *old == id) return false;
     *merged++ = id;
     return true;
@@ -751,7 +749,7 @@ ReceiveStatus StreamReceiver::apply_coded(const Frame& f) {
     if (!b.next(&e)) return ReceiveStatus::kBadMessage;
     CacheStatus s = CacheStatus::kOk;
     if (e.kind == 0) {
-      while (old < old_end && *old < e.id) *merged++ = *old++;
+      merge_below(e.id);
       const uint32_t reference_id =
           coded_reference(e.id, merged > first ? merged[-1] : 0xFFFFFFFFu, old < old_end ? *old : 0xFFFFFFFFu);
       NodeFields reference{}, fields;

@@ -157,7 +157,8 @@ class StreamSender {
   bool send_drops(uint32_t* ids, uint32_t count, FrameSink sink, void* context);  // sorts them (compact batches)
   size_t put_id(uint8_t* out, uint32_t id, uint32_t previous) const;  // a batch's entry id: compact or u32
   bool send_nodes(const uint64_t* order, uint32_t count, FrameSink sink, void* context);  // ids in the low words, inverted
-  bool send_coded(const uint64_t* keyed, uint32_t count, FrameSink sink, void* context);  // (id << 32 | group), ascending
+  // (id << 32 | group), ascending; the code tables have gone (send_nodes sends them).
+  bool send_coded(const uint64_t* keyed, uint32_t count, FrameSink sink, void* context);
   const CodeTables& code_tables();  // the client's, counted on first use
   bool send_code_tables(FrameSink sink, void* context);
   const SpgView* view_ = nullptr;

@@ -20,7 +20,7 @@ struct Bunny : test::ParsedModel {
   std::vector<uint64_t> bounds_storage, sender_storage;
   CutBounds bounds;
   StreamSender sender;  // for its cut's points bytes
-  Bunny() : ParsedModel("tests/golden/bunny_v1.spg") {
+  explicit Bunny(const char* rel = "tests/golden/bunny_v1.spg") : ParsedModel(rel) {
     bounds_storage.resize(CutBounds::bytes(view.header) / 8 + 1);
     EXPECT_EQ(bounds.init(view, decoder, bounds_storage.data(), bounds_storage.size() * 8), CutStatus::kOk);
     sender_storage.resize(StreamSender::storage_bytes(view.header) / 8 + 1);
@@ -224,15 +224,9 @@ TEST(NodeCoding, SplitsCostLessThanTheirChildrenAsNodes) {
 // pieces a table, exact; every truncation, a padded piece, every bit flip,
 // a count beyond the table and a table without classes refused.
 TEST(NodeCoding, ClassPiecesRoundTripExactly) {
-  const test::ParsedModel m("tests/golden/bunny_v2.spg");
-  std::vector<uint64_t> bounds_storage(CutBounds::bytes(m.view.header) / 8 + 1), sender_storage;
-  CutBounds bounds;
-  ASSERT_EQ(bounds.init(m.view, m.decoder, bounds_storage.data(), bounds_storage.size() * 8), CutStatus::kOk);
-  sender_storage.resize(StreamSender::storage_bytes(m.view.header) / 8 + 1);
-  StreamSender sender;
-  ASSERT_TRUE(sender.init(m.view, bounds, sender_storage.data(), sender_storage.size() * 8));
+  const Bunny m("tests/golden/bunny_v2.spg");
   CodeTables t;
-  build_code_tables(m.view, sender.cut(), m.view.header, 32768, &t);
+  build_code_tables(m.view, m.sender.cut(), m.view.header, 32768, &t);
   ASSERT_TRUE(t.classes);
   // The tables with class models cross the wire and come back the same.
   std::vector<uint8_t> message(8192);
