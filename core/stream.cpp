@@ -785,7 +785,13 @@ ReceiveStatus StreamReceiver::receive(const uint8_t* data, size_t size) {
     at += reader_.feed(data + at, size - at);
     Frame f;
     FrameStatus s;
-    while (status_ == ReceiveStatus::kOk && (s = reader_.next(&f)) == FrameStatus::kOk) status_ = apply(f);
+    while (status_ == ReceiveStatus::kOk && (s = reader_.next(&f)) == FrameStatus::kOk) {
+      status_ = apply(f);
+      if (status_ != ReceiveStatus::kOk) {
+        fault_type_ = static_cast<uint8_t>(f.type);
+        fault_sequence_ = f.sequence;
+      }
+    }
     if (status_ != ReceiveStatus::kOk) break;
     if (s != FrameStatus::kNeedMore) {
       frame_status_ = s;

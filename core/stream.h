@@ -217,6 +217,10 @@ class StreamReceiver {
   FrameStatus frame_status() const { return frame_status_; }
   CacheStatus cache_status() const { return cache_status_; }
   const Fault& fault() const { return fault_; }
+  // The message that stopped the stream (kBadMessage, kCacheRefused,
+  // kClosed): its type and frame sequence.
+  uint8_t fault_type() const { return fault_type_; }
+  uint16_t fault_sequence() const { return fault_sequence_; }
   uint64_t bytes_received() const { return bytes_; }
   uint32_t frames() const { return frames_; }
   uint64_t nodes_received() const { return nodes_; }  // node entries in node batches
@@ -241,6 +245,8 @@ class StreamReceiver {
   FrameStatus frame_status_ = FrameStatus::kOk;
   CacheStatus cache_status_ = CacheStatus::kOk;
   Fault fault_{};
+  uint8_t fault_type_ = 0;
+  uint16_t fault_sequence_ = 0;
   UpdateEnd last_update_{};
   bool has_update_end_ = false;
   uint64_t bytes_ = 0, nodes_ = 0;

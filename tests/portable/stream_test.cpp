@@ -192,6 +192,8 @@ TEST(Stream, CodedBatchesNeedTheirTablesAndTheirStorage) {
     ASSERT_EQ(r.receive(start.data(), start.size()), ReceiveStatus::kOk);
     EXPECT_EQ(r.receive(update.data(), update.size()), ReceiveStatus::kBadMessage);
     EXPECT_FALSE(r.coded());
+    EXPECT_EQ(r.fault_type(), static_cast<uint8_t>(MessageType::kCode));  // names the message it refused
+    EXPECT_EQ(r.fault_sequence(), load_u16le(update.data() + code_at + 2));
   }
   {  // Without the code message (its frame cut out, the sequence mended), the first coded batch is refused.
     Device client;
@@ -210,6 +212,7 @@ TEST(Stream, CodedBatchesNeedTheirTablesAndTheirStorage) {
     }
     EXPECT_EQ(r.receive(rest.data(), rest.size()), ReceiveStatus::kBadMessage);
     EXPECT_GT(client.cache.count(), 0u);  // the coarse part came
+    EXPECT_EQ(r.fault_type(), static_cast<uint8_t>(MessageType::kCodedNodes));  // the batch without its tables
   }
   {  // Part storage smaller than the part: refused, not overrun.
     Device client;

@@ -136,7 +136,8 @@ bool RemoteModel::take(const uint8_t* data, size_t size, std::string& error) {
     else if (r == ReceiveStatus::kCacheRefused)
       error = std::string("the client refused the server's data: ") + cache_status_text(receiver_.cache_status());
     else
-      error = receive_status_text(r);
+      error = std::string("the server's ") + message_type_name(receiver_.fault_type()) + " message (frame " +
+              std::to_string(receiver_.fault_sequence()) + ") was refused: " + receive_status_text(r);
     return false;
   };
   if (!options_.serial) {
