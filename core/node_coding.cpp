@@ -162,20 +162,22 @@ void build_class_models(const SpgView& view, const SpgHeader& header, CodeTables
     for (uint32_t j = 0; j < k; ++j) {
       uint32_t plain[kMaxTokens] = {}, delta[kMaxTokens] = {};
       uint64_t plain_extra = 0, delta_extra = 0;
-      for (uint32_t c = 0; c < header.class_count[t]; ++c) {
-        const uint8_t* v = tables[t] + 2 * (k * c + j);
-        const uint32_t value = load_u16le(v);
-        const Hybrid a = hybrid(value);
-        ++plain[a.token];
-        plain_extra += static_cast<uint64_t>(a.extra_bits);
-        if (j > 0) {
-          const Hybrid d = hybrid(zigzag_delta(value, load_u16le(v - 2), 16));
+      // Value 0 against the class before it in a piece: the classes one
+      // and three apart stand for a piece's gaps.
+      for (uint32_t stride = 1; stride <= 3; stride += 2)
+        for (uint32_t c = 0; c < header.class_count[t]; c += stride) {
+          const uint8_t* v = tables[t] + 2 * (k * c + j);
+          const uint32_t value = load_u16le(v);
+          const Hybrid a = hybrid(value);
+          ++plain[a.token];
+          plain_extra += static_cast<uint64_t>(a.extra_bits);
+          const uint32_t base = j > 0 ? load_u16le(v - 2) : c >= stride ? load_u16le(v - 2 * k * stride) : 0;
+          const Hybrid d = hybrid(zigzag_delta(value, base, 16));
           ++delta[d.token];
           delta_extra += static_cast<uint64_t>(d.extra_bits);
         }
-      }
       const int tokens = tokens_for_bits(16);
-      const bool d = j > 0 && cost_q8(delta, tokens) + 256 * delta_extra < cost_q8(plain, tokens) + 256 * plain_extra;
+      const bool d = cost_q8(delta, tokens) + 256 * delta_extra < cost_q8(plain, tokens) + 256 * plain_extra;
       if (d) out->class_delta = static_cast<uint16_t>(out->class_delta | (1u << (3 * t + j)));
       normalise(d ? delta : plain, tokens, &out->class_model[1 + 3 * t + j]);
     }
@@ -224,15 +226,22 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
   // Token counts: points, and per field and context both ways (as it is, as
   // a difference); and the raw bits each way costs.
   uint32_t points[kMaxTokens] = {};
-  uint32_t plain[kFieldCount][4][kMaxTokens] = {}, delta[kFieldCount][4][kMaxTokens] = {};
-  uint64_t plain_extra[kFieldCount] = {}, delta_extra[kFieldCount] = {};
-  const auto count = [&](int field, int context, uint32_t v, uint32_t base) {
-    const Hybrid a = hybrid(v);
-    const Hybrid d = hybrid(zigzag_delta(v, base, layout.bits[field]));
-    ++plain[field][context][a.token];
-    ++delta[field][context][d.token];
-    plain_extra[field] += static_cast<uint64_t>(a.extra_bits);
-    delta_extra[field] += static_cast<uint64_t>(d.extra_bits);
+  // Each field's tokens three ways: as it is, against the reference, and
+  // (a normal frame's angles) against the node's own position frame.
+  enum { kPlain, kDelta, kFrame, kWays };
+  uint32_t tokens_of[kWays][kFieldCount][4][kMaxTokens] = {};  // 62 KB of stack: a server's thread has it
+  uint64_t extra[kWays][kFieldCount] = {};
+  const auto tally = [&](int way, int field, int context, uint32_t v) {
+    const Hybrid h = hybrid(v);
+    ++tokens_of[way][field][context][h.token];
+    extra[way][field] += static_cast<uint64_t>(h.extra_bits);
+  };
+  const auto count = [&](int field, int context, const NodeFields& self, uint32_t base) {
+    const int bits = layout.bits[field];
+    const uint32_t v = self.v[field];
+    tally(kPlain, field, context, v);
+    tally(kDelta, field, context, zigzag_delta(v, base, bits));
+    if (is_normal_frame_field(field)) tally(kFrame, field, context, zigzag_delta(v, frame_base(layout, field, self), bits));
   };
   const auto fields_of = [&](uint32_t id) { return unpack_record(view.header.layout, view.records + size_t{id} * view.record_bytes); };
   const uint32_t n = view.header.node_count;
@@ -253,7 +262,7 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
       const NodeFields f = fields_of(id);
       ++points[hybrid(cut.points(NodeId{id})).token];
       for (int field = 0; field < kFieldCount; ++field)
-        if (layout.bits[field] > 0) count(field, gap == 1 ? kAdjacentContext : kFarContext, f.v[field], last.v[field]);
+        if (layout.bits[field] > 0) count(field, gap == 1 ? kAdjacentContext : kFarContext, f, last.v[field]);
       last = f;
       const uint32_t child = cut.first_child(id);
       if (id + 1 < n && cut.first_child(id + 1) == child + 2) {
@@ -262,11 +271,11 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
         for (int field = 0; field < kFieldCount; ++field) {
           const int bits = layout.bits[field];
           if (bits == 0) continue;
-          count(field, kChildContext, c1.v[field], f.v[field]);
+          count(field, kChildContext, c1, f.v[field]);
           if (is_position_field(field))
-            count(field, kSplitContext, c2.v[field], split_prediction(f.v[field], c1.v[field], pp, p1, bits));
+            count(field, kSplitContext, c2, split_prediction(f.v[field], c1.v[field], pp, p1, bits));
           else
-            count(field, kAdjacentContext, c2.v[field], c1.v[field]);
+            count(field, kAdjacentContext, c2, c1.v[field]);
         }
       }
     }
@@ -288,15 +297,17 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
     if (bits == 0) continue;
     const int tokens = tokens_for_bits(bits);
     const int contexts = is_position_field(field) ? 4 : 3;
-    uint64_t as_is = 256 * plain_extra[field], as_delta = 256 * delta_extra[field];
-    for (int c = 0; c < contexts; ++c) {
-      as_is += cost_q8(plain[field][c], tokens);
-      as_delta += cost_q8(delta[field][c], tokens);
+    // The cheapest way on the sample (the earlier on a tie).
+    int best = kPlain;
+    uint64_t best_cost = 0;
+    for (int way = kPlain; way < (is_normal_frame_field(field) ? kWays : kFrame); ++way) {
+      uint64_t cost = 256 * extra[way][field];
+      for (int c = 0; c < contexts; ++c) cost += cost_q8(tokens_of[way][field][c], tokens);
+      if (way == kPlain || cost < best_cost) best = way, best_cost = cost;
     }
-    const bool d = as_delta < as_is;
-    if (d) out->delta_fields |= 1u << field;
-    for (int c = 0; c < contexts; ++c)
-      normalise(d ? delta[field][c] : plain[field][c], tokens, &out->model[field_model(field, c)]);
+    if (best == kDelta) out->delta_fields |= 1u << field;
+    if (best == kFrame) out->frame_fields |= 1u << field;
+    for (int c = 0; c < contexts; ++c) normalise(tokens_of[best][field][c], tokens, &out->model[field_model(field, c)]);
   }
   build_class_models(view, header, out);
 }
@@ -315,7 +326,7 @@ uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_point
 
 size_t write_code_tables(const CodeTables& t, uint8_t* out, size_t capacity) {
   if (capacity < 4) return 0;
-  store_u32le(out, t.delta_fields);
+  store_u32le(out, t.delta_fields | t.frame_fields << (kFrameFieldsShift - static_cast<int>(Field::kFnTheta)));
   size_t at = 4;
   bool fits = true;
   const auto put = [&](const CodeModel& m) {  // a model takes at most 2 + 3 x its tokens
@@ -340,10 +351,18 @@ bool parse_code_tables(const uint8_t* payload, size_t size, const SpgHeader& hea
   *out = CodeTables{};
   const RecordLayout& layout = header.layout;
   out->layout = layout;
-  out->delta_fields = load_u32le(payload);
-  for (int field = 0; field < 32; ++field)
-    if ((out->delta_fields >> field) & 1u)
-      if (field >= kFieldCount || layout.bits[field] == 0) return false;
+  const uint32_t word = load_u32le(payload);
+  constexpr int kFnTheta = static_cast<int>(Field::kFnTheta);
+  out->delta_fields = word & ((1u << kFieldCount) - 1u);
+  out->frame_fields = (word >> kFrameFieldsShift) << kFnTheta;
+  if (word != (out->delta_fields | out->frame_fields << (kFrameFieldsShift - kFnTheta)) ||
+      (out->delta_fields & out->frame_fields) != 0)
+    return false;
+  for (int field = 0; field < kFieldCount; ++field) {
+    const bool coded_as_difference = ((out->delta_fields | out->frame_fields) >> field) & 1u;
+    if (coded_as_difference && layout.bits[field] == 0) return false;
+    if (((out->frame_fields >> field) & 1u) && (!is_normal_frame_field(field) || layout.bits[field - 4] == 0)) return false;
+  }
   const uint8_t* at = payload + 4;
   const uint8_t* end = payload + size;
   bool ok = true;
@@ -363,7 +382,7 @@ bool parse_code_tables(const uint8_t* payload, size_t size, const SpgHeader& hea
       out->class_count[k] = header.class_count[k];
       for (uint32_t j = 0; j < 3; ++j) {
         const bool present = header.class_count[k] > 0 && j < spg_class_values(k);
-        if (((out->class_delta >> (3 * k + j)) & 1u) && (!present || j == 0)) return false;
+        if (((out->class_delta >> (3 * k + j)) & 1u) && !present) return false;
         if (present && !read_model(&at, end, tokens_for_bits(16), &out->class_model[1 + 3 * k + j])) return false;
       }
     }
@@ -374,10 +393,13 @@ bool parse_code_tables(const uint8_t* payload, size_t size, const SpgHeader& hea
 
 namespace {
 
-// A field's value as coded: its difference from `base` or itself.
-uint32_t field_value(const CodeTables& t, int field, uint32_t v, uint32_t base) {
+// Field `field` of `self` as coded: its difference from `reference`, or
+// from its own position frame's angle, or itself.
+uint32_t field_value(const CodeTables& t, int field, const NodeFields& self, uint32_t reference) {
   const int bits = t.layout.bits[field];
-  return ((t.delta_fields >> field) & 1u) ? zigzag_delta(v, base, bits) : v & ((1u << bits) - 1u);
+  const uint32_t v = self.v[field];
+  if ((t.frame_fields >> field) & 1u) return zigzag_delta(v, frame_base(t.layout, field, self), bits);
+  return ((t.delta_fields >> field) & 1u) ? zigzag_delta(v, reference, bits) : v & ((1u << bits) - 1u);
 }
 
 // The symbols of entries[first ..] (a node, or a split's two) in decoding order.
@@ -391,7 +413,7 @@ int unit_symbols(const CodeTables& t, const CodedEntry* e, uint32_t previous_id,
     const int context = r + 1u == e[0].id || r == e[0].id + 1u ? kAdjacentContext : kFarContext;
     for (int f = 0; f < kFieldCount; ++f)
       if (t.layout.bits[f] > 0)
-        n += push_value(t.model[field_model(f, context)], field_value(t, f, e[0].fields.v[f], e[0].reference.v[f]), s + n);
+        n += push_value(t.model[field_model(f, context)], field_value(t, f, e[0].fields, e[0].reference.v[f]), s + n);
     return n;
   }
   const CodedEntry& first = e[0];
@@ -403,18 +425,18 @@ int unit_symbols(const CodeTables& t, const CodedEntry* e, uint32_t previous_id,
   n += push_value(t.model[kPointsModel], first.points, s + n);
   for (int f = 0; f < kFieldCount; ++f)
     if (t.layout.bits[f] > 0)
-      n += push_value(t.model[field_model(f, kChildContext)], field_value(t, f, first.fields.v[f], parent.v[f]), s + n);
+      n += push_value(t.model[field_model(f, kChildContext)], field_value(t, f, first.fields, parent.v[f]), s + n);
   if (split_points(first.reference_points, first.points) > 255) n += push_value(t.model[kPointsModel], second.points, s + n);
   for (int f = 0; f < kFieldCount; ++f) {
     const int bits = t.layout.bits[f];
     if (bits == 0) continue;
     if (is_position_field(f))
       n += push_value(t.model[field_model(f, kSplitContext)],
-                      field_value(t, f, second.fields.v[f],
+                      field_value(t, f, second.fields,
                                   split_prediction(parent.v[f], first.fields.v[f], first.reference_points, first.points, bits)),
                       s + n);
     else
-      n += push_value(t.model[field_model(f, kAdjacentContext)], field_value(t, f, second.fields.v[f], first.fields.v[f]), s + n);
+      n += push_value(t.model[field_model(f, kAdjacentContext)], field_value(t, f, second.fields, first.fields.v[f]), s + n);
   }
   return n;
 }
@@ -486,10 +508,11 @@ size_t encode_coded_classes(const CodeTables& t, int table, const uint16_t* indi
     Symbol s[16];
     int n = push_value(t.class_model[0], indices[i] - (i > 0 ? indices[i - 1] : 0xFFFFFFFFu) - 1u, s);
     for (uint32_t j = 0; j < k; ++j) {
-      const uint32_t v = load_u16le(values + 2 * (k * i + j));
+      const uint8_t* v = values + 2 * (k * i + j);
+      // Value 0 against the class before it in the piece, the others against the value before them.
+      const uint32_t base = j > 0 ? load_u16le(v - 2) : i > 0 ? load_u16le(v - 2 * k) : 0;
       const bool d = (t.class_delta >> (3 * table + j)) & 1u;
-      n += push_value(t.class_model[1 + 3 * table + j], d ? zigzag_delta(v, load_u16le(values + 2 * (k * i + j - 1)), 16) : v,
-                      s + n);
+      n += push_value(t.class_model[1 + 3 * table + j], d ? zigzag_delta(load_u16le(v), base, 16) : load_u16le(v), s + n);
     }
     if (!put_symbols(s, n, &x, &p, floor)) return 0;
   }
@@ -506,6 +529,7 @@ bool CodedClassesReader::init(const CodeTables& tables, const uint8_t* payload, 
   count_ = load_u16le(payload + 2);
   done_ = 0;
   previous_ = 0xFFFFFFFFu;
+  first_value_ = 0;
   return tables.class_count[table_] > 0 && count_ > 0 && count_ <= tables.class_count[table_] &&
          in_.init(payload + kCodedClassesHeaderBytes, size - kCodedClassesHeaderBytes);
 }
@@ -517,12 +541,13 @@ bool CodedClassesReader::next(uint32_t* index, uint8_t values[6]) {
   const uint64_t i = uint64_t{previous_} + 1u + gap - (done_ == 0 ? uint64_t{1} << 32 : 0);  // the first from -1
   if (i >= t_->class_count[table_]) return false;
   const uint32_t k = spg_class_values(table_);
-  uint32_t last = 0;
+  uint32_t last = first_value_;  // value 0's base: the class before it in the piece
   for (uint32_t j = 0; j < k; ++j) {
     uint32_t v = 0;
     if (!in_.value(t_->class_model[1 + 3 * table_ + j], &v)) return false;
     if ((t_->class_delta >> (3 * table_ + j)) & 1u) v = undo_zigzag_delta(v, last, 16);
     store_u16le(values + 2 * j, static_cast<uint16_t>(v));
+    if (j == 0) first_value_ = v;
     last = v;
   }
   previous_ = static_cast<uint32_t>(i);
@@ -624,9 +649,12 @@ bool CodedBatchReader::next(Entry* e) {
   return true;
 }
 
-bool CodedBatchReader::field(int f, int context, uint32_t base, uint32_t* v) {
+bool CodedBatchReader::field(int f, int context, uint32_t reference, const NodeFields& self, uint32_t* v) {
   if (!value(field_model(f, context), v)) return false;
-  if ((t_->delta_fields >> f) & 1u) *v = undo_zigzag_delta(*v, base, t_->layout.bits[f]);
+  if ((t_->frame_fields >> f) & 1u)
+    *v = undo_zigzag_delta(*v, frame_base(t_->layout, f, self), t_->layout.bits[f]);
+  else if ((t_->delta_fields >> f) & 1u)
+    *v = undo_zigzag_delta(*v, reference, t_->layout.bits[f]);
   return true;
 }
 
@@ -636,7 +664,7 @@ bool CodedBatchReader::node(const NodeFields& reference, bool adjacent, NodeFiel
   for (int k = 0; k < kFieldCount; ++k) {
     if (t_->layout.bits[k] == 0) continue;
     uint32_t v = 0;
-    if (!field(k, adjacent ? kAdjacentContext : kFarContext, reference.v[k], &v)) return false;
+    if (!field(k, adjacent ? kAdjacentContext : kFarContext, reference.v[k], f, &v)) return false;
     f.v[k] = static_cast<uint16_t>(v);
   }
   pending_ = 0;
@@ -652,7 +680,7 @@ bool CodedBatchReader::split(const NodeFields& parent, uint8_t parent_points, No
   uint32_t v = 0;
   for (int k = 0; k < kFieldCount; ++k) {
     if (t_->layout.bits[k] == 0) continue;
-    if (!field(k, kChildContext, parent.v[k], &v)) return false;
+    if (!field(k, kChildContext, parent.v[k], a, &v)) return false;
     a.v[k] = static_cast<uint16_t>(v);
   }
   uint32_t points = split_points(parent_points, first_points_);
@@ -662,7 +690,7 @@ bool CodedBatchReader::split(const NodeFields& parent, uint8_t parent_points, No
     if (bits == 0) continue;
     const bool position = is_position_field(k);
     const uint32_t base = position ? split_prediction(parent.v[k], a.v[k], parent_points, first_points_, bits) : a.v[k];
-    if (!field(k, position ? kSplitContext : kAdjacentContext, base, &v)) return false;
+    if (!field(k, position ? kSplitContext : kAdjacentContext, base, b, &v)) return false;
     b.v[k] = static_cast<uint16_t>(v);
   }
   pending_ = 0;

@@ -63,16 +63,38 @@ struct CodeModel {
 // Fills m.start from m.cum (a model made by hand must call it).
 void index_code_model(CodeModel* m);
 
-// Everything both ends need: the layout's present fields, which are coded
-// as differences, and the models.
+// The normal frame's angles (fn θ, φ, ψ) may go as their difference from
+// the same angle of the node's own position frame, scaled to their width
+// (frame_base): with normals, fp's f3 is oriented along the node's mean
+// normal and fn's z is that normal, so their θ and φ nearly agree. In the
+// code message's first word, bit kFrameFieldsShift + k stands for field
+// kFnTheta + k (the bits below are the delta fields).
+inline constexpr int kFrameFieldsShift = 24;
+constexpr bool is_normal_frame_field(int field) {
+  return field >= static_cast<int>(Field::kFnTheta) && field <= static_cast<int>(Field::kFnPsi);
+}
+// Field `field`'s prediction from the node's own position frame (`self`
+// holds at least that frame's angles).
+constexpr uint32_t frame_base(const RecordLayout& layout, int field, const NodeFields& self) {
+  const int own = field - 4;  // fn θ, φ, ψ <- fp θ, φ, ψ
+  const int from = layout.bits[own], to = layout.bits[field];
+  const uint32_t v = self.v[own];
+  return from >= to ? v >> (from - to) : v << (to - from);
+}
+
+// Everything both ends need: the layout's present fields, how each is
+// coded, and the models.
 struct CodeTables {
   RecordLayout layout;
   uint32_t delta_fields = 0;  // bit f: field f as its difference from the entry's reference
+  uint32_t frame_fields = 0;  // bit f: field f (a normal frame's angle) as its difference from frame_base
   CodeModel model[kCodeModels];
   // Coded classes (format version 2 and later: 16-bit class values): the
   // tables' class counts, the models of index gaps (0) and of value j of
   // table t (1 + 3 t + j), and bit 3 t + j of class_delta: that value as
-  // its difference from value j - 1 of the same class.
+  // its difference from value j - 1 of the same class, value 0 from value
+  // 0 of the class before it in the piece (0 for the first; the encoder
+  // numbers classes by size).
   bool classes = false;
   uint16_t class_count[3] = {};
   uint16_t class_delta = 0;
@@ -107,7 +129,8 @@ class RansReader {
   uint32_t x_ = 0;
 };
 
-// The code message (kCode): u32 the delta-field bits, then per model in use
+// The code message (kCode): u32 the delta-field bits (bits 0-17) and the
+// frame-field bits (kFrameFieldsShift + 0..2), then per model in use
 // (ids, points, kinds, parents, then each field of the layout in order, its
 // contexts: three, four for the mean's): u8 n, n LEB128 frequencies, u8 m:
 // m more tokens of frequency 1 — n + m tokens, 1 .. the model's alphabet,
@@ -122,8 +145,9 @@ size_t write_code_tables(const CodeTables& t, uint8_t* out, size_t capacity);
 // kCodedClasses (with class models): u8 table, u8 0, u16 count (>= 1), then
 // the rANS stream (final state first) of count classes, indices ascending:
 // each the index's difference from the one before, less one (the first as
-// it is), then its values, each as it is or as its difference from the
-// value before it (class_delta), 16-bit. `values`: the classes' values as
+// it is), then its values, each as it is or as its difference (class_delta:
+// from the value before it in the class, value 0 from the previous class's
+// value 0), 16-bit. `values`: the classes' values as
 // in .spg §2, spg_class_values(table) little-endian u16 each. Returns the
 // payload's length, 0 when it did not fit.
 size_t encode_coded_classes(const CodeTables& t, int table, const uint16_t* indices, const uint8_t* values,
@@ -144,7 +168,7 @@ class CodedClassesReader {
   const CodeTables* t_ = nullptr;
   RansReader in_;
   int table_ = 0;
-  uint32_t count_ = 0, done_ = 0, previous_ = 0xFFFFFFFFu;
+  uint32_t count_ = 0, done_ = 0, previous_ = 0xFFFFFFFFu, first_value_ = 0;
 };
 
 // kCodedNodes: u32 count (nodes), then the rANS stream of its entries (the
@@ -168,8 +192,10 @@ class CodedClassesReader {
 //   against the first child's (context 1). The second child's id is the
 //   first's plus one.
 //
-// Fields the code message marks as differences are wrapped to their width
-// and zigzagged; the others go as they are, in the same contexts.
+// Fields the code message marks as differences (from the reference, or a
+// normal frame's angle from its own position frame's: frame_base) are
+// wrapped to their width and zigzagged; the others go as they are, in the
+// same contexts.
 
 // An entry's reference: of the nearest ids below and above it that this
 // part sent before it (0xFFFFFFFF: none), the nearer; the lower one on a tie.
@@ -235,7 +261,8 @@ class CodedBatchReader {
 
  private:
   bool value(int model, uint32_t* v);
-  bool field(int field, int context, uint32_t base, uint32_t* v);
+  // Field `field` of a node whose earlier fields `self` holds, against `reference`.
+  bool field(int field, int context, uint32_t reference, const NodeFields& self, uint32_t* v);
   const CodeTables* t_ = nullptr;
   RansReader in_;
   uint32_t count_ = 0, done_ = 0, node_count_ = 0, previous_ = 0xFFFFFFFFu, parent_ = 0xFFFFFFFFu;

@@ -133,6 +133,11 @@ TEST(NodeCoding, TheEncodersOwnTreeRoundTripsExactly) {
   CodeTables back;
   ASSERT_TRUE(parse_code_tables(message.data(), message.size(), m.view.header, &back));
   EXPECT_EQ(back.delta_fields, t.delta_fields);
+  EXPECT_EQ(back.frame_fields, t.frame_fields);
+  // The sample chose the normal frame's θ and φ against the node's own
+  // position frame (fp's f3 follows the mean normal, fn's z is it).
+  const uint32_t frame_angles = 3u << static_cast<int>(Field::kFnTheta);
+  EXPECT_EQ(t.frame_fields & frame_angles, frame_angles);
   for (int k = 0; k < kCodeModels; ++k) {
     ASSERT_EQ(back.model[k].count, t.model[k].count) << "model " << k;
     for (int i = 0; i <= t.model[k].count; ++i) ASSERT_EQ(back.model[k].cum[i], t.model[k].cum[i]) << "model " << k;
@@ -165,8 +170,12 @@ TEST(NodeCoding, EveryValueAtItsExtremesRoundTrips) {
   RecordLayout wide;
   for (int f = 0; f < kFieldCount; ++f) wide.bits[f] = static_cast<uint8_t>(1 + f % 16);  // 1 .. 16 bits
   wide.bits[5] = 16;
-  for (uint32_t delta : {0u, (1u << kFieldCount) - 1u, 0x2AAAAu}) {
-    const CodeTables t = flat_tables(wide, delta);
+  // The normal frame's angles as they are, against the reference, and
+  // against the position frame's of other widths (4 -> 8, 5 -> 9, 16 -> 10 bits).
+  constexpr uint32_t kFrame = 7u << static_cast<int>(Field::kFnTheta);
+  for (uint32_t delta : {0u, (1u << kFieldCount) - 1u, 0x2AAAAu, 0x3FFFFu & ~kFrame, 0x10000u}) {
+    CodeTables t = flat_tables(wide, delta);
+    if (delta == (0x3FFFFu & ~kFrame) || delta == 0x10000u) t.frame_fields = kFrame;
     Batch b;
     const uint32_t ids[] = {0, 1, 2, 17, 0x7FFFFFFFu, 0xFFFFFFF0u, 0xFFFFFFFDu};
     for (size_t i = 0; i < std::size(ids); ++i) {
@@ -318,6 +327,26 @@ TEST(NodeCoding, HostileTablesAreRefused) {
   bad = good;
   bad[3] = 0x80;  // bit 31
   EXPECT_FALSE(parse_code_tables(bad.data(), bad.size(), layout, &out));
+  bad = good;
+  bad[2] = 0x10;  // bit 20: between the delta and the frame fields
+  EXPECT_FALSE(parse_code_tables(bad.data(), bad.size(), layout, &out));
+  // The normal frame's θ from the position frame's (bit 24): this layout
+  // has normals; both ways for one field, or without normals, refused.
+  bad = good;
+  bad[3] = 0x01;
+  ASSERT_TRUE(parse_code_tables(bad.data(), bad.size(), layout, &out));
+  EXPECT_EQ(out.frame_fields, 1u << static_cast<int>(Field::kFnTheta));
+  EXPECT_EQ(out.delta_fields, 1u << static_cast<int>(Field::kPosX));
+  bad[0] = static_cast<uint8_t>(bad[0] | 1u << static_cast<int>(Field::kFnTheta));
+  EXPECT_FALSE(parse_code_tables(bad.data(), bad.size(), layout, &out));
+  SpgHeader bare = header;
+  bare.layout = paper_layout(false, false, 2);
+  CodeTables no_normals = flat_tables(bare.layout, 0);
+  std::vector<uint8_t> plain(4096);
+  plain.resize(write_code_tables(no_normals, plain.data(), plain.size()));
+  ASSERT_TRUE(parse_code_tables(plain.data(), plain.size(), bare, &out));
+  plain[3] = 0x02;  // bit 25: fn φ
+  EXPECT_FALSE(parse_code_tables(plain.data(), plain.size(), bare, &out));
   // The id model: no tokens, more than its alphabet, frequencies that do not add up.
   bad = good;
   bad[4] = 0;
