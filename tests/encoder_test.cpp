@@ -377,6 +377,26 @@ TEST(Golden, BundledBunnyBitstream) {
   }
 }
 
+// Automatic class counts fitted to what the picture needs (docs/encoder.md
+// "Classes"), numbered by size: σ1 (σn1) never falls along the table, so a
+// view's class pieces go as small steps (docs/protocol.md "Coded batches").
+TEST(Encoder, ClassesAreCountedForTheSceneAndNumberedBySize) {
+  std::vector<uint8_t> spg;
+  std::string error;
+  ASSERT_TRUE(read_file(test::source_path("tests/golden/bunny_v2.spg"), spg, error)) << error;
+  SpgView v;
+  ASSERT_TRUE(spg_parse(spg.data(), spg.size(), &v).ok());
+  const uint32_t nodes = v.header.node_count;
+  EXPECT_EQ(v.header.class_count[0], std::clamp(nodes / 16, 64u, 2048u));  // 432
+  EXPECT_EQ(v.header.class_count[1], std::clamp(nodes / 64, 64u, 1024u));  // 108
+  for (int t = 0; t < 2; ++t) {
+    const uint8_t* table = t == 0 ? v.sigma_p : v.sigma_n;
+    const uint32_t k = spg_class_values(t);
+    for (uint32_t c = 1; c < v.header.class_count[t]; ++c)
+      ASSERT_LE(load_u16le(table + 2 * k * (c - 1)), load_u16le(table + 2 * k * c)) << "table " << t << " class " << c;
+  }
+}
+
 TEST(RealScans, SharedBunnyAndDragonEncode) {
   for (const char* name : {"bunny.ply", "dragon.ply"}) {
     const std::string path = test::shared_data(name);

@@ -53,8 +53,8 @@ TEST(NodeDecoder, DecodesToTheSameBytesOnEveryPlatform) {
   const struct {
     const char* file;
     uint32_t crc;
-  } cases[] = {{"tests/golden/bunny_v1.spg", 0x58aaed0du},
-               {"tests/golden/bunny_v2.spg", 0xb878954du},
+  } cases[] = {{"tests/golden/bunny_v1.spg", 0x22ef00d6u},
+               {"tests/golden/bunny_v2.spg", 0xc23d7896u},
                {"tests/data/sphere600_colour.spg", 0x8e56c137u}};
   for (const auto& c : cases) {
     const uint32_t crc = decoded_crc(test::fixture(c.file));
@@ -86,8 +86,9 @@ TEST(NodeDecoder, SixteenBitTablesDecodeAsTheFloatTablesDo) {
       ASSERT_LE(std::llabs(a - b), a / 4096 + 1) << "class " << c << " axis " << k;
       differ += a != b;
     }
-    for (int k = 0; k < 2; ++k) ASSERT_EQ(d1.sigma_n_q12(ClassId{c})[k], d2.sigma_n_q12(ClassId{c})[k]) << "class " << c;
   }
+  for (uint16_t c = 0; c < v1.header.class_count[1]; ++c)
+    for (int k = 0; k < 2; ++k) ASSERT_EQ(d1.sigma_n_q12(ClassId{c})[k], d2.sigma_n_q12(ClassId{c})[k]) << "class " << c;
   EXPECT_GT(differ, 0);  // the codes are not float32 in disguise
 }
 

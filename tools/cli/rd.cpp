@@ -34,7 +34,7 @@ const char kRdHelp[] =
     "\n"
     "settings (default: all):\n"
     "  default        stipple encode's defaults (leaves under 16 points; class\n"
-    "                 counts scaled to the scan: nodes / 16 within 64..4096)\n"
+    "                 counts scaled to the scan: stipple encode --help)\n"
     "  leaf-4         leaves under 4 points\n"
     "  leaf-32        leaves under 32 points\n"
     "  classes-1024   1024 sigma_p and sigma_n classes\n"

@@ -17,9 +17,9 @@ namespace stipple {
 
 struct EncodeOptions {
   TreeOptions tree;
-  // Class counts; 0 means automatic: clamp(nodes / 16, 64, 4096) for sigma_p
-  // and sigma_n (a small scan does not need 4096 classes of 12 bytes each),
-  // 64 for sigma_c.
+  // Class counts; 0 means automatic: clamp(nodes / 16, 64, 2048) for
+  // sigma_p, clamp(nodes / 64, 64, 1024) for sigma_n, 64 for sigma_c (what
+  // the picture needs: docs/encoder.md "Classes").
   int classes_p = 0, classes_n = 0, classes_c = 0;
   // An error bound (docs/encoder.md "Tolerance"): the variance stop at it
   // (leaves of sigma1 at most `tolerance`) and position fields wide enough

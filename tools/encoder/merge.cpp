@@ -231,9 +231,12 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
         return true;
       }))
     return false;
-  const int auto_classes = static_cast<int>(std::clamp<uint64_t>(nodes / 16, 64, 4096));
-  const SigmaClasses cp(sp, 3, plan.classes[0] ? plan.classes[0] : auto_classes, 20, threads);
-  const SigmaClasses cn(sn, 2, plan.classes[1] ? plan.classes[1] : auto_classes, 20, threads);
+  // Automatic counts (docs/encoder.md "Classes"): what the picture needs,
+  // measured; more only cost a view's class pieces and the indices' bits.
+  const int auto_p = static_cast<int>(std::clamp<uint64_t>(nodes / 16, 64, 2048));
+  const int auto_n = static_cast<int>(std::clamp<uint64_t>(nodes / 64, 64, 1024));
+  const SigmaClasses cp(sp, 3, plan.classes[0] ? plan.classes[0] : auto_p, 20, threads);
+  const SigmaClasses cn(sn, 2, plan.classes[1] ? plan.classes[1] : auto_n, 20, threads);
   const SigmaClasses cc(sc, 3, plan.classes[2] ? plan.classes[2] : 64, 20, threads);
   sp = {}, sn = {}, sc = {};
   report.classes[0] = static_cast<int>(cp.centers().size());
