@@ -76,7 +76,7 @@ constexpr bool is_normal_frame_field(int field) {
 // Field `field`'s prediction from the node's own position frame (`self`
 // holds at least that frame's angles).
 constexpr uint32_t frame_base(const RecordLayout& layout, int field, const NodeFields& self) {
-  const int own = field - 4;  // fn θ, φ, ψ <- fp θ, φ, ψ
+  const int own = field >= 4 ? field - 4 : 0;  // fn θ, φ, ψ <- fp θ, φ, ψ (the guard: any field stays in bounds)
   const int from = layout.bits[own], to = layout.bits[field];
   const uint32_t v = self.v[own];
   return from >= to ? v >> (from - to) : v << (to - from);
