@@ -147,7 +147,7 @@ namespace {
 // index gaps (a piece's are small once a view has sent many, and any below
 // the count is possible), each value as it is or as its difference from the
 // value before it in its class, whichever costs fewer bits.
-void build_class_models(const SpgView& view, const SpgHeader& header, CodeTables* out) {
+void build_class_models(const SpgView& view, const SpgHeader& header, bool first_value_delta, CodeTables* out) {
   out->classes = header.version >= 2;
   if (!out->classes) return;
   uint32_t gaps[kMaxTokens] = {};
@@ -177,7 +177,8 @@ void build_class_models(const SpgView& view, const SpgHeader& header, CodeTables
           delta_extra += static_cast<uint64_t>(d.extra_bits);
         }
       const int tokens = tokens_for_bits(16);
-      const bool d = cost_q8(delta, tokens) + 256 * delta_extra < cost_q8(plain, tokens) + 256 * plain_extra;
+      const bool d = (j > 0 || first_value_delta) &&
+                     cost_q8(delta, tokens) + 256 * delta_extra < cost_q8(plain, tokens) + 256 * plain_extra;
       if (d) out->class_delta = static_cast<uint16_t>(out->class_delta | (1u << (3 * t + j)));
       normalise(d ? delta : plain, tokens, &out->class_model[1 + 3 * t + j]);
     }
@@ -219,7 +220,7 @@ bool read_model(const uint8_t** at, const uint8_t* end, int alphabet, CodeModel*
 }  // namespace
 
 void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader& header, uint32_t sample,
-                       CodeTables* out) {
+                       CodeTables* out, uint16_t protocol) {
   *out = CodeTables{};
   const RecordLayout& layout = header.layout;
   out->layout = layout;
@@ -300,7 +301,7 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
     // The cheapest way on the sample (the earlier on a tie).
     int best = kPlain;
     uint64_t best_cost = 0;
-    for (int way = kPlain; way < (is_normal_frame_field(field) ? kWays : kFrame); ++way) {
+    for (int way = kPlain; way < (is_normal_frame_field(field) && protocol >= 6 ? kWays : kFrame); ++way) {
       uint64_t cost = 256 * extra[way][field];
       for (int c = 0; c < contexts; ++c) cost += cost_q8(tokens_of[way][field][c], tokens);
       if (way == kPlain || cost < best_cost) best = way, best_cost = cost;
@@ -309,7 +310,7 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
     if (best == kFrame) out->frame_fields |= 1u << field;
     for (int c = 0; c < contexts; ++c) normalise(tokens_of[best][field][c], tokens, &out->model[field_model(field, c)]);
   }
-  build_class_models(view, header, out);
+  build_class_models(view, header, protocol >= 6, out);
 }
 
 uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_points, uint32_t first_points, int bits) {

@@ -108,8 +108,10 @@ inline constexpr size_t kCodedClassesHeaderBytes = 4;
 // order with id gaps like a cut's, and (format version 2 on) from every
 // class of its tables. The points model from cut.points(). Integer-only;
 // host or server side.
+// `protocol`: the client's version — below 6, no frame fields and no class
+// value 0 as a difference (what a version 5 client reads).
 void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader& header, uint32_t sample,
-                       CodeTables* out);
+                       CodeTables* out, uint16_t protocol = 6);
 
 // The decoding end of the coder over one stream: its final state (u32),
 // then its bytes.

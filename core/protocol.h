@@ -30,8 +30,11 @@ namespace stipple {
 // in pieces (model, classes) before the nodes that use them, and each
 // update's parts announced (update-begin); older clients are served as before.
 // 5: a client may ask for entropy-coded node batches (kWantCoded: code,
-// coded nodes; core/node_coding.h).
-inline constexpr uint16_t kProtocolVersion = 5;
+// coded nodes; core/node_coding.h). 6: the code tables may code the normal
+// frame's angles against the node's own position frame and a class piece's
+// first values against the previous class's (version 5 clients get tables
+// without either).
+inline constexpr uint16_t kProtocolVersion = 6;
 inline constexpr uint16_t kOldestProtocolVersion = 2;
 inline constexpr size_t kFrameHeaderBytes = 8;
 inline constexpr size_t kFrameTrailerBytes = 4;

@@ -134,6 +134,7 @@ uint8_t StreamSender::adopt_hello(const Hello& hello) {
   pieces_ = hello.version >= 4 && class_bits_ != nullptr && class_bits_bytes_ >= class_bits_bytes(reduced_);
   for (size_t i = 0; pieces_ && i < class_bits_bytes(reduced_); ++i) class_bits_[i] = 0;
   coded_ = pieces_ && hello.version >= 5 && (hello.attributes & kWantCoded) && scratch_->codes != nullptr;
+  protocol_ = hello.version;
   tables_sent_ = false;
   return static_cast<uint8_t>(attributes & ~kWantCoded);
 }
@@ -199,9 +200,11 @@ const CodeTables& StreamSender::code_tables() {
     c.view = view_;
     c.built = 0;
   }
-  const int k = reduced_.flags & (kAttrNormals | kAttrColor);
+  // A version 5 client reads tables without the frame fields and without
+  // a class piece's first values as differences: built apart.
+  const int k = (reduced_.flags & (kAttrNormals | kAttrColor)) | (protocol_ < 6 ? 4 : 0);
   if (!(c.built & (1u << k))) {
-    build_code_tables(*view_, cut_, reduced_, kSample, &c.tables[k]);
+    build_code_tables(*view_, cut_, reduced_, kSample, &c.tables[k], protocol_);
     c.built = static_cast<uint8_t>(c.built | (1u << k));
   }
   return c.tables[k];

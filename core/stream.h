@@ -46,8 +46,8 @@ using FrameSink = bool (*)(void* context, const uint8_t* frame, size_t size);
 // scratch keeps them, so each worker counts them once.
 struct CodeTableCache {
   const SpgView* view = nullptr;
-  uint8_t built = 0;  // bit k: tables[k] holds attribute set k (kWantNormals | kWantColor)
-  CodeTables tables[4];
+  uint8_t built = 0;  // bit k: tables[k] built: attribute set k & 3 (kWantNormals | kWantColor), protocol 5 at k & 4
+  CodeTables tables[8];
 };
 
 // What a sender works in during one update or send, beside its cut's
@@ -171,6 +171,7 @@ class StreamSender {
   uint32_t capacity_ = 0;
   bool pieces_ = false;         // protocol 4: each class before the first node that uses it
   bool coded_ = false;          // protocol 5: node batches entropy-coded
+  uint16_t protocol_ = kProtocolVersion;  // the client's version (its code tables: code_tables())
   bool part_sent_ = false;      // scratch_->sent tracks this part's entering nodes: its batches can be coded
   bool tables_sent_ = false;    // the code message went (just before the first coded batch)
   bool coarse_ = false;         // a cold start's coarse part: compact batches, the code tables not yet

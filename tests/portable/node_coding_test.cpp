@@ -238,8 +238,14 @@ TEST(NodeCoding, ClassPiecesRoundTripExactly) {
   build_code_tables(m.view, m.sender.cut(), m.view.header, 32768, &t);
   ASSERT_TRUE(t.classes);
   // The encoder numbers classes by size: σ1 goes against the class before
-  // it in the piece (bit 0 of each table), σ2 against σ1 and so on.
+  // it in the piece (bit 0 of each table), σ2 against σ1 and so on; not
+  // for a version 5 client, which reads neither that nor frame fields.
   EXPECT_EQ(t.class_delta & 0x9u, 0x9u);
+  CodeTables five;
+  build_code_tables(m.view, m.sender.cut(), m.view.header, 32768, &five, 5);
+  EXPECT_EQ(five.class_delta & 0x9u, 0u);
+  EXPECT_EQ(five.frame_fields, 0u);
+  EXPECT_NE(t.frame_fields, 0u);
   // The tables with class models cross the wire and come back the same.
   std::vector<uint8_t> message(8192);
   message.resize(write_code_tables(t, message.data(), message.size()));

@@ -73,8 +73,9 @@ Camera camera(double yaw, double pitch, double distance) {
 // and the 23 updates'.
 struct OrbitBytes {
   uint64_t cold = 0, orbit = 0;
+  uint32_t code_word = 0;  // the code message's first word (how each field goes)
 };
-void stream_an_orbit(bool coded, OrbitBytes& bytes) {
+void stream_an_orbit(bool coded, OrbitBytes& bytes, uint16_t version = kProtocolVersion) {
   const Model& m = bunny();
   std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
   StreamSender sender;
@@ -87,6 +88,7 @@ void stream_an_orbit(bool coded, OrbitBytes& bytes) {
   receiver.use_part_storage(part_storage.data(), 8000);
   Link link;
   Hello hello;
+  hello.version = version;
   hello.cache_capacity = 8000;
   if (coded) hello.attributes |= kWantCoded;
   ASSERT_TRUE(sender.start(hello, Link::sink, &link));
@@ -110,6 +112,11 @@ void stream_an_orbit(bool coded, OrbitBytes& bytes) {
     ASSERT_TRUE(receiver.converged(step));
     ASSERT_EQ(client.cache.count(), sender.cut().sent_count());
     (step == 0 ? cold : orbit) += link.bytes.size();
+    for (size_t at = 0; step == 0 && at < link.bytes.size();) {
+      if (link.bytes[at] == static_cast<uint8_t>(MessageType::kCode))
+        bytes.code_word = load_u32le(link.bytes.data() + at + kFrameHeaderBytes);
+      at += kFrameHeaderBytes + load_u32le(link.bytes.data() + at + 4) + kFrameTrailerBytes;
+    }
     resend += sender.cut().sent_count() * node_entry_bytes(m.view.record_bytes);
     // Every node arrived with the original points under it.
     for (uint32_t slot = 0; slot < client.cache.count(); ++slot)
@@ -144,6 +151,19 @@ TEST(Stream, CodedBatchesDrawTheSameFramesInFewerBytes) {
   stream_an_orbit(true, coded);
   EXPECT_LT(coded.cold, compact.cold * 95 / 100);
   EXPECT_LT(coded.orbit, compact.orbit * 95 / 100);
+  // Version 6 tables code the normal frame's θ and φ against the node's own position frame.
+  EXPECT_EQ(coded.code_word >> kFrameFieldsShift, 3u);
+}
+
+// A version 5 client (stop 49's) reads tables without the frame fields:
+// the server counts its tables apart, and it draws the same frames.
+TEST(Stream, AVersionFiveClientGetsTablesItReads) {
+  OrbitBytes five, six;
+  stream_an_orbit(true, five, 5);
+  stream_an_orbit(true, six);
+  ASSERT_NE(five.code_word, 0u);
+  EXPECT_EQ(five.code_word >> kFrameFieldsShift, 0u);
+  EXPECT_LT(six.cold, five.cold);
 }
 
 // A coded stream's receiver needs the tables before a coded batch, and its
