@@ -47,6 +47,13 @@ int model_bits(int model, const RecordLayout& layout) {
   return layout.bits[(model - 4) / 4];
 }
 
+// The code message's first word: the delta fields in bits 0-17, the frame
+// fields (fn θ, φ, ψ) from bit kFrameFieldsShift.
+constexpr int kFrameWordShift = kFrameFieldsShift - static_cast<int>(Field::kFnTheta);
+constexpr uint32_t fields_word(uint32_t delta_fields, uint32_t frame_fields) {
+  return delta_fields | frame_fields << kFrameWordShift;
+}
+
 // Calls f(model) for every model a layout uses, in wire order.
 template <typename F>
 void for_each_model(const RecordLayout& layout, F&& f) {
@@ -224,8 +231,8 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
   *out = CodeTables{};
   const RecordLayout& layout = header.layout;
   out->layout = layout;
-  // Token counts: points, and per field and context both ways (as it is, as
-  // a difference); and the raw bits each way costs.
+  // Token counts: points, and per field and context each way a field may go
+  // (below); and the raw bits each way costs.
   uint32_t points[kMaxTokens] = {};
   // Each field's tokens three ways: as it is, against the reference, and
   // (a normal frame's angles) against the node's own position frame.
@@ -301,7 +308,8 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
     // The cheapest way on the sample (the earlier on a tie).
     int best = kPlain;
     uint64_t best_cost = 0;
-    for (int way = kPlain; way < (is_normal_frame_field(field) && protocol >= 6 ? kWays : kFrame); ++way) {
+    for (int way = kPlain; way < (is_normal_frame_field(field) && protocol >= kFrameFieldsProtocol ? kWays : kFrame);
+         ++way) {
       uint64_t cost = 256 * extra[way][field];
       for (int c = 0; c < contexts; ++c) cost += cost_q8(tokens_of[way][field][c], tokens);
       if (way == kPlain || cost < best_cost) best = way, best_cost = cost;
@@ -310,7 +318,7 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
     if (best == kFrame) out->frame_fields |= 1u << field;
     for (int c = 0; c < contexts; ++c) normalise(tokens_of[best][field][c], tokens, &out->model[field_model(field, c)]);
   }
-  build_class_models(view, header, protocol >= 6, out);
+  build_class_models(view, header, protocol >= kFrameFieldsProtocol, out);
 }
 
 uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_points, uint32_t first_points, int bits) {
@@ -327,7 +335,7 @@ uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_point
 
 size_t write_code_tables(const CodeTables& t, uint8_t* out, size_t capacity) {
   if (capacity < 4) return 0;
-  store_u32le(out, t.delta_fields | t.frame_fields << (kFrameFieldsShift - static_cast<int>(Field::kFnTheta)));
+  store_u32le(out, fields_word(t.delta_fields, t.frame_fields));
   size_t at = 4;
   bool fits = true;
   const auto put = [&](const CodeModel& m) {  // a model takes at most 2 + 3 x its tokens
@@ -353,11 +361,9 @@ bool parse_code_tables(const uint8_t* payload, size_t size, const SpgHeader& hea
   const RecordLayout& layout = header.layout;
   out->layout = layout;
   const uint32_t word = load_u32le(payload);
-  constexpr int kFnTheta = static_cast<int>(Field::kFnTheta);
   out->delta_fields = word & ((1u << kFieldCount) - 1u);
-  out->frame_fields = (word >> kFrameFieldsShift) << kFnTheta;
-  if (word != (out->delta_fields | out->frame_fields << (kFrameFieldsShift - kFnTheta)) ||
-      (out->delta_fields & out->frame_fields) != 0)
+  out->frame_fields = (word >> kFrameFieldsShift) << static_cast<int>(Field::kFnTheta);
+  if (word != fields_word(out->delta_fields, out->frame_fields) || (out->delta_fields & out->frame_fields) != 0)
     return false;
   for (int field = 0; field < kFieldCount; ++field) {
     const bool coded_as_difference = ((out->delta_fields | out->frame_fields) >> field) & 1u;
@@ -394,13 +400,24 @@ bool parse_code_tables(const uint8_t* payload, size_t size, const SpgHeader& hea
 
 namespace {
 
-// Field `field` of `self` as coded: its difference from `reference`, or
-// from its own position frame's angle, or itself.
+// What field `field` of a node goes against, both ends: its own position
+// frame's angle (frame fields), `reference` (delta fields) or nothing
+// (false). `self` holds at least the node's fields before `field`.
+bool difference_base(const CodeTables& t, int field, const NodeFields& self, uint32_t reference, uint32_t* base) {
+  if ((t.frame_fields >> field) & 1u) {
+    *base = frame_base(t.layout, field, self);
+    return true;
+  }
+  *base = reference;
+  return (t.delta_fields >> field) & 1u;
+}
+
+// Field `field` of `self` as coded.
 uint32_t field_value(const CodeTables& t, int field, const NodeFields& self, uint32_t reference) {
   const int bits = t.layout.bits[field];
   const uint32_t v = self.v[field];
-  if ((t.frame_fields >> field) & 1u) return zigzag_delta(v, frame_base(t.layout, field, self), bits);
-  return ((t.delta_fields >> field) & 1u) ? zigzag_delta(v, reference, bits) : v & ((1u << bits) - 1u);
+  uint32_t base = 0;
+  return difference_base(t, field, self, reference, &base) ? zigzag_delta(v, base, bits) : v & ((1u << bits) - 1u);
 }
 
 // The symbols of entries[first ..] (a node, or a split's two) in decoding order.
@@ -652,10 +669,8 @@ bool CodedBatchReader::next(Entry* e) {
 
 bool CodedBatchReader::field(int f, int context, uint32_t reference, const NodeFields& self, uint32_t* v) {
   if (!value(field_model(f, context), v)) return false;
-  if ((t_->frame_fields >> f) & 1u)
-    *v = undo_zigzag_delta(*v, frame_base(t_->layout, f, self), t_->layout.bits[f]);
-  else if ((t_->delta_fields >> f) & 1u)
-    *v = undo_zigzag_delta(*v, reference, t_->layout.bits[f]);
+  uint32_t base = 0;
+  if (difference_base(*t_, f, self, reference, &base)) *v = undo_zigzag_delta(*v, base, t_->layout.bits[f]);
   return true;
 }
 

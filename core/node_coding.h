@@ -70,6 +70,9 @@ void index_code_model(CodeModel* m);
 // code message's first word, bit kFrameFieldsShift + k stands for field
 // kFnTheta + k (the bits below are the delta fields).
 inline constexpr int kFrameFieldsShift = 24;
+// The protocol version that reads frame fields and a class piece's first
+// values as differences (docs/protocol.md, "Versions").
+inline constexpr uint16_t kFrameFieldsProtocol = 6;
 constexpr bool is_normal_frame_field(int field) {
   return field >= static_cast<int>(Field::kFnTheta) && field <= static_cast<int>(Field::kFnPsi);
 }
@@ -111,7 +114,7 @@ inline constexpr size_t kCodedClassesHeaderBytes = 4;
 // `protocol`: the client's version — below 6, no frame fields and no class
 // value 0 as a difference (what a version 5 client reads).
 void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader& header, uint32_t sample,
-                       CodeTables* out, uint16_t protocol = 6);
+                       CodeTables* out, uint16_t protocol = kFrameFieldsProtocol);
 
 // The decoding end of the coder over one stream: its final state (u32),
 // then its bytes.

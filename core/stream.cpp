@@ -202,7 +202,7 @@ const CodeTables& StreamSender::code_tables() {
   }
   // A version 5 client reads tables without the frame fields and without
   // a class piece's first values as differences: built apart.
-  const int k = (reduced_.flags & (kAttrNormals | kAttrColor)) | (protocol_ < 6 ? 4 : 0);
+  const int k = (reduced_.flags & (kAttrNormals | kAttrColor)) | (protocol_ < kFrameFieldsProtocol ? 4 : 0);
   if (!(c.built & (1u << k))) {
     build_code_tables(*view_, cut_, reduced_, kSample, &c.tables[k], protocol_);
     c.built = static_cast<uint8_t>(c.built | (1u << k));

@@ -100,11 +100,11 @@ SigmaClasses::SigmaClasses(const std::vector<Vec3>& sample, int dims, int max_cl
         if (counts[c]) centers[c] = sums[c] / static_cast<double>(counts[c]);  // an empty class keeps its centre
     }
   }
-  // Numbered by size (σ1 ascending, then σ2, σ3, in log space): a view's
-  // classes then go in pieces whose neighbours differ little
-  // (docs/protocol.md "Coded batches"), and the numbering no longer depends
-  // on the seeding's order.
-  std::sort(centers.begin(), centers.end(), less);
+  // Numbered by size (σ1 ascending, then σ2, σ3, in log space; `distinct`
+  // is in that order already): a view's classes then go in pieces whose
+  // neighbours differ little (docs/protocol.md "Coded batches"), and the
+  // numbering no longer depends on the seeding's order.
+  if (distinct.size() > k) std::sort(centers.begin(), centers.end(), less);
   centers_.resize(centers.size());
   for (size_t c = 0; c < centers.size(); ++c) {
     centers_[c] = Vec3::Zero();
