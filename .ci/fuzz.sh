@@ -29,8 +29,8 @@ for harness in $harnesses; do
   corpus=$build/corpus/$harness
   rm -rf "$corpus" && mkdir -p "$corpus"
   case $harness in
-    spg) cp tests/fuzz/seeds/tiny.spg "$corpus/"; max_len=4096 ;;
-    scan) cp tests/fuzz/seeds/tiny* "$corpus/"; rm -f "$corpus/tiny.spg"; max_len=4096 ;;
+    spg) cp tests/fuzz/seeds/tiny.spg tests/fuzz/seeds/tiny_v3.spg "$corpus/"; max_len=4096 ;;
+    scan) cp tests/fuzz/seeds/tiny* "$corpus/"; rm -f "$corpus/tiny.spg" "$corpus/tiny_v3.spg"; max_len=4096 ;;
     stream) cp tests/fuzz/seeds/sphere_stream.* "$corpus/"; max_len=8192 ;;
     decoder) cp tests/fuzz/seeds/decoder_* "$corpus/"; max_len=1024 ;;
     serial) cp tests/fuzz/seeds/sphere_stream.cobs "$corpus/"; max_len=16384 ;;

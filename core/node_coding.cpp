@@ -226,31 +226,92 @@ bool read_model(const uint8_t** at, const uint8_t* end, int alphabet, CodeModel*
 
 }  // namespace
 
-void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader& header, uint32_t sample,
-                       CodeTables* out, uint16_t protocol) {
-  *out = CodeTables{};
-  const RecordLayout& layout = header.layout;
-  out->layout = layout;
-  // Token counts: points, and per field and context each way a field may go
-  // (below); and the raw bits each way costs.
-  uint32_t points[kMaxTokens] = {};
-  // Each field's tokens three ways: as it is, against the reference, and
-  // (a normal frame's angles) against the node's own position frame.
-  enum { kPlain, kDelta, kFrame, kWays };
-  uint32_t tokens_of[kWays][kFieldCount][4][kMaxTokens] = {};  // 62 KB of stack: a server's thread has it
-  uint64_t extra[kWays][kFieldCount] = {};
-  const auto tally = [&](int way, int field, int context, uint32_t v) {
-    const Hybrid h = hybrid(v);
-    ++tokens_of[way][field][context][h.token];
+void CodeTally::field(int field, int context, const NodeFields& self, uint32_t base) {
+  const int bits = layout.bits[field];
+  const uint32_t v = self.v[field];
+  const auto tally = [&](int way, uint32_t value) {
+    const Hybrid h = hybrid(value);
+    ++fields[way][field][context][h.token];
     extra[way][field] += static_cast<uint64_t>(h.extra_bits);
   };
-  const auto count = [&](int field, int context, const NodeFields& self, uint32_t base) {
-    const int bits = layout.bits[field];
-    const uint32_t v = self.v[field];
-    tally(kPlain, field, context, v);
-    tally(kDelta, field, context, zigzag_delta(v, base, bits));
-    if (is_normal_frame_field(field)) tally(kFrame, field, context, zigzag_delta(v, frame_base(layout, field, self), bits));
+  tally(kPlain, v);
+  tally(kDelta, zigzag_delta(v, base, bits));
+  if (is_normal_frame_field(field)) tally(kFrame, zigzag_delta(v, frame_base(layout, field, self), bits));
+}
+
+void CodeTally::split(const NodeFields& parent, uint32_t parent_points, const NodeFields& first, uint32_t first_points,
+                      const NodeFields& second) {
+  for (int f = 0; f < kFieldCount; ++f) {
+    const int bits = layout.bits[f];
+    if (bits == 0) continue;
+    field(f, kChildContext, first, parent.v[f]);
+    if (is_position_field(f))
+      field(f, kSplitContext, second, split_prediction(parent.v[f], first.v[f], parent_points, first_points, bits));
+    else
+      field(f, kAdjacentContext, second, first.v[f]);
+  }
+}
+
+void CodeTally::unit(const CodedEntry* e, uint32_t previous_id, uint32_t previous_parent) {
+  ++kinds[e[0].kind == 0 ? 0 : 1];
+  ++ids[hybrid(e[0].id - previous_id - 1u).token];
+  ++points[hybrid(e[0].points).token];
+  if (e[0].kind == 0) {
+    const uint32_t r = e[0].reference_id;
+    const int context = r + 1u == e[0].id || r == e[0].id + 1u ? kAdjacentContext : kFarContext;
+    for (int f = 0; f < kFieldCount; ++f)
+      if (layout.bits[f] > 0) field(f, context, e[0].fields, e[0].reference.v[f]);
+    return;
+  }
+  ++parents[hybrid(e[0].reference_id - previous_parent - 1u).token];
+  if (split_points(e[0].reference_points, e[0].points) > 255) ++points[hybrid(e[1].points).token];
+  split(e[0].reference, e[0].reference_points, e[0].fields, e[0].points, e[1].fields);
+}
+
+void CodeTally::tables(const SpgView& view, const SpgHeader& header, uint16_t protocol, CodeTables* out,
+                       bool unseen_at_floor) const {
+  *out = CodeTables{};
+  out->layout = layout;
+  // A model of nothing counted, at the floor: token 0 all but one slot of
+  // each other token (three bytes on the wire, not one a token).
+  const auto fit = [&](const uint32_t* counts, int n, CodeModel* m) {
+    bool any = false;
+    for (int t = 0; t < n && !any; ++t) any = counts[t] > 0;
+    if (any || !unseen_at_floor) return normalise(counts, n, m);
+    m->count = static_cast<uint8_t>(n);
+    m->cum[0] = 0;
+    for (int t = 0; t < n; ++t) m->cum[t + 1] = static_cast<uint16_t>(t == 0 ? kCodeTotal - (n - 1) : m->cum[t] + 1);
+    index_code_model(m);
   };
+  fit(ids, tokens_for_bits(32), &out->model[kIdModel]);
+  fit(parents, tokens_for_bits(32), &out->model[kParentModel]);
+  fit(kinds, 2, &out->model[kKindModel]);
+  fit(points, tokens_for_bits(8), &out->model[kPointsModel]);
+  for (int f = 0; f < kFieldCount; ++f) {
+    const int bits = layout.bits[f];
+    if (bits == 0) continue;
+    const int tokens = tokens_for_bits(bits);
+    const int contexts = is_position_field(f) ? 4 : 3;
+    // The cheapest way on the counts (the earlier on a tie).
+    int best = kPlain;
+    uint64_t best_cost = 0;
+    for (int way = kPlain; way < (is_normal_frame_field(f) && protocol >= kFrameFieldsProtocol ? kWays : kFrame); ++way) {
+      uint64_t cost = 256 * extra[way][f];
+      for (int c = 0; c < contexts; ++c) cost += cost_q8(fields[way][f][c], tokens);
+      if (way == kPlain || cost < best_cost) best = way, best_cost = cost;
+    }
+    if (best == kDelta) out->delta_fields |= 1u << f;
+    if (best == kFrame) out->frame_fields |= 1u << f;
+    for (int c = 0; c < contexts; ++c) fit(fields[best][f][c], tokens, &out->model[field_model(f, c)]);
+  }
+  build_class_models(view, header, protocol >= kFrameFieldsProtocol, out);
+}
+
+void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader& header, uint32_t sample,
+                       CodeTables* out, uint16_t protocol) {
+  const RecordLayout& layout = header.layout;
+  CodeTally tally;  // 62 KB of stack: a server's thread has it
+  tally.layout = layout;
   const auto fields_of = [&](uint32_t id) { return unpack_record(view.header.layout, view.records + size_t{id} * view.record_bytes); };
   const uint32_t n = view.header.node_count;
   const uint32_t per_run = 32;
@@ -268,57 +329,24 @@ void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader&
       if (n - id <= gap) break;
       id += gap;
       const NodeFields f = fields_of(id);
-      ++points[hybrid(cut.points(NodeId{id})).token];
+      ++tally.points[hybrid(cut.points(NodeId{id})).token];
       for (int field = 0; field < kFieldCount; ++field)
-        if (layout.bits[field] > 0) count(field, gap == 1 ? kAdjacentContext : kFarContext, f, last.v[field]);
+        if (layout.bits[field] > 0) tally.field(field, gap == 1 ? kAdjacentContext : kFarContext, f, last.v[field]);
       last = f;
       const uint32_t child = cut.first_child(id);
-      if (id + 1 < n && cut.first_child(id + 1) == child + 2) {
-        const NodeFields c1 = fields_of(child), c2 = fields_of(child + 1);
-        const uint32_t pp = cut.points(NodeId{id}), p1 = cut.points(NodeId{child});
-        for (int field = 0; field < kFieldCount; ++field) {
-          const int bits = layout.bits[field];
-          if (bits == 0) continue;
-          count(field, kChildContext, c1, f.v[field]);
-          if (is_position_field(field))
-            count(field, kSplitContext, c2, split_prediction(f.v[field], c1.v[field], pp, p1, bits));
-          else
-            count(field, kAdjacentContext, c2, c1.v[field]);
-        }
-      }
+      if (id + 1 < n && cut.first_child(id + 1) == child + 2)
+        tally.split(f, cut.points(NodeId{id}), fields_of(child), cut.points(NodeId{child}), fields_of(child + 1));
     }
   }
   // A batch's id gaps depend on how much of the model its part sends, which
   // no sample knows: every gap below the node count alike, by its token;
   // the same for splits' parents, and either kind of entry alike.
-  uint32_t ids[kMaxTokens] = {};
   const int id_bits = n > 1 ? bit_length_minus_one(n - 1) + 1 : 1;
-  for (int t = 0; t < tokens_for_bits(id_bits); ++t) ids[t] = runs;
-  normalise(ids, tokens_for_bits(32), &out->model[kIdModel]);
-  normalise(ids, tokens_for_bits(32), &out->model[kParentModel]);
+  for (int t = 0; t < tokens_for_bits(id_bits); ++t) tally.ids[t] = tally.parents[t] = runs;
   // Splits are a refinement's (an orbit's) entries, few of a cold start's.
-  const uint32_t kinds[2] = {15 * runs, runs};
-  normalise(kinds, 2, &out->model[kKindModel]);
-  normalise(points, tokens_for_bits(8), &out->model[kPointsModel]);
-  for (int field = 0; field < kFieldCount; ++field) {
-    const int bits = layout.bits[field];
-    if (bits == 0) continue;
-    const int tokens = tokens_for_bits(bits);
-    const int contexts = is_position_field(field) ? 4 : 3;
-    // The cheapest way on the sample (the earlier on a tie).
-    int best = kPlain;
-    uint64_t best_cost = 0;
-    for (int way = kPlain; way < (is_normal_frame_field(field) && protocol >= kFrameFieldsProtocol ? kWays : kFrame);
-         ++way) {
-      uint64_t cost = 256 * extra[way][field];
-      for (int c = 0; c < contexts; ++c) cost += cost_q8(tokens_of[way][field][c], tokens);
-      if (way == kPlain || cost < best_cost) best = way, best_cost = cost;
-    }
-    if (best == kDelta) out->delta_fields |= 1u << field;
-    if (best == kFrame) out->frame_fields |= 1u << field;
-    for (int c = 0; c < contexts; ++c) normalise(tokens_of[best][field][c], tokens, &out->model[field_model(field, c)]);
-  }
-  build_class_models(view, header, protocol >= kFrameFieldsProtocol, out);
+  tally.kinds[0] = 15 * runs;
+  tally.kinds[1] = runs;
+  tally.tables(view, header, protocol, out);
 }
 
 uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_points, uint32_t first_points, int bits) {

@@ -116,6 +116,45 @@ inline constexpr size_t kCodedClassesHeaderBytes = 4;
 void build_code_tables(const SpgView& view, const ViewCut& cut, const SpgHeader& header, uint32_t sample,
                        CodeTables* out, uint16_t protocol = kFrameFieldsProtocol);
 
+// One entry to encode. `kind` 0: a node, with its reference; 1: a split's
+// first child, with its parent as the reference (`reference_points` the
+// parent's points byte) — the next entry must be its sibling (kind 2, id + 1,
+// its reference unused).
+struct CodedEntry {
+  uint32_t id = 0;
+  uint8_t points = 0, kind = 0, reference_points = 0;
+  uint32_t reference_id = 0xFFFFFFFFu;
+  NodeFields fields, reference;
+};
+
+// Token counts of what a coder codes, and the tables fitted to them: a
+// server's from a sample of the model (build_code_tables), a whole file's
+// (format version 3, core/spg_coded.h) from every entry it codes. 62 KB.
+struct CodeTally {
+  enum Way { kPlain, kDelta, kFrame, kWays };  // a field as it is, against its base, against its own frame
+  RecordLayout layout;
+  uint32_t ids[kMaxTokens] = {}, parents[kMaxTokens] = {}, kinds[2] = {}, points[kMaxTokens] = {};
+  uint32_t fields[kWays][kFieldCount][4][kMaxTokens] = {};
+  uint64_t extra[kWays][kFieldCount] = {};  // raw bits each way costs
+  // Field `field` of `self` in `context`, every way it may go; `base` what a difference goes against.
+  void field(int field, int context, const NodeFields& self, uint32_t base);
+  // A split's children's fields against their parent, as they are coded.
+  void split(const NodeFields& parent, uint32_t parent_points, const NodeFields& first, uint32_t first_points,
+             const NodeFields& second);
+  // A unit as encode_coded_nodes codes it — a node, or a split's two
+  // entries — after the last id and the last split's parent before it in
+  // its batch (0xFFFFFFFF for none).
+  void unit(const CodedEntry* e, uint32_t previous_id, uint32_t previous_parent);
+  // Models of these counts, each field the cheapest way it may go (below
+  // protocol 6, never against its own frame), and the class models (a
+  // header of version 2 on). Every value stays codable in every model
+  // unless `unseen_at_floor`: a model nothing was counted in is then all
+  // but one slot a token its first (tables counted on every entry they
+  // will code, a file's, need no more).
+  void tables(const SpgView& view, const SpgHeader& header, uint16_t protocol, CodeTables* out,
+              bool unseen_at_floor = false) const;
+};
+
 // The decoding end of the coder over one stream: its final state (u32),
 // then its bytes.
 class RansReader {
@@ -222,17 +261,6 @@ constexpr uint32_t split_points(uint32_t parent, uint32_t first) {
 // the points bytes as counts; 2 p - c1 (equal counts) where they are
 // saturated or unknown. One division a split, no floating point.
 uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_points, uint32_t first_points, int bits);
-
-// One entry to encode. `kind` 0: a node, with its reference; 1: a split's
-// first child, with its parent as the reference (`reference_points` the
-// parent's points byte) — the next entry must be its sibling (kind 2, id + 1,
-// its reference unused).
-struct CodedEntry {
-  uint32_t id = 0;
-  uint8_t points = 0, kind = 0, reference_points = 0;
-  uint32_t reference_id = 0xFFFFFFFFu;
-  NodeFields fields, reference;
-};
 
 // Encodes entries[0 .. count) (ids ascending) into out[0 .. capacity);
 // returns the payload's length, 0 when it did not fit or a split is malformed.

@@ -69,6 +69,8 @@ const char* spg_error_text(SpgError e) {
     case SpgError::kBadRecord: return "node record has a class index beyond its table or nonzero padding";
     case SpgError::kBadChecksum: return "CRC-32 mismatch (file corrupted)";
     case SpgError::kTrailingBytes: return "unexpected bytes after the CRC-32";
+    case SpgError::kCodedRecords: return "version 3 (coded records) must be expanded before it is read";
+    case SpgError::kBadCoded: return "coded records do not decode (version 3)";
   }
   return "unknown error";
 }
@@ -157,7 +159,8 @@ namespace {
 
 // §1 fixed header and §2 class tables: the startup message. With
 // `whole_file`, the counts must also fit the bytes after the header.
-SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgView& view, Cursor& in, bool tables = true) {
+SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgView& view, Cursor& in, bool tables = true,
+                        bool coded = false) {
   SpgHeader& h = view.header;
 
   // §1 fixed header.
@@ -167,7 +170,10 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   if (size < kSpgFixedHeaderBytes) return truncated(size, kSpgFixedHeaderBytes);
   using namespace spg_offset;
   h.version = load_u16le(data + kVersion);
-  if (h.version < kSpgOldestVersion || h.version > kSpgVersion) return fail(SpgError::kBadVersion, kVersion);
+  if (h.version == kSpgCodedVersion && !coded)
+    return fail(whole_file ? SpgError::kCodedRecords : SpgError::kBadVersion, kVersion);
+  if (h.version < kSpgOldestVersion || h.version > (coded ? kSpgCodedVersion : kSpgVersion))
+    return fail(SpgError::kBadVersion, kVersion);
   const size_t header_bytes = spg_fixed_header_bytes(h.version);
   if (size < header_bytes) return truncated(size, header_bytes);
   h.flags = load_u16le(data + kFlags);
@@ -204,7 +210,10 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   h.view_hint.sensor_side = static_cast<SpgAxis>((hint >> 3) & 7u);
   // Every node needs a record and every leaf at least one LEB128 byte: bound
   // the counts by the file size before anything is sized from them.
-  const uint64_t min_body = static_cast<uint64_t>(h.node_count) * h.layout.record_bytes() + h.leaf_count + 4;
+  // (Version 3: a topology bit a node, the coded section's two counts.)
+  const uint64_t min_body = h.version == kSpgCodedVersion
+                                ? static_cast<uint64_t>(h.node_count) / 8 + h.leaf_count + 12
+                                : static_cast<uint64_t>(h.node_count) * h.layout.record_bytes() + h.leaf_count + 4;
   if (whole_file && min_body > size - header_bytes) return truncated(size, header_bytes + min_body);
   for (int i = 0; i < 6; ++i) {
     h.bbox_bits[i] = load_u32le(data + kBboxMin + 4 * i);
@@ -264,10 +273,12 @@ SpgResult spg_parse_header(const uint8_t* data, size_t size, SpgHeader* out, siz
   return r;
 }
 
-SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
+namespace {
+
+SpgResult parse_file(const uint8_t* data, size_t size, SpgView* out, SpgCodedParts* coded) {
   Cursor in{data, size, 0};
   SpgView view;
-  const SpgResult startup = parse_startup(data, size, true, view, in);
+  const SpgResult startup = parse_startup(data, size, true, view, in, true, coded != nullptr);
   if (!startup.ok()) return startup;
   const SpgHeader& h = view.header;
   const bool normals = h.has_normals(), color = h.has_color();
@@ -333,24 +344,58 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
   }
   view.leaf_counts_bytes = static_cast<size_t>(in.pos - static_cast<size_t>(view.leaf_counts - data));
 
-  // §5 records: class indices inside their tables, padding bits zero.
   view.record_bytes = static_cast<size_t>(h.layout.record_bytes());
-  const uint64_t records_size = static_cast<uint64_t>(h.node_count) * view.record_bytes;
-  if (in.remaining() < records_size) return truncated(size, uint64_t{in.pos} + records_size);
-  view.records = data + in.pos;
-  {
-    const int pad_bits = static_cast<int>(view.record_bytes * 8) - h.layout.total_bits();
-    for (uint32_t i = 0; i < h.node_count; ++i) {
-      const uint8_t* rec = view.records + static_cast<size_t>(i) * view.record_bytes;
-      const NodeFields f = unpack_record(h.layout, rec);
-      if (f[Field::kSigmaP] >= h.class_count[0] || (normals && f[Field::kSigmaN] >= h.class_count[1]) ||
-          (color && f[Field::kSigmaC] >= h.class_count[2]))
-        return fail(SpgError::kBadRecord, in.pos + static_cast<size_t>(i) * view.record_bytes);
-      if (pad_bits > 0 && (rec[view.record_bytes - 1] >> (8 - pad_bits)) != 0)
-        return fail(SpgError::kBadRecord, in.pos + static_cast<size_t>(i) * view.record_bytes);
+  if (h.version == kSpgCodedVersion) {
+    // §5, version 3: u32 the code tables' bytes, the tables, u32 the
+    // batches, each u32 its bytes (at least 8: a count and a state) and
+    // its payload. What they hold, spg_expand checks.
+    SpgCodedParts parts;
+    parts.records_offset = in.pos;
+    const auto length = [&](size_t* n) {
+      if (in.remaining() < 4) return truncated(size, uint64_t{in.pos} + 4);
+      *n = load_u32le(data + in.pos);
+      in.pos += 4;
+      return SpgResult{};
+    };
+    if (const SpgResult r = length(&parts.tables_bytes); !r.ok()) return r;
+    if (in.remaining() < parts.tables_bytes) return truncated(size, uint64_t{in.pos} + parts.tables_bytes);
+    parts.tables = data + in.pos;
+    in.pos += parts.tables_bytes;
+    const size_t batches_at = in.pos;
+    size_t batches = 0;
+    if (const SpgResult r = length(&batches); !r.ok()) return r;
+    if (batches == 0 || batches > h.node_count) return fail(SpgError::kBadCoded, batches_at);
+    for (size_t b = 0; b < batches; ++b) {
+      const size_t at = in.pos;
+      size_t bytes = 0;
+      if (const SpgResult r = length(&bytes); !r.ok()) return r;
+      if (bytes < 8) return fail(SpgError::kBadCoded, at);
+      if (in.remaining() < bytes) return truncated(size, uint64_t{in.pos} + bytes);
+      in.pos += bytes;
     }
+    parts.batches = data + batches_at;
+    parts.batches_bytes = in.pos - batches_at;
+    parts.batch_count = static_cast<uint32_t>(batches);
+    *coded = parts;
+  } else {
+    // §5 records: class indices inside their tables, padding bits zero.
+    const uint64_t records_size = static_cast<uint64_t>(h.node_count) * view.record_bytes;
+    if (in.remaining() < records_size) return truncated(size, uint64_t{in.pos} + records_size);
+    view.records = data + in.pos;
+    {
+      const int pad_bits = static_cast<int>(view.record_bytes * 8) - h.layout.total_bits();
+      for (uint32_t i = 0; i < h.node_count; ++i) {
+        const uint8_t* rec = view.records + static_cast<size_t>(i) * view.record_bytes;
+        const NodeFields f = unpack_record(h.layout, rec);
+        if (f[Field::kSigmaP] >= h.class_count[0] || (normals && f[Field::kSigmaN] >= h.class_count[1]) ||
+            (color && f[Field::kSigmaC] >= h.class_count[2]))
+          return fail(SpgError::kBadRecord, in.pos + static_cast<size_t>(i) * view.record_bytes);
+        if (pad_bits > 0 && (rec[view.record_bytes - 1] >> (8 - pad_bits)) != 0)
+          return fail(SpgError::kBadRecord, in.pos + static_cast<size_t>(i) * view.record_bytes);
+      }
+    }
+    in.pos += static_cast<size_t>(records_size);
   }
-  in.pos += static_cast<size_t>(records_size);
 
   // §6 CRC-32 of everything before it, then end of file.
   if (in.remaining() < 4) return truncated(size, uint64_t{in.pos} + 4);
@@ -359,6 +404,21 @@ SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) {
 
   *out = view;
   return SpgResult{};
+}
+
+}  // namespace
+
+SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out) { return parse_file(data, size, out, nullptr); }
+
+SpgResult spg_parse_coded(const uint8_t* data, size_t size, SpgView* out, SpgCodedParts* parts) {
+  SpgView view;
+  SpgCodedParts coded;
+  const SpgResult r = parse_file(data, size, &view, &coded);
+  if (!r.ok()) return r;
+  if (view.header.version != kSpgCodedVersion) return fail(SpgError::kBadVersion, spg_offset::kVersion);
+  *out = view;
+  *parts = coded;
+  return r;
 }
 
 }  // namespace stipple

@@ -26,6 +26,12 @@ inline constexpr uint8_t kSpgMagic[4] = {'S', 'T', 'P', 'G'};
 // 1e7 from the origin keep their millimetres in the float32 box).
 inline constexpr uint16_t kSpgVersion = 2;
 inline constexpr uint16_t kSpgOldestVersion = 1;
+// Version 3 is version 2 with the records entropy-coded, each child
+// against its parent (docs/format.md §5, "Coded records"): a file to store
+// and carry, read by expanding it into the version 2 image it stands for
+// (core/spg_coded.h). spg_parse refuses it (kCodedRecords); no stream
+// carries it.
+inline constexpr uint16_t kSpgCodedVersion = 3;
 inline constexpr size_t kSpgFixedHeaderBytes = 76;    // version 1's fixed header, the start of every version's
 inline constexpr size_t kSpgOriginBytes = 24;         // version 2: 3 x float64 after it
 inline size_t spg_fixed_header_bytes(uint16_t version) {
@@ -131,6 +137,8 @@ enum class SpgError : uint8_t {
   kBadRecord,          // a record's class index is beyond its class table
   kBadChecksum,        // CRC-32 mismatch
   kTrailingBytes,      // bytes after the CRC-32
+  kCodedRecords,       // a version 3 file (coded records) where its expansion is wanted (spg_expand)
+  kBadCoded,           // version 3: coded records whose framing, tables or batches do not decode
 };
 
 // A short, static, English description of an error code (no allocation).
@@ -189,6 +197,21 @@ struct SpgResult {
 // Validates `data[0 .. size)` as a complete `.spg` file and fills `out`.
 // Checks every rule of docs/format.md, including the class index of every record.
 [[nodiscard]] SpgResult spg_parse(const uint8_t* data, size_t size, SpgView* out);
+
+// A version 3 file's coded records (docs/format.md §5): the code tables
+// and the batches, each u32-length-prefixed in the file.
+struct SpgCodedParts {
+  const uint8_t* tables = nullptr;
+  size_t tables_bytes = 0;
+  const uint8_t* batches = nullptr;  // u32 count, then each batch: u32 bytes, payload
+  size_t batches_bytes = 0;
+  uint32_t batch_count = 0;
+  size_t records_offset = 0;  // where the coded section, and a version 2 image's records, begin
+};
+// Validates a version 3 file as spg_parse validates every other version —
+// all but the records, which only their decoding checks (spg_expand) — and
+// finds its coded parts. `out->records` is null.
+[[nodiscard]] SpgResult spg_parse_coded(const uint8_t* data, size_t size, SpgView* out, SpgCodedParts* parts);
 
 // Validates only the startup message — the fixed header and class tables
 // that begin a `.spg` file (docs/format.md §1-§2) — from `data[0 .. size)`.

@@ -1,7 +1,8 @@
 // Fuzz harness: core's .spg validator, then the host reference decoder on
 // whatever it accepts, and the handheld client on the same bytes: the
 // input's startup message, then the bytes after it cut into records for
-// put_node (accepted or refused), then one frame. Must never crash, overrun
+// put_node (accepted or refused), then one frame; a version 3 file expanded
+// and decoded. Must never crash, overrun
 // or hang. Each input is
 // checked as it is and again with its last four bytes replaced by the right
 // CRC-32, so mutations reach the structural checks behind the checksum.
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/spg_coded.h"
 #include "core/spg_format.h"
 #include "raster/client.h"
 #include "tools/reference/spg_model.h"
@@ -61,6 +63,22 @@ void check(const uint8_t* data, size_t size) {
     if (!stipple::decode_spg("fuzz.spg", data, size, model, error)) __builtin_trap();  // parse and decode must agree
   } else if (r.offset > size) {
     __builtin_trap();  // an error offset is always inside (or at the end of) the input
+  } else if (r.error == stipple::SpgError::kCodedRecords) {
+    // Version 3: expanded, the image is a model its readers take whole.
+    stipple::SpgCodedParts parts;
+    const stipple::SpgResult c = stipple::spg_parse_coded(data, size, &view, &parts);
+    if (!c.ok() && c.offset > size) __builtin_trap();
+    if (c.ok()) {
+      std::vector<uint8_t> image(stipple::spg_expanded_bytes(view, parts)), points(view.header.node_count);
+      const stipple::SpgResult e = stipple::spg_expand(data, view, parts, image.data(), points.data());
+      if (e.ok()) {
+        stipple::DecodedModel model;
+        std::string error;
+        if (!stipple::decode_spg("fuzz.spg", image.data(), image.size(), model, error)) __builtin_trap();
+      } else if (e.error == stipple::SpgError::kBadCoded && e.offset > size) {
+        __builtin_trap();
+      }
+    }
   }
   check_client(data, size);
 }

@@ -181,7 +181,8 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
   const Case cases[] = {
       {0, {'S', 'T', 'P', 'X'}, SpgError::kBadMagic},
       {4, {0, 0}, SpgError::kBadVersion},
-      {4, {3, 0}, SpgError::kBadVersion},
+      {4, {3, 0}, SpgError::kCodedRecords},  // version 3: expanded first (core/spg_coded.h)
+      {4, {4, 0}, SpgError::kBadVersion},
       {6, {4, 0}, SpgError::kBadFlags},
       {8, {3}, SpgError::kBadArity},
       {9, {17}, SpgError::kBadLayout},

@@ -56,6 +56,7 @@ int cmd_encode(int argc, char** argv);
 int cmd_encode_part(int argc, char** argv);
 int cmd_demo(int argc, char** argv);
 int cmd_info(int argc, char** argv);
+int cmd_convert(int argc, char** argv);
 int cmd_sample(int argc, char** argv);
 int cmd_metrics(int argc, char** argv);
 int cmd_levels(int argc, char** argv);

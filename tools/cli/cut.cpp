@@ -99,7 +99,7 @@ int cmd_cut(int argc, char** argv) {
   if (!args.unknown_option().empty()) return cli::fail("cut: " + args.unknown_option_message());
   if (files.size() != 1) return cli::fail("cut: expected one .spg file (see stipple cut --help)");
   std::vector<uint8_t> file;
-  if (!read_file(files[0], file, error)) return cli::fail(error);
+  if (!read_spg_file(files[0], file, error)) return cli::fail(error);
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
   if (!r.ok()) return cli::fail(spg_error_message(files[0], r, file.data(), file.size()));

@@ -111,9 +111,10 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
   if (args.value("--up", v) && !spg_parse_axis(v.c_str(), &o.orient.up))
     return error = "--up: expected +x, -x, +y, -y, +z or -z, got '" + v + "'", false;
   if (args.value("--format-version", v)) {
-    if (!cli::parse_uint(v, kSpgVersion, u) || u < kSpgOldestVersion)
-      return error = "--format-version: expected 1 or 2, got '" + v + "'", false;
-    o.format_version = static_cast<int>(u);
+    if (!cli::parse_uint(v, kSpgCodedVersion, u) || u < kSpgOldestVersion)
+      return error = "--format-version: expected 1, 2 or 3, got '" + v + "'", false;
+    o.coded_file = u == kSpgCodedVersion;
+    o.format_version = o.coded_file ? kSpgVersion : static_cast<int>(u);
   }
   if (args.flag("--no-shrink")) o.tree.stats.shrink_eta0 = 1.0;
   o.tree.octree = args.flag("--octree");
@@ -208,6 +209,8 @@ std::string summary_json(const std::string& scan, const EncodeReport& r, double 
       .num("hierarchy_seconds", r.seconds.hierarchy)
       .num("classes_seconds", r.seconds.classes)
       .num("write_seconds", r.seconds.write)
+      .integer("expanded_bytes", static_cast<long long>(r.expanded_bytes ? r.expanded_bytes : r.bytes))
+      .num("coding_seconds", r.seconds.coding)
       .str("cut_table", r.cut_table)
       .integer("cut_table_bytes", static_cast<long long>(r.cut_table_bytes))
       .num("cut_table_seconds", r.seconds.cut_table);
@@ -224,6 +227,10 @@ void print_summary(const std::string& scan, const EncodeReport& r, double second
               r.normals_source == "k-NN" ? (std::string(", facing ") + orient_mode_name(r.frame.orient)).c_str() : "",
               spg_axis_name(r.frame.hint.up), spg_axis_name(r.frame.hint.sensor_side));
   if (r.partitions > 1) std::printf("  in %u partitions (tools/encoder/partition.h)\n", r.partitions);
+  if (r.expanded_bytes > 0)
+    std::printf("  version 3: records coded, %s bytes as version 2 (-%.1f %%), %.2f s\n",
+                cli::with_commas(r.expanded_bytes).c_str(),
+                100.0 * (1.0 - static_cast<double>(r.bytes) / static_cast<double>(r.expanded_bytes)), r.seconds.coding);
   if (!r.cut_table.empty())
     std::printf("  cut table %s, %s bytes, %.2f s\n", r.cut_table.c_str(), cli::with_commas(r.cut_table_bytes).c_str(),
                 r.seconds.cut_table);

@@ -3,9 +3,11 @@
 #include <string>
 #include <vector>
 
+#include "core/spg_coded.h"
 #include "platform/file_io.h"
 #include "tools/embedded/embedded.h"
 #include "tools/cli/cli.h"
+#include "tools/embedded/model_file.h"
 #include "tools/encoder/hierarchy.h"
 #include "tools/encoder/orientation.h"
 #include "tools/reference/spg_model.h"
@@ -54,6 +56,17 @@ int cmd_info(int argc, char** argv) {
   std::vector<uint8_t> file;
   std::string error;
   if (!read_file(files[0], file, error)) return cli::fail(error);
+  // A version 3 file is read expanded; its own size and coded section are what it costs.
+  const bool coded = spg_is_coded(file.data(), file.size());
+  const size_t file_bytes = file.size();
+  size_t coded_bytes = 0;
+  if (coded) {
+    SpgView v;
+    SpgCodedParts parts;
+    if (spg_parse_coded(file.data(), file.size(), &v, &parts).ok())
+      coded_bytes = 4 + parts.tables_bytes + parts.batches_bytes;
+    if (!expand_coded_spg(file, files[0], error)) return cli::fail(error);
+  }
   SpgView view;
   const SpgResult parsed = spg_parse(file.data(), file.size(), &view);
   if (!parsed.ok())
@@ -76,7 +89,7 @@ int cmd_info(int argc, char** argv) {
     next_child += children;
   }
   const PartitionRatios ratios = acc.result();
-  const double bpp = 8.0 * static_cast<double>(file.size()) / h.point_count;
+  const double bpp = 8.0 * static_cast<double>(file_bytes) / h.point_count;
   // Leaves whose mean normal faces the point or the axis: decoded one at a time.
   double facing = -1;
   if ((facing_point || facing_up) && h.has_normals()) {
@@ -98,7 +111,7 @@ int cmd_info(int argc, char** argv) {
   if (json) {
     cli::Json j;
     j.str("file", files[0])
-        .integer("version", h.version)
+        .integer("version", coded ? kSpgCodedVersion : h.version)
         .str("tree", h.tree_arity == 2 ? "binary" : "octree")
         .boolean("normals", h.has_normals())
         .boolean("colors", h.has_color())
@@ -107,8 +120,9 @@ int cmd_info(int argc, char** argv) {
         .integer("leaves", h.leaf_count)
         .integer("depth", h.depth)
         .integer("record_bytes", h.layout.record_bytes())
-        .integer("bytes", static_cast<long long>(file.size()))
+        .integer("bytes", static_cast<long long>(file_bytes))
         .integer("records_total_bytes", static_cast<long long>(record_total))
+        .integer("records_coded_bytes", static_cast<long long>(coded ? coded_bytes : record_total))
         .num("bits_per_point", bpp)
         .integer("classes_p", h.class_count[0])
         .integer("classes_n", h.class_count[1])
@@ -124,7 +138,8 @@ int cmd_info(int argc, char** argv) {
     std::printf("%s\n", j.done().c_str());
     return 0;
   }
-  std::printf("%s: stipple .spg version %u, %s tree, %s%s\n", files[0].c_str(), h.version,
+  std::printf("%s: stipple .spg version %u%s, %s tree, %s%s\n", files[0].c_str(), coded ? kSpgCodedVersion : h.version,
+              coded ? " (coded records)" : "",
               h.tree_arity == 2 ? "binary 2-means" : "octree", h.has_normals() ? "normals" : "no normals",
               h.has_color() ? ", colour" : ", no colour");
   std::printf("  points       %s (original)\n", cli::with_commas(h.point_count).c_str());
@@ -132,7 +147,10 @@ int cmd_info(int argc, char** argv) {
               cli::with_commas(h.leaf_count).c_str(), h.depth);
   std::printf("  records      %d bytes each, %s bytes in all\n", h.layout.record_bytes(),
               cli::with_commas(record_total).c_str());
-  std::printf("  file         %s bytes, %.2f bits per original point\n", cli::with_commas(file.size()).c_str(), bpp);
+  if (coded)
+    std::printf("               coded in %s bytes, %.2f bytes a node (tables included)\n", cli::with_commas(coded_bytes).c_str(),
+                static_cast<double>(coded_bytes) / h.node_count);
+  std::printf("  file         %s bytes, %.2f bits per original point\n", cli::with_commas(file_bytes).c_str(), bpp);
   std::printf("  classes      sigma_p %u, sigma_n %u, sigma_c %u (tables %s bytes, %s)\n", h.class_count[0],
               h.class_count[1], h.class_count[2],
               cli::with_commas(spg_startup_bytes(h.version, h.class_count) - spg_fixed_header_bytes(h.version)).c_str(),

@@ -21,6 +21,7 @@
 #include "platform/file_io.h"
 #include "platform/tcp/tcp_transport.h"
 #include "tools/cli/cli.h"
+#include "tools/embedded/model_file.h"
 #include "tools/embedded/render_options.h"
 
 namespace stipple {
@@ -102,7 +103,7 @@ int cmd_load(int argc, char** argv) {
   uint16_t port = 0;
   if (!parse_host_port(files[0], "127.0.0.1", host, port, error)) return cli::fail("load: " + error);
   std::vector<uint8_t> file;
-  if (!read_file(files[1], file, error)) return cli::fail("load: " + error);
+  if (!read_spg_file(files[1], file, error)) return cli::fail("load: " + error);
   SpgView view;
   const SpgResult parsed = spg_parse(file.data(), file.size(), &view);
   if (!parsed.ok()) return cli::fail("load: " + spg_error_message(files[1], parsed, file.data(), file.size()));

@@ -25,6 +25,7 @@ const Command kCommands[] = {
     {"encode", "scan (PLY, PCD, LAS or x y z text) -> .spg", stipple::cmd_encode},
     {"encode-part", "one job of an encode --plan-only plan (for a cluster)", stipple::cmd_encode_part},
     {"info", "describe a .spg file", stipple::cmd_info},
+    {"convert", "write a .spg as version 2 (records plain) or 3 (records coded)", stipple::cmd_convert},
     {"sample", "generate points from a .spg cut (reference decoder) -> .ply", stipple::cmd_sample},
     {"metrics", "nearest-neighbour error and PSNR between two point sets", stipple::cmd_metrics},
     {"levels", "bits per point and PSNR of each tree level's cut (the trade)", stipple::cmd_levels},

@@ -21,6 +21,7 @@
 #include "platform/png_io.h"
 #include "platform/progress.h"
 #include "tools/cli/cli.h"
+#include "tools/embedded/model_file.h"
 #include "tools/embedded/render_options.h"
 #include "tools/encoder/encoder.h"
 #include "tools/reference/image_metrics.h"
@@ -183,7 +184,7 @@ int cmd_trade(int argc, char** argv) {
   if (files.size() != 1) return cli::fail("trade: expected one .spg file (see stipple trade --help)");
   if (output.empty()) return cli::fail("trade: -o DIR is required");
   std::vector<uint8_t> file;
-  if (!read_file(files[0], file, error)) return cli::fail(error);
+  if (!read_spg_file(files[0], file, error)) return cli::fail(error);
   SpgView view;
   const SpgResult r = spg_parse(file.data(), file.size(), &view);
   if (!r.ok()) return cli::fail(spg_error_message(files[0], r, file.data(), file.size()));

@@ -3,10 +3,39 @@
 
 #include <sys/stat.h>
 
+#include <cstring>
+
 #include "core/cut_table.h"
+#include "core/spg_coded.h"
 #include "tools/embedded/embedded.h"
 
 namespace stipple {
+
+bool spg_is_coded(const uint8_t* data, size_t size) {
+  return size >= spg_offset::kVersion + 2 && std::memcmp(data, kSpgMagic, 4) == 0 &&
+         load_u16le(data + spg_offset::kVersion) == kSpgCodedVersion;
+}
+
+bool expand_coded_spg(std::vector<uint8_t>& file, const std::string& name, std::string& error) {
+  if (!spg_is_coded(file.data(), file.size())) return true;
+  SpgView view;
+  SpgCodedParts parts;
+  if (const SpgResult r = spg_parse_coded(file.data(), file.size(), &view, &parts); !r.ok())
+    return error = spg_error_message(name, r, file.data(), file.size()), false;
+  std::vector<uint8_t> image(spg_expanded_bytes(view, parts)), points(view.header.node_count);
+  if (const SpgResult r = spg_expand(file.data(), view, parts, image.data(), points.data()); !r.ok()) {
+    if (r.error == SpgError::kBadCoded) return error = spg_error_message(name, r, file.size()), false;
+    return error = name + ": its records, decoded (version 3), do not form a model: " +
+                   spg_error_message("byte", r, image.size()) + " of the expanded file",
+           false;
+  }
+  file.swap(image);
+  return true;
+}
+
+bool read_spg_file(const std::string& path, std::vector<uint8_t>& out, std::string& error) {
+  return read_file(path, out, error) && expand_coded_spg(out, path, error);
+}
 
 std::string cut_table_path(const std::string& model_path) { return model_path + ".cut"; }
 
@@ -16,6 +45,13 @@ bool ModelFile::open(const std::string& path, const ConeRule& cones, std::string
   if (!mapped_.open(path, error)) return false;
   data_ = mapped_.data();
   size_ = mapped_.size();
+  if (spg_is_coded(data_, size_)) {  // version 3: expanded once, held in memory
+    owned_.assign(data_, data_ + size_);
+    mapped_.close();
+    if (!expand_coded_spg(owned_, path, error)) return false;
+    data_ = owned_.data();
+    size_ = owned_.size();
+  }
   if (!validate(error)) return false;
   const std::string table_path = cut_table_path(path);
   struct stat st {};
@@ -42,6 +78,7 @@ bool ModelFile::open(const std::string& path, const ConeRule& cones, std::string
 
 bool ModelFile::adopt(std::vector<uint8_t> file, const std::string& name, const ConeRule& cones, std::string& error) {
   owned_ = std::move(file);
+  if (!expand_coded_spg(owned_, name, error)) return false;
   name_ = name;
   cones_ = cones;
   data_ = owned_.data();

@@ -20,6 +20,16 @@
 
 namespace stipple {
 
+// Whether data[0 .. size) begins as a version 3 .spg (coded records,
+// docs/format.md §5), which every reader expands before it reads.
+bool spg_is_coded(const uint8_t* data, size_t size);
+// A version 3 file in `file` replaced by the version 2 image it expands to
+// (core/spg_coded.h); anything else left as it is, for its reader to judge.
+// The error names the file as spg_error_message does.
+bool expand_coded_spg(std::vector<uint8_t>& file, const std::string& name, std::string& error);
+// read_file, then expand_coded_spg: a .spg of any version as its readers take it.
+bool read_spg_file(const std::string& path, std::vector<uint8_t>& out, std::string& error);
+
 // Where a model's cut table is: beside it, MODEL.spg.cut.
 std::string cut_table_path(const std::string& model_path);
 
@@ -30,7 +40,8 @@ class ModelFile {
   ModelFile& operator=(const ModelFile&) = delete;
 
   // Maps `path` read-only (its pages are the page cache's: processes
-  // reading one file share them) and validates it whole; maps its cut table
+  // reading one file share them) — a version 3 file is expanded into memory
+  // instead — and validates it whole; maps its cut table
   // when that is the model's and made for `cones`, else builds the bounds
   // (nothing is written: `stipple encode` and `stipple cut-table` write tables).
   bool open(const std::string& path, const ConeRule& cones, std::string& error);

@@ -1,4 +1,5 @@
 // stipple host — encoder pipeline; the file is written by core/spg_writer (docs/format.md).
+#include "tools/embedded/model_file.h"
 #include "tools/encoder/encoder.h"
 
 #include <unistd.h>
@@ -374,7 +375,8 @@ bool encode_scan_file(const std::string& scan, const ScanOptions& scan_options, 
 
 bool read_model(const std::string& path, std::vector<uint8_t>& spg, std::string& error) {
   if (!read_file(path, spg, error)) return false;
-  if (spg.size() >= 4 && std::memcmp(spg.data(), kSpgMagic, 4) == 0) return true;  // a .spg: validated by its reader
+  if (spg.size() >= 4 && std::memcmp(spg.data(), kSpgMagic, 4) == 0)  // a .spg: validated by its reader
+    return expand_coded_spg(spg, path, error);
   std::vector<uint8_t> bytes;
   bytes.swap(spg);
   PointCloud cloud;

@@ -35,6 +35,9 @@ struct EncodeOptions {
   // The .spg version written: kSpgVersion (16-bit class tables) or 1
   // (float32 tables, for readers that predate version 2).
   int format_version = kSpgVersion;
+  // stipple encode --format-version 3: the version 2 file written, then its
+  // records coded (tools/encoder/coded_file.h; format_version stays 2).
+  bool coded_file = false;
   OrientOptions orient;  // how estimated normals face; also gives the file's view hint (tools/encoder/orientation.h)
   // The encoder may take the scan's positions and normals for the hierarchy
   // instead of copying them (48 bytes a point less at the peak); the cloud
@@ -73,6 +76,7 @@ struct EncodeReport {
   ScanFrame frame;  // what analyse_scan decided: normal orientation, view hint
   uint32_t partitions = 1;  // jobs the scan was encoded in (tools/encoder/partition.h)
   uint64_t duplicates = 0;  // repeated positions the jobs counted (a scan read in chunks)
+  uint64_t expanded_bytes = 0;  // --format-version 3: the version 2 file's bytes (`bytes` the coded file's)
   std::string cut_table;    // the cut table written beside the model (stipple encode; empty: none)
   uint64_t cut_table_bytes = 0;
   // Wall seconds of each stage: the scan's reading (the caller's), its
@@ -80,7 +84,7 @@ struct EncodeReport {
   // The plan's pass (a scan read in chunks: its first reading), the
   // partitions' (routing, or loading one partition), then the jobs.
   struct Stages {
-    double read = 0, plan = 0, route = 0, normals = 0, hierarchy = 0, classes = 0, write = 0, cut_table = 0;
+    double read = 0, plan = 0, route = 0, normals = 0, hierarchy = 0, classes = 0, write = 0, coding = 0, cut_table = 0;
   } seconds;
 };
 

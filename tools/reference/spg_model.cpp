@@ -1,4 +1,5 @@
 // stipple host — reference `.spg` decoder. See spg_model.h.
+#include "tools/embedded/model_file.h"
 #include "tools/reference/spg_model.h"
 
 #include <algorithm>
@@ -141,7 +142,7 @@ std::vector<uint32_t> spg_point_counts(const SpgView& view) {
 
 bool load_spg(const std::string& path, DecodedModel& model, std::string& error) {
   std::vector<uint8_t> bytes;
-  if (!read_file(path, bytes, error)) return false;
+  if (!read_spg_file(path, bytes, error)) return false;
   return decode_spg(path, bytes.data(), bytes.size(), model, error);
 }
 

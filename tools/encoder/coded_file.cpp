@@ -1,0 +1,154 @@
+// stipple host — writing `.spg` version 3. See coded_file.h.
+#include "tools/encoder/coded_file.h"
+
+#include <algorithm>
+#include <memory>
+
+#include "core/node_coding.h"
+#include "core/protocol.h"
+#include "core/spg_coded.h"
+#include "core/spg_format.h"
+#include "core/spg_writer.h"
+
+namespace stipple {
+namespace {
+
+// Calls f(unit, size) for the units of the file's one coded sequence, in id
+// order: the root as a node, then each node with two children as a split
+// of them (binary trees: every other node), or — octrees — every node after
+// the root as a node against the one before it.
+template <typename F>
+void for_each_unit(const SpgView& view, const uint8_t* points, F&& f) {
+  const SpgHeader& h = view.header;
+  const auto fields = [&](uint32_t id) { return unpack_record(h.layout, view.records + size_t{id} * view.record_bytes); };
+  CodedEntry unit[2];
+  unit[0] = CodedEntry{};
+  unit[0].fields = fields(0);
+  unit[0].points = points[0];
+  f(unit, 1u);
+  if (h.tree_arity != 2) {
+    for (uint32_t id = 1; id < h.node_count; ++id) {
+      unit[0] = CodedEntry{};
+      unit[0].id = id;
+      unit[0].points = points[id];
+      unit[0].fields = fields(id);
+      unit[0].reference_id = id - 1;
+      unit[0].reference = fields(id - 1);
+      f(unit, 1u);
+    }
+    return;
+  }
+  uint32_t child = 1;
+  for (uint32_t id = 0; id < h.node_count; ++id) {
+    if (spg_child_count(view, id) != 2) continue;
+    unit[0] = CodedEntry{};
+    unit[0].id = child;
+    unit[0].kind = 1;
+    unit[0].points = points[child];
+    unit[0].fields = fields(child);
+    unit[0].reference_id = id;
+    unit[0].reference_points = points[id];
+    unit[0].reference = fields(id);
+    unit[1] = CodedEntry{};
+    unit[1].id = child + 1;
+    unit[1].kind = 2;
+    unit[1].points = points[child + 1];
+    unit[1].fields = fields(child + 1);
+    f(unit, 2u);
+    child += 2;
+  }
+}
+
+}  // namespace
+
+bool write_coded_spg(const uint8_t* data, size_t size, std::vector<uint8_t>& out, CodedFileReport& report,
+                     std::string& error, const std::function<void(double)>& progress) {
+  SpgView view;
+  if (const SpgResult r = spg_parse(data, size, &view); !r.ok())
+    return error = std::string("version 3: the file to code is not a valid .spg (") + spg_error_text(r.error) + ")", false;
+  const SpgHeader& h = view.header;
+  if (h.version != kSpgVersion)
+    return error = "version 3: codes version " + std::to_string(kSpgVersion) + " files (this is version " +
+                   std::to_string(h.version) + ")",
+           false;
+  const uint32_t n = h.node_count;
+  std::vector<uint8_t> points(n);
+  spg_node_points(view, points.data(), 1);
+
+  // The tables, from every unit as its batch will code it.
+  auto tally = std::make_unique<CodeTally>();
+  tally->layout = h.layout;
+  {
+    uint32_t in_batch = 0, previous_id = 0xFFFFFFFFu, previous_parent = 0xFFFFFFFFu;
+    for_each_unit(view, points.data(), [&](const CodedEntry* unit, uint32_t k) {
+      if (in_batch + k > kSpgCodedBatchNodes) in_batch = 0, previous_id = previous_parent = 0xFFFFFFFFu;
+      tally->unit(unit, previous_id, previous_parent);
+      in_batch += k;
+      previous_id = unit[k - 1].id;
+      if (unit[0].kind == 1) previous_parent = unit[0].reference_id;
+    });
+  }
+  CodeTables tables;
+  tally->tables(view, spg_coded_table_header(h), kProtocolVersion, &tables, true);
+  tally.reset();
+  std::vector<uint8_t> table_bytes(64 * 1024);
+  table_bytes.resize(write_code_tables(tables, table_bytes.data(), table_bytes.size()));
+  if (table_bytes.empty()) return error = "version 3: the code tables did not fit", false;
+
+  // The file: version 2's sections before the records, then the coded ones.
+  const size_t records_offset = static_cast<size_t>(view.records - data);
+  out.assign(data, data + records_offset);
+  store_u16le(out.data() + spg_offset::kVersion, kSpgCodedVersion);
+  const auto put_u32 = [&](uint32_t v) {
+    uint8_t b[4];
+    store_u32le(b, v);
+    out.insert(out.end(), b, b + 4);
+  };
+  put_u32(static_cast<uint32_t>(table_bytes.size()));
+  out.insert(out.end(), table_bytes.begin(), table_bytes.end());
+  const size_t count_at = out.size();
+  put_u32(0);
+  std::vector<CodedEntry> batch;
+  std::vector<uint8_t> coded;
+  uint32_t batches = 0, done = 0;
+  const auto flush = [&]() {
+    if (batch.empty()) return true;
+    coded.resize(batch.size() * (view.record_bytes * 2 + 16) + 64);
+    const size_t bytes = encode_coded_nodes(tables, batch.data(), static_cast<uint32_t>(batch.size()), coded.data(), coded.size());
+    if (bytes == 0) return false;
+    put_u32(static_cast<uint32_t>(bytes));
+    out.insert(out.end(), coded.begin(), coded.begin() + static_cast<std::ptrdiff_t>(bytes));
+    ++batches;
+    done += static_cast<uint32_t>(batch.size());
+    batch.clear();
+    if (progress) progress(static_cast<double>(done) / n);
+    return true;
+  };
+  bool ok = true;
+  for_each_unit(view, points.data(), [&](const CodedEntry* unit, uint32_t k) {
+    if (batch.size() + k > kSpgCodedBatchNodes) ok = ok && flush();
+    batch.insert(batch.end(), unit, unit + k);
+  });
+  if (!ok || !flush()) return error = "version 3: a batch could not be coded", false;
+  store_u32le(out.data() + count_at, batches);
+  put_u32(crc32(out.data(), out.size()));
+
+  // Read back as every reader will: the very bytes it was given.
+  SpgView coded_view;
+  SpgCodedParts parts;
+  if (const SpgResult r = spg_parse_coded(out.data(), out.size(), &coded_view, &parts); !r.ok())
+    return error = std::string("version 3: wrote a file the reader refuses (") + spg_error_text(r.error) + ")", false;
+  std::vector<uint8_t> image(spg_expanded_bytes(coded_view, parts)), scratch(n);
+  if (const SpgResult r = spg_expand(out.data(), coded_view, parts, image.data(), scratch.data()); !r.ok())
+    return error = std::string("version 3: wrote records that do not decode (") + spg_error_text(r.error) + ")", false;
+  if (image.size() != size || !std::equal(image.begin(), image.end(), data))
+    return error = "version 3: the coded file does not expand to the file it was made from", false;
+  report.records_bytes = size_t{n} * view.record_bytes;
+  report.tables_bytes = table_bytes.size();
+  report.coded_bytes = out.size() - 4 - records_offset;
+  report.file_bytes = out.size();
+  report.batches = batches;
+  return true;
+}
+
+}  // namespace stipple
