@@ -513,6 +513,29 @@ size_t close_stream(uint32_t x, const uint8_t* p, const uint8_t* end, uint8_t* s
 
 }  // namespace
 
+void coded_mean_cost_q8(const CodeTables& t, const CodedEntry* e, uint32_t cost[2]) {
+  const auto bits = [&](int model, uint32_t v) {
+    const CodeModel& m = t.model[model];
+    const Hybrid h = hybrid(v);
+    const uint32_t freq = uint32_t{m.cum[h.token + 1]} - m.cum[h.token];
+    return static_cast<uint32_t>(256u * kCodeProbabilityBits - log2_q8(freq) + 256u * static_cast<uint32_t>(h.extra_bits));
+  };
+  cost[0] = cost[1] = 0;
+  for (int f = 0; f <= static_cast<int>(Field::kPosZ); ++f) {
+    if (e[0].kind == 0) {
+      const uint32_t r = e[0].reference_id;
+      const int context = r + 1u == e[0].id || r == e[0].id + 1u ? kAdjacentContext : kFarContext;
+      cost[0] += bits(field_model(f, context), field_value(t, f, e[0].fields, e[0].reference.v[f]));
+      continue;
+    }
+    const NodeFields& parent = e[0].reference;
+    cost[0] += bits(field_model(f, kChildContext), field_value(t, f, e[0].fields, parent.v[f]));
+    const uint32_t guess =
+        split_prediction(parent.v[f], e[0].fields.v[f], e[0].reference_points, e[0].points, t.layout.bits[f]);
+    cost[1] += bits(field_model(f, kSplitContext), field_value(t, f, e[1].fields, guess));
+  }
+}
+
 size_t encode_coded_nodes(const CodeTables& t, const CodedEntry* entries, uint32_t count, uint8_t* out, size_t capacity) {
   if (capacity < 8) return 0;
   uint8_t* const floor = out + 8;

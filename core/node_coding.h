@@ -266,6 +266,12 @@ uint32_t split_prediction(uint32_t parent, uint32_t first, uint32_t parent_point
 // returns the payload's length, 0 when it did not fit or a split is malformed.
 size_t encode_coded_nodes(const CodeTables& t, const CodedEntry* entries, uint32_t count, uint8_t* out, size_t capacity);
 
+// What the mean (the position fields) of each node of a unit costs as
+// encode_coded_nodes codes it, in 1/256 bits (within 0.09 bits a value):
+// cost[0] the unit's first node's, cost[1] a split's second's. Host side: a
+// file's report (tools/encoder/coded_file.h).
+void coded_mean_cost_q8(const CodeTables& t, const CodedEntry* unit, uint32_t cost[2]);
+
 // Walks a coded batch: next() gives an entry's kind and ids; then, with its
 // reference's fields (a node's reference, or a split's parent, which the
 // caller looks up), node() or split() decodes the rest. Every value is

@@ -18,6 +18,7 @@
 #include "core/divide.h"
 #include "core/gaussian_table.h"
 #include "core/node_decoder.h"
+#include "core/spg_coded.h"
 #include "core/spg_format.h"
 #include "platform/file_io.h"
 #include "core/cut.h"
@@ -36,6 +37,7 @@
 #include <lzf.h>
 
 #include "tools/encoder/classify.h"
+#include "tools/encoder/coded_file.h"
 #include "tools/encoder/encoder.h"
 #include "tools/scan/kdtree.h"
 #include "tools/encoder/normals.h"
@@ -129,6 +131,8 @@ const std::vector<uint8_t>& encoded_scan() {
   return spg;
 }
 
+uint32_t spg_node_count(const std::vector<uint8_t>& spg) { return load_u32le(spg.data() + spg_offset::kNodeCount); }
+
 // A validated view of `encoded_scan()`.
 SpgView parsed_scan() {
   const std::vector<uint8_t>& spg = encoded_scan();
@@ -148,6 +152,42 @@ void BM_SpgParse(benchmark::State& state) {
   state.counters["nodes"] = view.header.node_count;
 }
 BENCHMARK(BM_SpgParse)->Unit(benchmark::kMillisecond);
+
+// Format version 3 (docs/format.md §5, "Coded records"): the scan's file
+// coded (the tables counted on every record, the batches, the check that
+// it expands back), and expanded as every reader opens it.
+void BM_SpgCode(benchmark::State& state) {
+  const std::vector<uint8_t>& spg = encoded_scan();
+  std::vector<uint8_t> coded;
+  CodedFileReport report;
+  std::string error;
+  for (auto _ : state)
+    if (!write_coded_spg(spg.data(), spg.size(), coded, report, error)) state.SkipWithError(error.c_str());
+  state.counters["nodes"] = static_cast<double>(spg_node_count(spg));
+  state.counters["bytes"] = static_cast<double>(coded.size());
+  state.counters["v2_bytes"] = static_cast<double>(spg.size());
+  state.counters["nodes_per_s"] = benchmark::Counter(static_cast<double>(spg_node_count(spg)), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_SpgCode)->Unit(benchmark::kMillisecond);
+
+void BM_SpgExpand(benchmark::State& state) {
+  const std::vector<uint8_t>& spg = encoded_scan();
+  std::vector<uint8_t> coded;
+  CodedFileReport report;
+  std::string error;
+  if (!write_coded_spg(spg.data(), spg.size(), coded, report, error)) return state.SkipWithError(error.c_str());
+  SpgView view;
+  SpgCodedParts parts;
+  if (!spg_parse_coded(coded.data(), coded.size(), &view, &parts).ok()) return state.SkipWithError("parse");
+  std::vector<uint8_t> image(spg_expanded_bytes(view, parts)), points(view.header.node_count);
+  for (auto _ : state) {
+    const SpgResult r = spg_expand(coded.data(), view, parts, image.data(), points.data());
+    if (!r.ok()) state.SkipWithError("expand");
+  }
+  state.counters["nodes_per_s"] =
+      benchmark::Counter(static_cast<double>(view.header.node_count), benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_SpgExpand)->Unit(benchmark::kMillisecond);
 
 void BM_UnpackRecord(benchmark::State& state) {
   const SpgView view = parsed_scan();

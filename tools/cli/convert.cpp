@@ -56,14 +56,20 @@ int cmd_convert(int argc, char** argv) {
     return cli::fail(files[0] + ": version " + std::to_string(view.header.version) +
                      " (float32 class tables): re-encode it (stipple encode SCAN -o MODEL.spg) to convert it");
   std::vector<uint8_t> coded;
-  if (version_text == "3") {
-    CodedFileReport report;
-    if (!write_coded_spg(file.data(), file.size(), coded, report, error)) return cli::fail(files[0] + ": " + error);
-  }
+  CodedFileReport report;
+  if (version_text == "3" && !write_coded_spg(file.data(), file.size(), coded, report, error))
+    return cli::fail(files[0] + ": " + error);
   const std::vector<uint8_t>& out = version_text == "3" ? coded : file;
   if (!write_file_atomic(output, out, error)) return cli::fail("convert: " + error);
   std::printf("%s: version %s, %s bytes (%s bytes as version 2)\n", output.c_str(), version_text.c_str(),
               cli::with_commas(out.size()).c_str(), cli::with_commas(file.size()).c_str());
+  if (version_text == "3") {
+    const int widths = view.header.layout.bits[0] + view.header.layout.bits[1] + view.header.layout.bits[2];
+    std::printf("  the mean's bits a node by depth (version 2: %d each):", widths);
+    for (size_t d = 0; d < report.mean_bits_by_depth.size(); ++d)
+      std::printf("%s %zu: %.1f", d % 8 == 0 ? "\n   " : "", d, report.mean_bits_by_depth[d]);
+    std::printf("\n");
+  }
   return 0;
 }
 

@@ -125,9 +125,21 @@ bool write_coded_spg(const uint8_t* data, size_t size, std::vector<uint8_t>& out
     return true;
   };
   bool ok = true;
+  std::vector<uint16_t> depth(n, 0);
+  for (uint32_t id = 0, child = 1; id < n; ++id)
+    for (uint32_t c = spg_child_count(view, id); c > 0; --c) depth[child++] = static_cast<uint16_t>(depth[id] + 1);
+  std::vector<uint64_t> mean_q8(size_t{h.depth} + 1, 0);
+  report.nodes_by_depth.assign(size_t{h.depth} + 1, 0);
   for_each_unit(view, points.data(), [&](const CodedEntry* unit, uint32_t k) {
     if (batch.size() + k > kSpgCodedBatchNodes) ok = ok && flush();
     batch.insert(batch.end(), unit, unit + k);
+    uint32_t cost[2];
+    coded_mean_cost_q8(tables, unit, cost);
+    for (uint32_t j = 0; j < k; ++j) {
+      const uint32_t id = unit[j].id;
+      mean_q8[depth[id]] += cost[j];
+      ++report.nodes_by_depth[depth[id]];
+    }
   });
   if (!ok || !flush()) return error = "version 3: a batch could not be coded", false;
   store_u32le(out.data() + count_at, batches);
@@ -143,6 +155,9 @@ bool write_coded_spg(const uint8_t* data, size_t size, std::vector<uint8_t>& out
     return error = std::string("version 3: wrote records that do not decode (") + spg_error_text(r.error) + ")", false;
   if (image.size() != size || !std::equal(image.begin(), image.end(), data))
     return error = "version 3: the coded file does not expand to the file it was made from", false;
+  report.mean_bits_by_depth.assign(mean_q8.size(), 0.0);
+  for (size_t d = 0; d < mean_q8.size(); ++d)
+    if (report.nodes_by_depth[d] > 0) report.mean_bits_by_depth[d] = static_cast<double>(mean_q8[d]) / 256.0 / report.nodes_by_depth[d];
   report.records_bytes = size_t{n} * view.record_bytes;
   report.tables_bytes = table_bytes.size();
   report.coded_bytes = out.size() - 4 - records_offset;
