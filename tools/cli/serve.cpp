@@ -170,8 +170,9 @@ int cmd_serve(int argc, char** argv) {
   {
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
     char line[256];
-    std::snprintf(line, sizeof line, "%s: %u nodes, %.1f MB mapped, %.1f MB of tables on the heap, ready in %.0f ms; %llu workers, at most %u clients",
+    std::snprintf(line, sizeof line, "%s: %u nodes, %.1f MB %s, %.1f MB of tables on the heap, ready in %.0f ms; %llu workers, at most %u clients",
                   files[0].c_str(), model->view().header.node_count, static_cast<double>(model->file_bytes()) / 1e6,
+                  model->expanded() ? "expanded from version 3 in memory" : "mapped",
                   static_cast<double>(model->table_bytes()) / 1e6, ms, workers, max_clients);
     o.log(line);
     o.log(model->table_note());

@@ -49,6 +49,7 @@ bool ModelFile::open(const std::string& path, const ConeRule& cones, std::string
     owned_.assign(data_, data_ + size_);
     mapped_.close();
     if (!expand_coded_spg(owned_, path, error)) return false;
+    expanded_ = true;
     data_ = owned_.data();
     size_ = owned_.size();
   }
@@ -78,6 +79,7 @@ bool ModelFile::open(const std::string& path, const ConeRule& cones, std::string
 
 bool ModelFile::adopt(std::vector<uint8_t> file, const std::string& name, const ConeRule& cones, std::string& error) {
   owned_ = std::move(file);
+  expanded_ = spg_is_coded(owned_.data(), owned_.size());
   if (!expand_coded_spg(owned_, name, error)) return false;
   name_ = name;
   cones_ = cones;

@@ -52,6 +52,9 @@ class ModelFile {
   const SpgView& view() const { return view_; }
   const uint8_t* data() const { return data_; }
   size_t file_bytes() const { return size_; }
+  // Opened from a version 3 file: the model is its expansion, held in
+  // memory (file_bytes() its size), not a mapping of the file.
+  bool expanded() const { return expanded_; }
   const NodeDecoder& decoder() const { return decoder_; }
   const CutBounds& bounds() const { return bounds_; }
   // What the tables take on the heap: the decoder's, and the bounds when
@@ -77,6 +80,7 @@ class ModelFile {
   size_t size_ = 0;
   std::string name_, table_note_;
   bool table_refused_ = false;
+  bool expanded_ = false;
   ConeRule cones_;
   SpgView view_{};
   std::vector<uint32_t> decoder_storage_;
