@@ -7,6 +7,7 @@
 #include "platform/png_io.h"
 #include "platform/progress.h"
 #include "tools/cli/cli.h"
+#include "tools/embedded/model_file.h"
 #include "tools/reference/level_trade.h"
 #include "tools/reference/plot.h"
 #include "tools/reference/sampler.h"
@@ -54,7 +55,10 @@ int cmd_levels(int argc, char** argv) {
   PointCloud original;
   std::string error;
   if (!cli::check_output_name(plot_path, ".png", "PNG", error)) return cli::fail("levels: --plot " + error);
-  if (!load_spg(files[0], model, error) || !read_point_cloud(files[1], original, error, scan_options)) return cli::fail(error);
+  std::vector<uint8_t> file;
+  if (!read_spg_file(files[0], file, error) || !decode_spg(files[0], file.data(), file.size(), model, error) ||
+      !read_point_cloud(files[1], original, error, scan_options))
+    return cli::fail(error);
   std::vector<int> levels;
   if (has_levels) {
     size_t start = 0;
@@ -73,15 +77,18 @@ int cmd_levels(int argc, char** argv) {
   const KdTree original_tree(original.positions);  // built once, shared by every level
   ProgressBar progress("levels");
   std::vector<LevelPoint> points;
-  if (!measure_levels(model, original, original_tree, levels, points, error, [&](size_t i) {
-        progress.update(static_cast<double>(i) / static_cast<double>(levels.size()), "level " + std::to_string(levels[i]));
-      }))
+  if (!measure_levels(
+          model, original, original_tree, levels, points, error,
+          [&](size_t i) {
+            progress.update(static_cast<double>(i) / static_cast<double>(levels.size()), "level " + std::to_string(levels[i]));
+          },
+          &file))
     return cli::fail(files[0] + ": " + error);
   std::string rows;
   PlotSeries one_sided{"one-sided (paper)", {}, {}, 0x1f77b4, {}}, symmetric{"symmetric", {}, {}, 0xd62728, {}};
   if (!json) {
     progress.finish();
-    std::printf("%6s %10s %12s %10s %10s\n", "level", "nodes", "bits/point", "PSNR-1", "PSNR-sym");
+    std::printf("%6s %10s %12s %12s %10s %10s\n", "level", "nodes", "bits/point", "coded", "PSNR-1", "PSNR-sym");
   }
   for (const LevelPoint& p : points) {
     for (PlotSeries* s : {&one_sided, &symmetric}) s->x.push_back(p.bits_per_point);
@@ -93,12 +100,14 @@ int cmd_levels(int argc, char** argv) {
       j.integer("level", p.level)
           .integer("nodes", static_cast<long long>(p.nodes))
           .num("bits_per_point", p.bits_per_point)
+          .num("coded_bits_per_point", p.coded_bits_per_point)
           .num("psnr_one_sided_db", p.psnr_one_sided)
           .num("psnr_symmetric_db", p.psnr_symmetric)
           .num("hausdorff", p.hausdorff);
       rows += (rows.empty() ? "" : ", ") + j.done();
     } else {
-      std::printf("%6d %10zu %12.3f %10.2f %10.2f\n", p.level, p.nodes, p.bits_per_point, p.psnr_one_sided, p.psnr_symmetric);
+      std::printf("%6d %10zu %12.3f %12.3f %10.2f %10.2f\n", p.level, p.nodes, p.bits_per_point, p.coded_bits_per_point,
+                  p.psnr_one_sided, p.psnr_symmetric);
     }
   }
   progress.finish();

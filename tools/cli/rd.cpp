@@ -116,7 +116,7 @@ int cmd_rd(int argc, char** argv) {
   if (ec) return cli::fail("rd: " + output + ": " + ec.message());
   const KdTree scan_tree(scan.positions);
   ProgressBar progress("rd");
-  std::string csv = "setting,level,nodes,bits_per_point,psnr_one_sided_db,psnr_symmetric_db,hausdorff\n";
+  std::string csv = "setting,level,nodes,bits_per_point,psnr_one_sided_db,psnr_symmetric_db,hausdorff,coded_bits_per_point\n";
   PlotSpec spec;
   spec.title = std::filesystem::path(files[0]).filename().string() + ": rate against distortion by encoder setting";
   spec.x_label = "bits per original point (cut records + startup tables)";
@@ -136,16 +136,19 @@ int cmd_rd(int argc, char** argv) {
     std::vector<int> levels;
     for (int l = 0; l <= model.header.depth; ++l) levels.push_back(l);
     std::vector<LevelPoint> points;
-    if (!measure_levels(model, scan, scan_tree, levels, points, error, [&](size_t k) {
-          progress.update((static_cast<double>(i) + 0.2 + 0.8 * static_cast<double>(k) / static_cast<double>(levels.size())) * share,
-                          std::string(settings[i]->name) + ", level " + std::to_string(k));
-        }))
+    if (!measure_levels(
+            model, scan, scan_tree, levels, points, error,
+            [&](size_t k) {
+              progress.update((static_cast<double>(i) + 0.2 + 0.8 * static_cast<double>(k) / static_cast<double>(levels.size())) * share,
+                              std::string(settings[i]->name) + ", level " + std::to_string(k));
+            },
+            &spg))
       return cli::fail(files[0] + ": " + settings[i]->name + ": " + error);
     PlotSeries series{settings[i]->name, {}, {}, colors[i % (sizeof colors / sizeof colors[0])], {}};
     for (const LevelPoint& p : points) {
       char line[256];
-      std::snprintf(line, sizeof line, "%s,%d,%zu,%.4f,%.3f,%.3f,%.6g\n", settings[i]->name, p.level, p.nodes,
-                    p.bits_per_point, p.psnr_one_sided, p.psnr_symmetric, p.hausdorff);
+      std::snprintf(line, sizeof line, "%s,%d,%zu,%.4f,%.3f,%.3f,%.6g,%.4f\n", settings[i]->name, p.level, p.nodes,
+                    p.bits_per_point, p.psnr_one_sided, p.psnr_symmetric, p.hausdorff, p.coded_bits_per_point);
       csv += line;
       series.x.push_back(p.bits_per_point);
       series.y.push_back(p.psnr_one_sided);

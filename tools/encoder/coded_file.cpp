@@ -166,4 +166,36 @@ bool write_coded_spg(const uint8_t* data, size_t size, std::vector<uint8_t>& out
   return true;
 }
 
+size_t coded_cut_bytes(const SpgView& view, const std::vector<uint32_t>& cut) {
+  const SpgHeader& h = view.header;
+  std::vector<uint8_t> points(h.node_count);
+  spg_node_points(view, points.data(), 1);
+  const auto fields = [&](uint32_t id) { return unpack_record(h.layout, view.records + size_t{id} * view.record_bytes); };
+  std::vector<CodedEntry> entries(cut.size());
+  for (size_t i = 0; i < cut.size(); ++i) {
+    CodedEntry& e = entries[i];
+    e.id = cut[i];
+    e.points = points[cut[i]];
+    e.fields = fields(cut[i]);
+    if (i > 0) {
+      e.reference_id = cut[i - 1];
+      e.reference = entries[i - 1].fields;
+    }
+  }
+  auto tally = std::make_unique<CodeTally>();
+  tally->layout = h.layout;
+  for (size_t i = 0; i < entries.size(); ++i)
+    tally->unit(&entries[i], i % kSpgCodedBatchNodes == 0 ? 0xFFFFFFFFu : entries[i - 1].id, 0xFFFFFFFFu);
+  CodeTables tables;
+  tally->tables(view, spg_coded_table_header(h), kProtocolVersion, &tables, true);
+  std::vector<uint8_t> out(64 * 1024);
+  size_t bytes = 4 + write_code_tables(tables, out.data(), out.size()) + 4;
+  for (size_t first = 0; first < entries.size(); first += kSpgCodedBatchNodes) {
+    const uint32_t count = static_cast<uint32_t>(std::min<size_t>(kSpgCodedBatchNodes, entries.size() - first));
+    out.resize(size_t{count} * (view.record_bytes * 2 + 16) + 64);
+    bytes += 4 + encode_coded_nodes(tables, entries.data() + first, count, out.data(), out.size());
+  }
+  return bytes;
+}
+
 }  // namespace stipple

@@ -32,4 +32,13 @@ struct CodedFileReport {
 [[nodiscard]] bool write_coded_spg(const uint8_t* data, size_t size, std::vector<uint8_t>& out, CodedFileReport& report,
                                    std::string& error, const std::function<void(double)>& progress = {});
 
+struct SpgView;
+
+// The bytes a cut's records take entropy-coded as version 3 codes a file's
+// nodes (ids ascending, each against the one before it; tables counted on
+// these records, their bytes included, with the batches' lengths) — what
+// `stipple rd` and `levels` give beside a cut's plain records, close to
+// what a cold start's coded batch sends (docs/protocol.md, "Coded batches").
+size_t coded_cut_bytes(const SpgView& view, const std::vector<uint32_t>& cut);
+
 }  // namespace stipple
