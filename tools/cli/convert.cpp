@@ -6,6 +6,7 @@
 
 #include "core/spg_format.h"
 #include "platform/file_io.h"
+#include "platform/progress.h"
 #include "tools/cli/cli.h"
 #include "tools/embedded/embedded.h"
 #include "tools/embedded/model_file.h"
@@ -57,8 +58,12 @@ int cmd_convert(int argc, char** argv) {
                      " (float32 class tables): re-encode it (stipple encode SCAN -o MODEL.spg) to convert it");
   std::vector<uint8_t> coded;
   CodedFileReport report;
-  if (version_text == "3" && !write_coded_spg(file.data(), file.size(), coded, report, error))
-    return cli::fail(files[0] + ": " + error);
+  if (version_text == "3") {
+    ProgressBar progress("convert");  // on a terminal only
+    if (!write_coded_spg(file.data(), file.size(), coded, report, error,
+                         [&](double done) { progress.update(done, "coding records"); }))
+      return cli::fail(files[0] + ": " + error);
+  }
   const std::vector<uint8_t>& out = version_text == "3" ? coded : file;
   if (!write_file_atomic(output, out, error)) return cli::fail("convert: " + error);
   std::printf("%s: version %s, %s bytes (%s bytes as version 2)\n", output.c_str(), version_text.c_str(),
