@@ -116,6 +116,13 @@ void normalise(const uint32_t* counts, int n, CodeModel* m) {
   index_code_model(m);
 }
 
+// A node entry's context: after an adjacent reference (ids one apart; the
+// root's "none", 0xFFFFFFFF, counts as id 0's neighbour), else after a far one.
+int node_context(const CodedEntry& e) {
+  const uint32_t r = e.reference_id;
+  return r + 1u == e.id || r == e.id + 1u ? kAdjacentContext : kFarContext;
+}
+
 struct Symbol {
   uint16_t start, freq;
 };
@@ -252,20 +259,29 @@ void CodeTally::split(const NodeFields& parent, uint32_t parent_points, const No
   }
 }
 
-void CodeTally::unit(const CodedEntry* e, uint32_t previous_id, uint32_t previous_parent) {
-  ++kinds[e[0].kind == 0 ? 0 : 1];
-  ++ids[hybrid(e[0].id - previous_id - 1u).token];
-  ++points[hybrid(e[0].points).token];
-  if (e[0].kind == 0) {
-    const uint32_t r = e[0].reference_id;
-    const int context = r + 1u == e[0].id || r == e[0].id + 1u ? kAdjacentContext : kFarContext;
-    for (int f = 0; f < kFieldCount; ++f)
-      if (layout.bits[f] > 0) field(f, context, e[0].fields, e[0].reference.v[f]);
-    return;
+void CodeTally::batch(const CodedEntry* entries, uint32_t count) {
+  uint32_t previous_id = 0xFFFFFFFFu, previous_parent = 0xFFFFFFFFu;
+  for (uint32_t i = 0; i < count;) {
+    const CodedEntry* e = entries + i;
+    ++kinds[e[0].kind == 0 ? 0 : 1];
+    ++ids[hybrid(e[0].id - previous_id - 1u).token];
+    ++points[hybrid(e[0].points).token];
+    if (e[0].kind == 0) {
+      const int context = node_context(e[0]);
+      for (int f = 0; f < kFieldCount; ++f)
+        if (layout.bits[f] > 0) field(f, context, e[0].fields, e[0].reference.v[f]);
+      previous_id = e[0].id;
+      i += 1;
+      continue;
+    }
+    if (i + 1 == count) return;  // a split without its second child: encode_coded_nodes refuses it
+    ++parents[hybrid(e[0].reference_id - previous_parent - 1u).token];
+    if (split_points(e[0].reference_points, e[0].points) > 255) ++points[hybrid(e[1].points).token];
+    split(e[0].reference, e[0].reference_points, e[0].fields, e[0].points, e[1].fields);
+    previous_id = e[1].id;
+    previous_parent = e[0].reference_id;
+    i += 2;
   }
-  ++parents[hybrid(e[0].reference_id - previous_parent - 1u).token];
-  if (split_points(e[0].reference_points, e[0].points) > 255) ++points[hybrid(e[1].points).token];
-  split(e[0].reference, e[0].reference_points, e[0].fields, e[0].points, e[1].fields);
 }
 
 void CodeTally::tables(const SpgView& view, const SpgHeader& header, uint16_t protocol, CodeTables* out,
@@ -448,42 +464,48 @@ uint32_t field_value(const CodeTables& t, int field, const NodeFields& self, uin
   return difference_base(t, field, self, reference, &base) ? zigzag_delta(v, base, bits) : v & ((1u << bits) - 1u);
 }
 
-// The symbols of entries[first ..] (a node, or a split's two) in decoding order.
-int unit_symbols(const CodeTables& t, const CodedEntry* e, uint32_t previous_id, uint32_t previous_parent, Symbol* s) {
-  int n = 0;
+// Calls f(model, value, node, field) for each value of a unit — a node,
+// or a split's two entries — as it is coded, in decoding order: node 0 or
+// 1 of the unit, field -1 for its kind, ids and points bytes.
+template <typename F>
+void for_each_value(const CodeTables& t, const CodedEntry* e, uint32_t previous_id, uint32_t previous_parent, F&& f) {
   if (e[0].kind == 0) {
-    n += push_value(t.model[kKindModel], 0, s + n);
-    n += push_value(t.model[kIdModel], e[0].id - previous_id - 1u, s + n);
-    n += push_value(t.model[kPointsModel], e[0].points, s + n);
-    const uint32_t r = e[0].reference_id;
-    const int context = r + 1u == e[0].id || r == e[0].id + 1u ? kAdjacentContext : kFarContext;
-    for (int f = 0; f < kFieldCount; ++f)
-      if (t.layout.bits[f] > 0)
-        n += push_value(t.model[field_model(f, context)], field_value(t, f, e[0].fields, e[0].reference.v[f]), s + n);
-    return n;
+    f(kKindModel, 0u, 0, -1);
+    f(kIdModel, e[0].id - previous_id - 1u, 0, -1);
+    f(kPointsModel, uint32_t{e[0].points}, 0, -1);
+    const int context = node_context(e[0]);
+    for (int k = 0; k < kFieldCount; ++k)
+      if (t.layout.bits[k] > 0) f(field_model(k, context), field_value(t, k, e[0].fields, e[0].reference.v[k]), 0, k);
+    return;
   }
   const CodedEntry& first = e[0];
   const CodedEntry& second = e[1];
   const NodeFields& parent = first.reference;
-  n += push_value(t.model[kKindModel], 1, s + n);
-  n += push_value(t.model[kParentModel], first.reference_id - previous_parent - 1u, s + n);
-  n += push_value(t.model[kIdModel], first.id - previous_id - 1u, s + n);
-  n += push_value(t.model[kPointsModel], first.points, s + n);
-  for (int f = 0; f < kFieldCount; ++f)
-    if (t.layout.bits[f] > 0)
-      n += push_value(t.model[field_model(f, kChildContext)], field_value(t, f, first.fields, parent.v[f]), s + n);
-  if (split_points(first.reference_points, first.points) > 255) n += push_value(t.model[kPointsModel], second.points, s + n);
-  for (int f = 0; f < kFieldCount; ++f) {
-    const int bits = t.layout.bits[f];
+  f(kKindModel, 1u, 0, -1);
+  f(kParentModel, first.reference_id - previous_parent - 1u, 0, -1);
+  f(kIdModel, first.id - previous_id - 1u, 0, -1);
+  f(kPointsModel, uint32_t{first.points}, 0, -1);
+  for (int k = 0; k < kFieldCount; ++k)
+    if (t.layout.bits[k] > 0) f(field_model(k, kChildContext), field_value(t, k, first.fields, parent.v[k]), 0, k);
+  if (split_points(first.reference_points, first.points) > 255) f(kPointsModel, uint32_t{second.points}, 1, -1);
+  for (int k = 0; k < kFieldCount; ++k) {
+    const int bits = t.layout.bits[k];
     if (bits == 0) continue;
-    if (is_position_field(f))
-      n += push_value(t.model[field_model(f, kSplitContext)],
-                      field_value(t, f, second.fields,
-                                  split_prediction(parent.v[f], first.fields.v[f], first.reference_points, first.points, bits)),
-                      s + n);
+    if (is_position_field(k))
+      f(field_model(k, kSplitContext),
+        field_value(t, k, second.fields,
+                    split_prediction(parent.v[k], first.fields.v[k], first.reference_points, first.points, bits)),
+        1, k);
     else
-      n += push_value(t.model[field_model(f, kAdjacentContext)], field_value(t, f, second.fields, first.fields.v[f]), s + n);
+      f(field_model(k, kAdjacentContext), field_value(t, k, second.fields, first.fields.v[k]), 1, k);
   }
+}
+
+// The symbols of a unit in decoding order.
+int unit_symbols(const CodeTables& t, const CodedEntry* e, uint32_t previous_id, uint32_t previous_parent, Symbol* s) {
+  int n = 0;
+  for_each_value(t, e, previous_id, previous_parent,
+                 [&](int model, uint32_t v, int, int) { n += push_value(t.model[model], v, s + n); });
   return n;
 }
 
@@ -514,26 +536,14 @@ size_t close_stream(uint32_t x, const uint8_t* p, const uint8_t* end, uint8_t* s
 }  // namespace
 
 void coded_mean_cost_q8(const CodeTables& t, const CodedEntry* e, uint32_t cost[2]) {
-  const auto bits = [&](int model, uint32_t v) {
+  cost[0] = cost[1] = 0;
+  for_each_value(t, e, 0xFFFFFFFFu, 0xFFFFFFFFu, [&](int model, uint32_t v, int node, int field) {
+    if (field < 0 || !is_position_field(field)) return;
     const CodeModel& m = t.model[model];
     const Hybrid h = hybrid(v);
     const uint32_t freq = uint32_t{m.cum[h.token + 1]} - m.cum[h.token];
-    return static_cast<uint32_t>(256u * kCodeProbabilityBits - log2_q8(freq) + 256u * static_cast<uint32_t>(h.extra_bits));
-  };
-  cost[0] = cost[1] = 0;
-  for (int f = 0; f <= static_cast<int>(Field::kPosZ); ++f) {
-    if (e[0].kind == 0) {
-      const uint32_t r = e[0].reference_id;
-      const int context = r + 1u == e[0].id || r == e[0].id + 1u ? kAdjacentContext : kFarContext;
-      cost[0] += bits(field_model(f, context), field_value(t, f, e[0].fields, e[0].reference.v[f]));
-      continue;
-    }
-    const NodeFields& parent = e[0].reference;
-    cost[0] += bits(field_model(f, kChildContext), field_value(t, f, e[0].fields, parent.v[f]));
-    const uint32_t guess =
-        split_prediction(parent.v[f], e[0].fields.v[f], e[0].reference_points, e[0].points, t.layout.bits[f]);
-    cost[1] += bits(field_model(f, kSplitContext), field_value(t, f, e[1].fields, guess));
-  }
+    cost[node] += static_cast<uint32_t>(256u * kCodeProbabilityBits - log2_q8(freq) + 256u * static_cast<uint32_t>(h.extra_bits));
+  });
 }
 
 size_t encode_coded_nodes(const CodeTables& t, const CodedEntry* entries, uint32_t count, uint8_t* out, size_t capacity) {

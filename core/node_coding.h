@@ -141,10 +141,9 @@ struct CodeTally {
   // A split's children's fields against their parent, as they are coded.
   void split(const NodeFields& parent, uint32_t parent_points, const NodeFields& first, uint32_t first_points,
              const NodeFields& second);
-  // A unit as encode_coded_nodes codes it — a node, or a split's two
-  // entries — after the last id and the last split's parent before it in
-  // its batch (0xFFFFFFFF for none).
-  void unit(const CodedEntry* e, uint32_t previous_id, uint32_t previous_parent);
+  // One batch's entries as encode_coded_nodes codes them (each id after
+  // the one before it, each split's parent after the split's before it).
+  void batch(const CodedEntry* entries, uint32_t count);
   // Models of these counts, each field the cheapest way it may go (below
   // protocol 6, never against its own frame), and the class models (a
   // header of version 2 on). Every value stays codable in every model

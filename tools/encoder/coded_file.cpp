@@ -59,6 +59,60 @@ void for_each_unit(const SpgView& view, const uint8_t* points, F&& f) {
   }
 }
 
+// Calls f(batch) for the file's units in batches of at most
+// kSpgCodedBatchNodes nodes, in order (a split is never cut).
+template <typename F>
+void for_each_batch(const SpgView& view, const uint8_t* points, F&& f) {
+  std::vector<CodedEntry> batch;
+  for_each_unit(view, points, [&](const CodedEntry* unit, uint32_t k) {
+    if (batch.size() + k > kSpgCodedBatchNodes) {
+      f(batch);
+      batch.clear();
+    }
+    batch.insert(batch.end(), unit, unit + k);
+  });
+  if (!batch.empty()) f(batch);
+}
+
+// Tables counted on every entry of `batches` (a callable that gives them
+// batch by batch), as a version 3 file's are (unseen models at the floor).
+template <typename Batches>
+CodeTables counted_tables(const SpgView& view, Batches&& batches) {
+  auto tally = std::make_unique<CodeTally>();  // 62 KB
+  tally->layout = view.header.layout;
+  batches([&](const std::vector<CodedEntry>& b) { tally->batch(b.data(), static_cast<uint32_t>(b.size())); });
+  CodeTables tables;
+  tally->tables(view, spg_coded_table_header(view.header), kProtocolVersion, &tables, true);
+  return tables;
+}
+
+void put_u32(std::vector<uint8_t>& out, uint32_t v) {
+  uint8_t b[4];
+  store_u32le(b, v);
+  out.insert(out.end(), b, b + 4);
+}
+
+// The code message, its length before it, appended to `out`.
+bool put_tables(const CodeTables& tables, std::vector<uint8_t>& out) {
+  uint8_t message[64 * 1024];
+  const size_t bytes = write_code_tables(tables, message, sizeof message);
+  if (bytes == 0) return false;
+  put_u32(out, static_cast<uint32_t>(bytes));
+  out.insert(out.end(), message, message + bytes);
+  return true;
+}
+
+// One batch coded, its length before it, appended to `out`.
+bool put_batch(const CodeTables& tables, const std::vector<CodedEntry>& batch, size_t record_bytes,
+               std::vector<uint8_t>& out) {
+  std::vector<uint8_t> coded(batch.size() * (record_bytes * 2 + 16) + 64);
+  const size_t bytes = encode_coded_nodes(tables, batch.data(), static_cast<uint32_t>(batch.size()), coded.data(), coded.size());
+  if (bytes == 0) return false;
+  put_u32(out, static_cast<uint32_t>(bytes));
+  out.insert(out.end(), coded.begin(), coded.begin() + static_cast<std::ptrdiff_t>(bytes));
+  return true;
+}
+
 }  // namespace
 
 bool write_coded_spg(const uint8_t* data, size_t size, std::vector<uint8_t>& out, CodedFileReport& report,
@@ -76,74 +130,42 @@ bool write_coded_spg(const uint8_t* data, size_t size, std::vector<uint8_t>& out
   spg_node_points(view, points.data(), 1);
 
   // The tables, from every unit as its batch will code it.
-  auto tally = std::make_unique<CodeTally>();
-  tally->layout = h.layout;
-  {
-    uint32_t in_batch = 0, previous_id = 0xFFFFFFFFu, previous_parent = 0xFFFFFFFFu;
-    for_each_unit(view, points.data(), [&](const CodedEntry* unit, uint32_t k) {
-      if (in_batch + k > kSpgCodedBatchNodes) in_batch = 0, previous_id = previous_parent = 0xFFFFFFFFu;
-      tally->unit(unit, previous_id, previous_parent);
-      in_batch += k;
-      previous_id = unit[k - 1].id;
-      if (unit[0].kind == 1) previous_parent = unit[0].reference_id;
-    });
-  }
-  CodeTables tables;
-  tally->tables(view, spg_coded_table_header(h), kProtocolVersion, &tables, true);
-  tally.reset();
-  std::vector<uint8_t> table_bytes(64 * 1024);
-  table_bytes.resize(write_code_tables(tables, table_bytes.data(), table_bytes.size()));
-  if (table_bytes.empty()) return error = "version 3: the code tables did not fit", false;
+  const CodeTables tables = counted_tables(view, [&](auto&& f) { for_each_batch(view, points.data(), f); });
 
   // The file: version 2's sections before the records, then the coded ones.
   const size_t records_offset = static_cast<size_t>(view.records - data);
   out.assign(data, data + records_offset);
   store_u16le(out.data() + spg_offset::kVersion, kSpgCodedVersion);
-  const auto put_u32 = [&](uint32_t v) {
-    uint8_t b[4];
-    store_u32le(b, v);
-    out.insert(out.end(), b, b + 4);
-  };
-  put_u32(static_cast<uint32_t>(table_bytes.size()));
-  out.insert(out.end(), table_bytes.begin(), table_bytes.end());
+  if (!put_tables(tables, out)) return error = "version 3: the code tables did not fit", false;
+  const size_t tables_bytes = out.size() - records_offset - 4;
   const size_t count_at = out.size();
-  put_u32(0);
-  std::vector<CodedEntry> batch;
-  std::vector<uint8_t> coded;
-  uint32_t batches = 0, done = 0;
-  const auto flush = [&]() {
-    if (batch.empty()) return true;
-    coded.resize(batch.size() * (view.record_bytes * 2 + 16) + 64);
-    const size_t bytes = encode_coded_nodes(tables, batch.data(), static_cast<uint32_t>(batch.size()), coded.data(), coded.size());
-    if (bytes == 0) return false;
-    put_u32(static_cast<uint32_t>(bytes));
-    out.insert(out.end(), coded.begin(), coded.begin() + static_cast<std::ptrdiff_t>(bytes));
-    ++batches;
-    done += static_cast<uint32_t>(batch.size());
-    batch.clear();
-    if (progress) progress(static_cast<double>(done) / n);
-    return true;
-  };
-  bool ok = true;
+  put_u32(out, 0);
   std::vector<uint16_t> depth(n, 0);
   for (uint32_t id = 0, child = 1; id < n; ++id)
     for (uint32_t c = spg_child_count(view, id); c > 0; --c) depth[child++] = static_cast<uint16_t>(depth[id] + 1);
   std::vector<uint64_t> mean_q8(size_t{h.depth} + 1, 0);
   report.nodes_by_depth.assign(size_t{h.depth} + 1, 0);
-  for_each_unit(view, points.data(), [&](const CodedEntry* unit, uint32_t k) {
-    if (batch.size() + k > kSpgCodedBatchNodes) ok = ok && flush();
-    batch.insert(batch.end(), unit, unit + k);
-    uint32_t cost[2];
-    coded_mean_cost_q8(tables, unit, cost);
-    for (uint32_t j = 0; j < k; ++j) {
-      const uint32_t id = unit[j].id;
-      mean_q8[depth[id]] += cost[j];
-      ++report.nodes_by_depth[depth[id]];
+  uint32_t batches = 0, done = 0;
+  bool ok = true;
+  for_each_batch(view, points.data(), [&](const std::vector<CodedEntry>& batch) {
+    ok = ok && put_batch(tables, batch, view.record_bytes, out);
+    for (size_t i = 0; i < batch.size();) {
+      const uint32_t k = batch[i].kind == 1 ? 2 : 1;
+      uint32_t cost[2];
+      coded_mean_cost_q8(tables, &batch[i], cost);
+      for (uint32_t j = 0; j < k; ++j) {
+        mean_q8[depth[batch[i + j].id]] += cost[j];
+        ++report.nodes_by_depth[depth[batch[i + j].id]];
+      }
+      i += k;
     }
+    ++batches;
+    done += static_cast<uint32_t>(batch.size());
+    if (progress) progress(static_cast<double>(done) / n);
   });
-  if (!ok || !flush()) return error = "version 3: a batch could not be coded", false;
+  if (!ok) return error = "version 3: a batch could not be coded", false;
   store_u32le(out.data() + count_at, batches);
-  put_u32(crc32(out.data(), out.size()));
+  put_u32(out, crc32(out.data(), out.size()));
 
   // Read back as every reader will: the very bytes it was given.
   SpgView coded_view;
@@ -159,7 +181,7 @@ bool write_coded_spg(const uint8_t* data, size_t size, std::vector<uint8_t>& out
   for (size_t d = 0; d < mean_q8.size(); ++d)
     if (report.nodes_by_depth[d] > 0) report.mean_bits_by_depth[d] = static_cast<double>(mean_q8[d]) / 256.0 / report.nodes_by_depth[d];
   report.records_bytes = size_t{n} * view.record_bytes;
-  report.tables_bytes = table_bytes.size();
+  report.tables_bytes = tables_bytes;
   report.coded_bytes = out.size() - 4 - records_offset;
   report.file_bytes = out.size();
   report.batches = batches;
@@ -167,35 +189,31 @@ bool write_coded_spg(const uint8_t* data, size_t size, std::vector<uint8_t>& out
 }
 
 size_t coded_cut_bytes(const SpgView& view, const std::vector<uint32_t>& cut) {
-  const SpgHeader& h = view.header;
-  std::vector<uint8_t> points(h.node_count);
+  std::vector<uint8_t> points(view.header.node_count);
   spg_node_points(view, points.data(), 1);
-  const auto fields = [&](uint32_t id) { return unpack_record(h.layout, view.records + size_t{id} * view.record_bytes); };
-  std::vector<CodedEntry> entries(cut.size());
+  const auto fields = [&](uint32_t id) { return unpack_record(view.header.layout, view.records + size_t{id} * view.record_bytes); };
+  // Each node against the one before it in the cut, in batches as a file's.
+  std::vector<std::vector<CodedEntry>> batches;
   for (size_t i = 0; i < cut.size(); ++i) {
-    CodedEntry& e = entries[i];
+    if (i % kSpgCodedBatchNodes == 0) batches.emplace_back();
+    CodedEntry e;
     e.id = cut[i];
     e.points = points[cut[i]];
     e.fields = fields(cut[i]);
     if (i > 0) {
       e.reference_id = cut[i - 1];
-      e.reference = entries[i - 1].fields;
+      e.reference = fields(cut[i - 1]);
     }
+    batches.back().push_back(e);
   }
-  auto tally = std::make_unique<CodeTally>();
-  tally->layout = h.layout;
-  for (size_t i = 0; i < entries.size(); ++i)
-    tally->unit(&entries[i], i % kSpgCodedBatchNodes == 0 ? 0xFFFFFFFFu : entries[i - 1].id, 0xFFFFFFFFu);
-  CodeTables tables;
-  tally->tables(view, spg_coded_table_header(h), kProtocolVersion, &tables, true);
-  std::vector<uint8_t> out(64 * 1024);
-  size_t bytes = 4 + write_code_tables(tables, out.data(), out.size()) + 4;
-  for (size_t first = 0; first < entries.size(); first += kSpgCodedBatchNodes) {
-    const uint32_t count = static_cast<uint32_t>(std::min<size_t>(kSpgCodedBatchNodes, entries.size() - first));
-    out.resize(size_t{count} * (view.record_bytes * 2 + 16) + 64);
-    bytes += 4 + encode_coded_nodes(tables, entries.data() + first, count, out.data(), out.size());
-  }
-  return bytes;
+  const CodeTables tables = counted_tables(view, [&](auto&& f) {
+    for (const std::vector<CodedEntry>& b : batches) f(b);
+  });
+  std::vector<uint8_t> out;
+  bool ok = put_tables(tables, out);
+  put_u32(out, static_cast<uint32_t>(batches.size()));
+  for (const std::vector<CodedEntry>& b : batches) ok = ok && put_batch(tables, b, view.record_bytes, out);
+  return ok ? out.size() : 0;
 }
 
 }  // namespace stipple
