@@ -3,7 +3,6 @@
 #include <string>
 #include <vector>
 
-#include "core/spg_coded.h"
 #include "platform/file_io.h"
 #include "tools/embedded/embedded.h"
 #include "tools/cli/cli.h"
@@ -59,14 +58,7 @@ int cmd_info(int argc, char** argv) {
   // A version 3 file is read expanded; its own size and coded section are what it costs.
   const bool coded = spg_is_coded(file.data(), file.size());
   const size_t file_bytes = file.size();
-  size_t coded_bytes = 0;
-  if (coded) {
-    SpgView v;
-    SpgCodedParts parts;
-    if (spg_parse_coded(file.data(), file.size(), &v, &parts).ok())
-      coded_bytes = 4 + parts.tables_bytes + parts.batches_bytes;
-    if (!expand_coded_spg(file, files[0], error)) return cli::fail(error);
-  }
+  if (!expand_coded_spg(file, files[0], error)) return cli::fail(error);
   SpgView view;
   const SpgResult parsed = spg_parse(file.data(), file.size(), &view);
   if (!parsed.ok())
@@ -108,6 +100,8 @@ int cmd_info(int argc, char** argv) {
     return cli::fail(files[0] + ": --facing-point/--facing-up: the model has no normals");
   }
   const uint64_t record_total = static_cast<uint64_t>(h.node_count) * static_cast<uint64_t>(h.layout.record_bytes());
+  // Version 3's coded section: what its file holds in place of the records.
+  const uint64_t coded_bytes = file_bytes - (file.size() - record_total);
   if (json) {
     cli::Json j;
     j.str("file", files[0])

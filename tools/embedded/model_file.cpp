@@ -16,19 +16,27 @@ bool spg_is_coded(const uint8_t* data, size_t size) {
          load_u16le(data + spg_offset::kVersion) == kSpgCodedVersion;
 }
 
-bool expand_coded_spg(std::vector<uint8_t>& file, const std::string& name, std::string& error) {
-  if (!spg_is_coded(file.data(), file.size())) return true;
+bool expand_coded_spg(const uint8_t* data, size_t size, const std::string& name, std::vector<uint8_t>& image,
+                      std::string& error) {
   SpgView view;
   SpgCodedParts parts;
-  if (const SpgResult r = spg_parse_coded(file.data(), file.size(), &view, &parts); !r.ok())
-    return error = spg_error_message(name, r, file.data(), file.size()), false;
-  std::vector<uint8_t> image(spg_expanded_bytes(view, parts)), points(view.header.node_count);
-  if (const SpgResult r = spg_expand(file.data(), view, parts, image.data(), points.data()); !r.ok()) {
-    if (r.error == SpgError::kBadCoded) return error = spg_error_message(name, r, file.size()), false;
+  if (const SpgResult r = spg_parse_coded(data, size, &view, &parts); !r.ok())
+    return error = spg_error_message(name, r, data, size), false;
+  image.resize(spg_expanded_bytes(view, parts));
+  std::vector<uint8_t> points(view.header.node_count);
+  if (const SpgResult r = spg_expand(data, view, parts, image.data(), points.data()); !r.ok()) {
+    if (r.error == SpgError::kBadCoded) return error = spg_error_message(name, r, size), false;
     return error = name + ": its records, decoded (version 3), do not form a model: " +
                    spg_error_message("byte", r, image.size()) + " of the expanded file",
            false;
   }
+  return true;
+}
+
+bool expand_coded_spg(std::vector<uint8_t>& file, const std::string& name, std::string& error) {
+  if (!spg_is_coded(file.data(), file.size())) return true;
+  std::vector<uint8_t> image;
+  if (!expand_coded_spg(file.data(), file.size(), name, image, error)) return false;
   file.swap(image);
   return true;
 }
@@ -46,9 +54,8 @@ bool ModelFile::open(const std::string& path, const ConeRule& cones, std::string
   data_ = mapped_.data();
   size_ = mapped_.size();
   if (spg_is_coded(data_, size_)) {  // version 3: expanded once, held in memory
-    owned_.assign(data_, data_ + size_);
+    if (!expand_coded_spg(data_, size_, path, owned_, error)) return false;
     mapped_.close();
-    if (!expand_coded_spg(owned_, path, error)) return false;
     expanded_ = true;
     data_ = owned_.data();
     size_ = owned_.size();

@@ -27,6 +27,9 @@ bool spg_is_coded(const uint8_t* data, size_t size);
 // (core/spg_coded.h); anything else left as it is, for its reader to judge.
 // The error names the file as spg_error_message does.
 bool expand_coded_spg(std::vector<uint8_t>& file, const std::string& name, std::string& error);
+// The same from a version 3 file's bytes (spg_is_coded) into `image`.
+bool expand_coded_spg(const uint8_t* data, size_t size, const std::string& name, std::vector<uint8_t>& image,
+                      std::string& error);
 // read_file, then expand_coded_spg: a .spg of any version as its readers take it.
 bool read_spg_file(const std::string& path, std::vector<uint8_t>& out, std::string& error);
 
