@@ -54,6 +54,11 @@ struct NodeLaneFrame {
   uint32_t quality_q8 = 256, samples = 1024;
   const int32_t* sample_reach = nullptr;  // PointRenderer::sample_reach_: [sample_reach_bucket(n)][4]
   bool lit = false;
+  // Close-ups (raster/close_up.h) in this frame: a node whose mean is out
+  // of view, or whose screen sigmas may pass kCloseUpSigmaPx, is the scalar
+  // set-up's.
+  bool close_ups = false;
+  int32_t close_up_wide = 0;  // a + c (1/256 px^2) past which a node may be one
   const ShadingTables* shading = nullptr;
   uint32_t base_rgb = 0;
 };

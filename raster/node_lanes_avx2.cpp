@@ -243,11 +243,6 @@ template <class FieldOf>
   }
   ex = _mm256_srai_epi32(_mm256_mullo_epi32(ex, set1(7)), 1);
   ey = _mm256_srai_epi32(_mm256_mullo_epi32(ey, set1(7)), 1);
-  const V off = bor(bor(_mm256_cmpgt_epi32(zero, add(x0, ex)), _mm256_cmpgt_epi32(sub(x0, ex), set1(f.width_q4 - 1))),
-                    bor(_mm256_cmpgt_epi32(zero, add(y0, ey)), _mm256_cmpgt_epi32(sub(y0, ey), set1(f.height_q4 - 1))));
-  l.culled = bor(l.culled, band(l.live, off));
-  l.live = band(l.live, _mm256_xor_si256(off, ones));
-
   V a = zero, b = zero, cc = zero;
 #pragma GCC unroll 8
   for (int k = 0; k < 3; ++k) {
@@ -255,6 +250,18 @@ template <class FieldOf>
     b = add(b, _mm256_mullo_epi32(vx4[k], vy4[k]));
     cc = add(cc, _mm256_mullo_epi32(vy4[k], vy4[k]));
   }
+  // A possible close-up — a disc, or more points (a + c past close_up_wide:
+  // screen_sigma_beyond's bound) — is the scalar set-up's.
+  if (f.close_ups) {
+    const V wide = band(l.live, _mm256_cmpgt_epi32(add(a, cc), set1(f.close_up_wide)));
+    l.fallback = bor(l.fallback, wide);
+    l.live = band(l.live, _mm256_xor_si256(wide, ones));
+  }
+  const V off = bor(bor(_mm256_cmpgt_epi32(zero, add(x0, ex)), _mm256_cmpgt_epi32(sub(x0, ex), set1(f.width_q4 - 1))),
+                    bor(_mm256_cmpgt_epi32(zero, add(y0, ey)), _mm256_cmpgt_epi32(sub(y0, ey), set1(f.height_q4 - 1))));
+  l.culled = bor(l.culled, band(l.live, off));
+  l.live = band(l.live, _mm256_xor_si256(off, ones));
+
   const V t = half_octave32(add(a, cc));
   const Wide ac = mul64(a, cc), bb = mul64(b, b);
   const Wide det = sub64(ac, bb);
@@ -560,9 +567,10 @@ uint32_t set_up_nodes(const NodeLaneFrame& f, uint32_t first_slot, uint32_t coun
       return _mm256_cmpeq_epi32(_mm256_min_epu32(ceil8, Z), ceil8);
     };
     const V in_view = band(band(_mm256_cmpgt_epi32(Z, set1(f.near)), within(X)), within(Y));
-    l.culled = band(active, _mm256_xor_si256(in_view, ones));
+    const V outside = band(active, _mm256_xor_si256(in_view, ones));
+    l.culled = f.close_ups ? _mm256_setzero_si256() : outside;  // with close-ups, the scalar set-up's
     // The lanes' range: 2^46 / Z below 2^31 (and every product below within 64 bits).
-    l.fallback = band(band(active, in_view), _mm256_cmpgt_epi32(set1(1 << 16), Z));
+    l.fallback = bor(band(band(active, in_view), _mm256_cmpgt_epi32(set1(1 << 16), Z)), f.close_ups ? outside : _mm256_setzero_si256());
     l.live = band(band(active, in_view), _mm256_xor_si256(l.fallback, ones));
     const V Zs = _mm256_blendv_epi8(set1(1 << 16), Z, l.live);  // no division by a culled lane's Z
 

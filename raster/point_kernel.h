@@ -337,6 +337,7 @@ struct PackedShade {
   uint32_t ca01[3] = {}, ca2[3] = {};         // colour axes per channel
   uint32_t r = 0, g = 0, b = 0;               // base colour
   uint32_t node_rgb = 0, intensity = 256, specular = 0;
+  PackedShade() = default;
   explicit PackedShade(const PointShade& s)
       : sn(int16_pair(s.sn[0], s.sn[1])), lt(int16_pair(s.lt[0], s.lt[1])), ht(int16_pair(s.ht[0], s.ht[1])),
         l0h0(int16_pair(s.l0, s.h0)), s0_01(int16_pair(s.surface[0][0], s.surface[0][1])), s0_2(int16_pair(s.surface[0][2], 0)),

@@ -196,16 +196,16 @@ void PointRaster::split(int32_t x0, int32_t y0, int32_t x1, int32_t y1, uint32_t
 }
 
 void PointRaster::draw(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage, TileFn tile_fn,
-                       void* context) const {
+                       void* context, bool every_tile) const {
   if (config_.format == PixelFormat::kRgb565)
-    draw_tiles<uint32_t>(rgb565(clear_rgb), frame, stride, coverage, tile_fn, context);
+    draw_tiles<uint32_t>(rgb565(clear_rgb), frame, stride, coverage, tile_fn, context, every_tile);
   else
-    draw_tiles<uint64_t>(clear_rgb & 0xFFFFFFu, frame, stride, coverage, tile_fn, context);
+    draw_tiles<uint64_t>(clear_rgb & 0xFFFFFFu, frame, stride, coverage, tile_fn, context, every_tile);
 }
 
 template <class Word>
 void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride, uint8_t* coverage, TileFn tile_fn,
-                             void* context) const {
+                             void* context, bool every_tile) const {
   const int sh = config_.tile_log2, tile = 1 << sh;
   Word* words = static_cast<Word*>(tile_words_);
   const Word clear = pack_word<Word>(0xFFFFFFFFu, clear_color);
@@ -217,7 +217,7 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
       const int px0 = tx << sh, py0 = ty << sh;
       const int pw = (px0 + tile > config_.width ? config_.width - px0 : tile);
       const int ph = (py0 + tile > config_.height ? config_.height - py0 : tile);
-      const bool items = tile_items_ != nullptr && tile_items_[t] != kNoLink;
+      const bool items = (tile_items_ != nullptr && tile_items_[t] != kNoLink) || every_tile;
       if (tile_fill_[t] == 0 && !(items && tile_fn != nullptr)) {
         // Nothing drawn here: every row the clear colour (one row of clear
         // words written out), no coverage.

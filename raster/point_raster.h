@@ -217,8 +217,10 @@ class PointRaster {
   // `stride` bytes, pixels in the configured format, little-endian RGB565).
   // With `coverage`, also writes which pixels a point covered: one bit a
   // pixel, LSB first, rows of (width + 7) / 8 bytes (raster/resolve.h).
+  // `tile_fn` is called for the tiles that hold items, or with
+  // `every_tile` for every tile (the renderer's close-ups, which span many).
   void draw(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage = nullptr, TileFn tile_fn = nullptr,
-            void* context = nullptr) const;
+            void* context = nullptr, bool every_tile = false) const;
 
   uint32_t points() const { return count_; }
   // Bytes of one binned square: 8 for RGB565 frames, 12 for RGB888.
@@ -276,7 +278,7 @@ class PointRaster {
   }
   template <class Word>
   void draw_tiles(uint32_t clear_rgb, uint8_t* frame, size_t stride, uint8_t* coverage, TileFn tile_fn,
-                  void* context) const;
+                  void* context, bool every_tile) const;
 
   RasterConfig config_{};
   int tiles_x_ = 0, tiles_y_ = 0;

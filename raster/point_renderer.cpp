@@ -37,7 +37,7 @@ constexpr uint32_t kTileMinPoints = avx2::kBuilt ? 1 : 4;
 
 struct Layout {
   size_t raster, internal_frame, coverage, screen_coverage, resolve, g_position, g_normal, g_color, shading, reciprocal,
-      lanes, grey, angles, tile_list, mean_terms, ppn, total;
+      lanes, grey, angles, tile_list, mean_terms, ppn, close_ups, total;
 };
 
 // The raster's configuration: the screen, times the supersampling, in
@@ -81,6 +81,7 @@ Layout layout_of(const RendererConfig& c) {
   l.tile_list = take(node_lanes ? 4 * size_t{point_raster_items(r)} : 0);
   l.mean_terms = take(sizeof(int32_t) * 3 * 3 * (size_t{1} << kMeanTermBits));
   l.ppn = take(node_lanes ? sizeof(PpnTable) + 4 : 0);
+  l.close_ups = take(c.close_ups ? sizeof(CloseUp) * close_up_capacity(r.width, r.height) : 0);
   l.total = arena.total();
   return l;
 }
@@ -133,6 +134,22 @@ inline void mean_axis_terms(RotationColumn column, int32_t d, int32_t out[3]) {
 }
 
 inline int bit_length(uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); }
+
+// Whether a node's screen sigmas' geometric mean passes 2^log2 px: its
+// screen covariance (a, b; b, c in (1/16 px)^2, each below 3 * 2^48) has a
+// determinant past (16 2^log2)^4 in (1/16 px)^4 — which needs a + c past
+// 2 (16 2^log2)^2 (the node lanes leave every such node to this set-up).
+// Huge nodes' terms are shifted to 31 bits first: their determinant's top
+// bits decide.
+inline bool screen_sigma_beyond(int64_t a, int64_t b, int64_t c, int log2) {
+  const int kDet = 4 * (4 + log2);
+  const int64_t most = a > c ? a : c;
+  if (most < (int64_t{1} << (kDet / 2))) return false;  // a + c below 2 (16 2^log2)^2: the determinant below the bound
+  const int s = bit_length(static_cast<uint64_t>(most)) > 31 ? bit_length(static_cast<uint64_t>(most)) - 31 : 0;
+  const int64_t as = a >> s, bs = b >> s, cs = c >> s;
+  const int64_t det = as * cs - bs * bs;
+  return 2 * s >= kDet ? det > 0 : det > (int64_t{1} << (kDet - 2 * s));
+}
 
 // A node's camera-space mean formed from its fields (mean_axis_terms), in a
 // frame without the mean table.
@@ -231,7 +248,9 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   tile_nodes_.init(raster_.item_words(0), raster_.item_capacity());
   tile_list_ = l.tile_list != l.mean_terms ? reinterpret_cast<uint32_t*>(base + l.tile_list) : nullptr;
   mean_terms_ = reinterpret_cast<int32_t*>(base + l.mean_terms);
-  lane_ppn_ = l.ppn != l.total ? reinterpret_cast<uint16_t*>(base + l.ppn) : nullptr;
+  lane_ppn_ = l.ppn != l.close_ups ? reinterpret_cast<uint16_t*>(base + l.ppn) : nullptr;
+  close_ups_ = config.close_ups ? reinterpret_cast<CloseUp*>(base + l.close_ups) : nullptr;
+  close_up_capacity_ = config.close_ups ? close_up_capacity(internal_.width, internal_.height) : 0;
   lanes_ = config.lanes == PointLanes::kScalar ? PointLanes::kScalar
            : config.lanes == PointLanes::kBest && avx2::supported() ? PointLanes::kBest
                                                                      : PointLanes::kBaseline;
@@ -295,6 +314,9 @@ struct PointRenderer::FrameSetup {
   int elevation_bits;   // that field's width
   bool elevation_down;  // the axis points down: the ramp reversed
   bool lit;  // the model has normals and the shading uses them
+  bool close_ups;  // nodes may be drawn as discs (RendererConfig::close_ups, without the point cap)
+  int close_up_log2;  // close-ups are measured in screen pixels: log2 of the supersampling
+  CloseUpFrame close_up;
 };
 
 // Depth: the node's (Z - near) and depth per sigma in the depth word's units.
@@ -446,6 +468,35 @@ template <PointNormals kNormals, bool kColorPoints>
   return false;
 }
 
+// Close-ups (close_up.h): the node as its 3 sigma disc, shaded as its
+// points would be (with sampled normals: by its mean normal), while the
+// frame has room for it; false — drawn as points, or culled — otherwise.
+template <PointNormals kNormals, bool kSpecular>
+bool PointRenderer::take_close_up(const FrameSetup& f, const NodeFields& fields, const int32_t c[3],
+                                  const int16_t frame[3][3], const int32_t sk[3], FrameStats& stats) {
+  if (close_up_count_ >= close_up_capacity_) return false;
+  CloseUp& disc = close_ups_[close_up_count_];
+  if (!set_up_close_up(f.close_up, c, frame, sk, &disc)) return false;
+  PointShade sh;
+  set_up_shade<kNormals, false, kSpecular>(f, fields, frame, sk, sh);
+  disc.shade = PackedShade(sh);
+  ++close_up_count_;
+  ++stats.nodes_drawn;
+  ++stats.nodes_close_up;
+  return true;
+}
+
+// The frame's discs over one tile's words, after its points.
+template <PointNormals kNormals, bool kSpecular, class Word>
+void PointRenderer::draw_close_ups(int px0, int py0, Word* words) {
+  const int tile = 1 << internal_.tile_log2;
+  const int pw = px0 + tile > internal_.width ? internal_.width - px0 : tile;
+  const int ph = py0 + tile > internal_.height ? internal_.height - py0 : tile;
+  constexpr PointNormals kDisc = kNormals == PointNormals::kSurface ? kNormals : PointNormals::kNode;
+  for (uint32_t i = 0; i < close_up_count_; ++i)
+    draw_close_up<kDisc, kSpecular>(close_ups_[i], tables_, reciprocal_, px0, py0, pw, ph, internal_.tile_log2, words);
+}
+
 template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
 void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uint32_t max_points, FrameStats& stats) {
   const NodeDecoder& decoder = *f.decoder;
@@ -458,7 +509,8 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   } else {
     camera_mean(f.camera, decoder, fields, c);
   }
-  if (!NodeProjection::in_view(f.camera, c)) {
+  const bool in_view = NodeProjection::in_view(f.camera, c);
+  if (!in_view && !f.close_ups) {
     ++stats.nodes_culled;
     return;
   }
@@ -473,10 +525,19 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
     sk[k] = sigma[k] < kMaxSigmaP ? sigma[k] : kMaxSigmaP;
     for (int i = 0; i < 3; ++i) axes[k][i] = mul_q14_fast(frame[k][i], sk[k]);
   }
+  // A close-up whose mean lies outside the view, or too near for the
+  // projection: its disc where it reaches into the view.
+  constexpr PointNormals kDisc = kNormals == PointNormals::kSurface ? kNormals : PointNormals::kNode;
+  if (!in_view) {
+    const int32_t largest = sk[0] > sk[1] ? (sk[0] > sk[2] ? sk[0] : sk[2]) : (sk[1] > sk[2] ? sk[1] : sk[2]);
+    if (!close_up_reaches(f.camera, c, largest) || !take_close_up<kDisc, kSpecular>(f, fields, c, frame, sk, stats))
+      ++stats.nodes_culled;
+    return;
+  }
   PointSetup s;
   NodeProjection& proj = s.proj;
   if (!proj.template setup<P != Projection::kAffine>(f.camera, c, axes)) {
-    ++stats.nodes_culled;
+    if (!f.close_ups || !take_close_up<kDisc, kSpecular>(f, fields, c, frame, sk, stats)) ++stats.nodes_culled;
     return;
   }
   // The gamma-extent (3.5 sigma) on screen, an L1 bound: cull nodes wholly
@@ -495,12 +556,19 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   }
   ex = (ex * 7) >> 1;
   ey = (ey * 7) >> 1;
+  if (f.close_ups && screen_sigma_beyond(a, b, cc, f.close_up_log2 + kCloseUpSigmaLog2) && take_close_up<kDisc, kSpecular>(f, fields, c, frame, sk, stats)) return;
   if (proj.x0_q4 + ex < 0 || proj.x0_q4 - ex >= f.width_q4 || proj.y0_q4 + ey < 0 || proj.y0_q4 - ey >= f.height_q4) {
     ++stats.nodes_culled;
     return;
   }
   // a, c: (1/16 px)^2 = 1/256 px^2, below 3 * 2^48.
   s.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
+  // Close-ups' points: a node past 2^kCloseUpPointsLog2 px (beyond the cut's
+  // size: a leaf seen close) draws kCloseUpPointsScale_q8 / 256 times its count.
+  if (f.close_ups && screen_sigma_beyond(a, b, cc, f.close_up_log2 + kCloseUpPointsLog2)) {
+    const uint32_t more = s.count * kCloseUpPointsScale_q8 >> 8;
+    s.count = more < config_.samples ? more : config_.samples;
+  }
   if (s.count > max_points) s.count = max_points;  // the point cap
   s.near = f.camera.near_mu;
   s.size = config_.point_size;
@@ -539,10 +607,15 @@ void PointRenderer::draw_tile_nodes(uint32_t tile, int px0, int py0, Word* words
 template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
 void PointRenderer::tile_nodes_of(void* context, uint32_t tile, int px0, int py0, void* words) {
   PointRenderer& r = *static_cast<PointRenderer*>(context);
-  if (r.internal_.format == PixelFormat::kRgb565)
-    r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint32_t*>(words));
-  else
-    r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint64_t*>(words));
+  // With discs every tile is called, with nodes or none.
+  const bool nodes = r.raster_.items() != 0 && r.raster_.first_link(tile) != PointRaster::kNoLink;
+  if (r.internal_.format == PixelFormat::kRgb565) {
+    if (nodes) r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint32_t*>(words));
+    if (r.close_up_count_ != 0) r.draw_close_ups<kNormals, kSpecular>(px0, py0, static_cast<uint32_t*>(words));
+  } else {
+    if (nodes) r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint64_t*>(words));
+    if (r.close_up_count_ != 0) r.draw_close_ups<kNormals, kSpecular>(px0, py0, static_cast<uint64_t*>(words));
+  }
 }
 
 // The per-point path through the bins: its own function, never inlined,
@@ -658,6 +731,8 @@ NodeLaneFrame PointRenderer::lane_frame(const FrameSetup& f, const NodeCache& ca
   lf.samples = config_.samples;
   lf.sample_reach = &sample_reach_[0][0];
   lf.lit = f.lit;
+  lf.close_ups = f.close_ups;
+  lf.close_up_wide = 1 << (2 * (4 + f.close_up_log2 + kCloseUpPointsLog2) + 1);
   lf.shading = shading_;
   lf.base_rgb = config_.grey_rgb & 0xFFFFFFu;
   return lf;
@@ -732,6 +807,10 @@ RenderStatus PointRenderer::set_up_frame(const NodeCache& cache, const Camera& c
   f.elevation_bits = elevation ? header.layout.bits[f.elevation_field] : 0;
   f.decoder = &cache.decoder();
   f.lit = header.has_normals() && config_.shading != ShadingMode::kNone;
+  f.close_ups = close_up_capacity_ > 0 && config_.point_cap == 0;
+  f.close_up_log2 = config_.supersample == 4 ? 2 : config_.supersample == 2 ? 1 : 0;
+  f.close_up = CloseUpFrame{f.camera.focal_q4, f.camera.center_q4[0], f.camera.center_q4[1], f.camera.near_mu,
+                            internal_.width, internal_.height, f.depth_shift};
   tables_.uniform_base = !f.model_color;
   tables_.base_rgb = config_.grey_rgb & 0xFFFFFFu;
   tables_.grey_shade = f.model_color ? nullptr : grey_shades_;
@@ -877,6 +956,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   if (stats.mean_table) build_mean_terms(f.camera, cache.decoder(), mean_terms_, f.mean);
 
   raster_.begin_frame();
+  close_up_count_ = 0;
   // The point cap: a node draws at most point_cap times the original points
   // under it (times the supersampling's n^2, so it means the same on screen).
   const int32_t n = config_.supersample;
@@ -896,7 +976,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   const uint32_t first = node_lanes ? set_up_in_lanes(f, cache, k, stats, draw_slot) : 0;
   for (uint32_t s = first; s < count; ++s) draw_slot(s);
   raster_.draw(config_.clear_rgb, n == 1 ? frame : internal_frame_, n == 1 ? stride : size_t{internal_.width} * 3,
-               coverage_, k.tile, this);
+               coverage_, k.tile, this, close_up_count_ != 0);
   if (n > 1) finish_supersampled(frame, stride);
   if (screen_coverage_ != nullptr)
     resolve_frame(frame, stride, config_.raster.format, config_.raster.width, config_.raster.height, screen_coverage_,

@@ -26,6 +26,7 @@
 #include "core/camera.h"
 #include "core/gaussian_table.h"
 #include "core/node_cache.h"
+#include "raster/close_up.h"
 #include "raster/node_lanes.h"
 #include "raster/node_setup.h"
 #include "raster/point_kernel.h"
@@ -79,6 +80,13 @@ struct RendererConfig {
   // under it (the counts the stream carries with each node; 0: no cap), so
   // sparse returns stay sparse (docs/results.md).
   uint8_t point_cap = 0;
+  // Close-ups: a node whose screen sigma passes kCloseUpSigmaPx (its
+  // samples sparser than the pixels they cover: a leaf seen closer than
+  // its spacing), or which reaches into the view from a mean outside it,
+  // is drawn as its 3 sigma disc, perspective correct and shaded per pixel
+  // (raster/close_up.h) — not with the point cap, which keeps sparse scans
+  // sparse. Up to close_up_capacity discs a frame; more are drawn as points.
+  bool close_ups = true;
   // Which loops draw the tile pass's points: the widest this CPU has
   // (kBest: AVX2 on x86-64 where the CPU has it, else SSE2; NEON on ARMv7
   // and AArch64), the build's baseline lanes (SSE2 or NEON), or one point at
@@ -115,6 +123,7 @@ struct FrameStats {
   uint32_t points = 0;        // points generated and binned
   uint32_t points_dropped = 0;  // refused by a full frame budget
   uint32_t nodes_in_tiles = 0;  // of nodes_drawn: drawn inside the tile pass (RendererConfig::tile_nodes)
+  uint32_t nodes_close_up = 0;  // of nodes_drawn: drawn as discs (RendererConfig::close_ups)
   uint32_t nodes_in_lanes = 0;  // of nodes: set up 8 at a time in AVX2 lanes, culled or drawn (raster/node_lanes.h)
   bool mean_table = false;      // the means' camera-space terms came from the frame's table (docs/fixed_point.md)
 };
@@ -168,6 +177,11 @@ class PointRenderer {
                     PointShade& sh);
   template <PointNormals kNormals, bool kColorPoints>
   bool wait_in_tiles(PointSetup& s, FrameStats& stats);
+  template <PointNormals kNormals, bool kSpecular>
+  bool take_close_up(const FrameSetup& f, const NodeFields& fields, const int32_t c[3], const int16_t frame[3][3],
+                     const int32_t sk[3], FrameStats& stats);
+  template <PointNormals kNormals, bool kSpecular, class Word>
+  void draw_close_ups(int px0, int py0, Word* words);
   template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
   [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
   template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
@@ -199,6 +213,8 @@ class PointRenderer {
   uint16_t* reciprocal_ = nullptr;  // 1024 entries
   const PpnTable* ppn_ = nullptr;
   PointTables tables_;
+  CloseUp* close_ups_ = nullptr;    // the frame's discs
+  uint32_t close_up_capacity_ = 0, close_up_count_ = 0;
   const uint32_t* grey_shades_ = nullptr;  // the grey shortcut's tables (PointTables::grey_shade), null when the grey is not one
   FrameAngles angles_;
   TileNodes tile_nodes_;            // the raster's items

@@ -106,6 +106,7 @@ TEST(Extremes, EveryCaseEncodesDrawsAndStaysFinite) {
     for (const Vec3& s : model.sigma_p) ASSERT_TRUE(s.allFinite());
     ClientConfig config;
     config.resolve = false;  // the points as drawn, as the reference draws them
+    config.raster.max_points = 1u << 20;  // none dropped (the reference draws every point)
     FixedRender fixed;
     ASSERT_TRUE(render_fixed(view, spg.data(), config, CutRule{CutRule::kProjectedSize, 0, 32}, ViewSpec{}, fixed, error))
         << error;

@@ -695,13 +695,16 @@ bool GlRenderer::draw(const NodeCache& cache, const Camera& camera, int width, i
     // sparse) there are no discs. A smaller node that wants more points
     // than the samples hold draws them larger, by the square root of the
     // shortfall.
-    if (std::sqrt(s1 * s2) > kDiscSigma && o.point_cap == 0) {
+    if (std::sqrt(s1 * s2) > kDiscSigma && o.point_cap == 0 && o.close_ups) {
       counts_[slot] = 1;
       buckets_[slot] = kDiscBucket;
       ++in_bucket[kDiscBucket];
       continue;
     }
     const float size = static_cast<float>(o.point_size);
+    // (Not the software client's doubled close-up points, raster/close_up.h:
+    // with this count they cost the bunny's three views 0.8 dB past 1 px,
+    // 0.5 past 2 px — docs/viewers.md.)
     const float want = kCoverage * 3.14159265f * (2 * s1) * (2 * s2) / (size * size) * static_cast<float>(o.quality_q8) / 256.f;
     uint32_t count = static_cast<uint32_t>(std::clamp(std::ceil(want), 1.f, static_cast<float>(samples_)));
     const float grown = want > static_cast<float>(count) ? size * std::sqrt(want / static_cast<float>(count)) : size;

@@ -88,6 +88,7 @@ struct GlRenderOptions {
   // window's MSAA applies only without it (the resolve draws offscreen).
   bool resolve = true;
   uint8_t point_cap = 0;  // a node draws at most this times its original points (0: no cap)
+  bool close_ups = true;  // a node past kDiscSigma px as its disc (--close-ups; none with the point cap)
   float specular = 0.25f;  // Blinn highlight's strength (0: none) and shininess
   float shininess = 16.f;
   uint8_t point_size = 2;      // px

@@ -251,6 +251,7 @@ TEST(Client, MeanTableGivesTheTermsDrawNodeForms) {
       c.raster.max_points = 1u << 21;  // no point dropped
       c.projection = projection;
       c.lanes = lanes;  // not the x86 node lanes, which always read the table
+      c.close_ups = false;  // the nodes behind the eye culled by their means, none drawn as the discs they reach
       Harness few(c), many(c);
       ASSERT_EQ(few.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
       ASSERT_EQ(many.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
@@ -550,6 +551,7 @@ TEST(Client, PointCapBoundsEachNodeByItsOriginalPoints) {
     ClientConfig c = small_config();
     c.point_cap = caps[k];
     c.resolve = false;
+    c.close_ups = false;  // the cap alone (a capped frame has no close-ups: the uncapped one would draw more)
     Harness h(c);
     ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
     uint64_t bound = 0;
@@ -572,6 +574,7 @@ TEST(Client, PointCapBoundsEachNodeByItsOriginalPoints) {
   ClientConfig c = small_config();
   c.point_cap = 1;
   c.resolve = false;
+  c.close_ups = false;
   Harness h(c);
   ASSERT_EQ(h.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);
   for (uint32_t id = 3000; id < 6913; ++id)
@@ -588,9 +591,11 @@ TEST(Client, SupersamplingIsTheLargerFrameAveragedBlockByBlock) {
     ss.raster.format = PixelFormat::kRgb888;
     ss.supersample = static_cast<uint8_t>(n);
     ss.resolve = false;  // the mean alone (the resolve follows it: tests/portable/resolve_test.cpp)
+    ss.close_ups = false;  // close-ups are sized in the screen's pixels, not the larger frame's
     ClientConfig big = small_config();
     big.raster = RasterConfig{static_cast<uint16_t>(240 * n), static_cast<uint16_t>(320 * n), 5, PixelFormat::kRgb888, 200000};
     big.resolve = false;
+    big.close_ups = false;
     EXPECT_GT(client_arena_bytes(ss), client_arena_bytes(small_config()) + size_t{240} * 320 * 3 * n * n);
     Harness a(ss), b(big);
     ASSERT_EQ(a.client.load_startup(bunny().file.data(), bunny().startup_bytes), ClientStatus::kOk);

@@ -381,6 +381,68 @@ BENCHMARK(BM_ClientFrame)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
 
+// Close-ups (raster/close_up.h): a scanned plane of 64 x 64 points, one
+// unit apart, from arg 0's view — 0: face on from a tenth of its spacing
+// (the whole screen one disc deep), 1: face on from 0.05 of the model (a
+// few hundred discs), 2: at 30 degrees from 0.3 (discs near, points far) —
+// at arg 1's screen (0: the handheld's 240 x 320 RGB565, 1: 640 x 480
+// RGB888), the default client (surface normals, the resolve). Counters:
+// the discs and the points of the frame.
+void BM_CloseUpFrame(benchmark::State& state) {
+  static const std::vector<uint8_t> spg = [] {
+    PointCloud plane;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        plane.positions.push_back(Vec3(x, y, 0));
+        plane.normals.push_back(Vec3(0, 0, 1));
+      }
+    std::vector<uint8_t> bytes;
+    EncodeReport r;
+    std::string error;
+    if (!encode_cloud(plane, EncodeOptions{}, bytes, r, error)) std::abort();
+    return bytes;
+  }();
+  SpgView view;
+  if (!spg_parse(spg.data(), spg.size(), &view).ok()) std::abort();
+  const bool large = state.range(1) != 0;
+  ClientConfig c;
+  c.raster = RasterConfig{static_cast<uint16_t>(large ? 640 : 240), static_cast<uint16_t>(large ? 480 : 320),
+                          kDefaultTileLog2, large ? PixelFormat::kRgb888 : PixelFormat::kRgb565, 1u << 21};
+  const char* views[] = {"0,90,0.0016", "0,90,0.05", "20,30,0.3"};
+  ViewSpec spec;
+  std::string error;
+  if (!parse_view(views[state.range(0)], spec, error)) std::abort();
+  FixedRender fixed;  // the cut, the camera and the frame as stipple render draws them
+  if (!render_fixed(view, spg.data(), c, CutRule{CutRule::kProjectedSize, 0, 32}, spec, fixed, error)) std::abort();
+  c.node_capacity = view.header.node_count;
+  std::vector<uint64_t> arena(client_arena_bytes(c) / 8 + 1);
+  Client client;
+  if (client.init(c, arena.data(), arena.size() * 8) != ClientStatus::kOk ||
+      client.load_startup(spg.data(), spg_startup_bytes(view.header.version, view.header.class_count)) != ClientStatus::kOk)
+    std::abort();
+  for (uint32_t id : fixed.cut)
+    if (client.put_node(NodeId{id}, view.records + size_t{id} * view.record_bytes, view.record_bytes) != ClientStatus::kOk)
+      std::abort();
+  const size_t stride = size_t{c.raster.width} * bytes_per_pixel(c.raster.format);
+  std::vector<uint8_t> frame(stride * c.raster.height);
+  FrameStats stats;
+  for (auto _ : state) {
+    if (client.render(fixed.camera, frame.data(), stride, &stats) != ClientStatus::kOk) std::abort();
+    benchmark::DoNotOptimize(frame.data());
+  }
+  state.counters["discs"] = stats.nodes_close_up;
+  state.counters["points"] = stats.points;
+}
+BENCHMARK(BM_CloseUpFrame)
+    ->ArgNames({"view", "large"})
+    ->Args({0, 0})
+    ->Args({1, 0})
+    ->Args({2, 0})
+    ->Args({0, 1})
+    ->Args({1, 1})
+    ->Args({2, 1})
+    ->Unit(benchmark::kMillisecond);
+
 // The screen-space resolve of a finished frame (raster/resolve.h): the
 // coverage of arg 0's share of the pixels (percent) in scattered blobs, at
 // 240 x 320 RGB565 (arg 1 = 0) or 640 x 480 RGB888 (1).

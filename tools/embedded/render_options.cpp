@@ -66,6 +66,13 @@ const char kRenderOptionsHelp[] =
     "  --resolve on|off       the screen-space resolve: fill pinholes, trim the\n"
     "                         points' fringe at silhouettes, blend 3x3\n"
     "                         (default on: docs/results.md)\n"
+    "  --splat points         how nodes are drawn: the fixed-point client's points (and\n"
+    "                         close-ups' discs); EWA splats are the GL client's\n"
+    "                         (stipple-gl --splat ewa; docs/fixed_point.md \"EWA\")\n"
+    "  --close-ups on|off     draw a node larger on screen than its samples cover\n"
+    "                         (8 px sigma: a leaf seen closer than its spacing) as\n"
+    "                         its 3 sigma disc, so the surface stays closed\n"
+    "                         (default on; off with --point-cap)\n"
     "  --pseudo               pseudo-random instead of Sobol samples\n"
     "  --samples N            Gaussian table entries = most points per node (default 1024)\n"
     "  --max-points N         frame budget (default 1048576)\n"
@@ -144,6 +151,17 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
     if (v == "on") c.resolve = true;
     else if (v == "off") c.resolve = false;
     else return error = "--resolve: expected on or off, got '" + v + "'", false;
+  }
+  if (args.value("--splat", v)) {
+    if (v == "ewa")
+      return error = "--splat ewa: the fixed-point client draws points (and close-ups' discs); EWA splats are the GL "
+                     "client's: stipple-gl --splat ewa (docs/fixed_point.md \"EWA\" says why)", false;
+    if (v != "points") return error = "--splat: expected points or ewa, got '" + v + "'", false;
+  }
+  if (args.value("--close-ups", v)) {
+    if (v == "on") c.close_ups = true;
+    else if (v == "off") c.close_ups = false;
+    else return error = "--close-ups: expected on or off, got '" + v + "'", false;
   }
   if (args.flag("--no-specular")) c.lighting.specular_q8 = 0;
   if (args.flag("--grey")) c.grey = true;

@@ -68,6 +68,7 @@ GlRenderOptions gl_options(const RenderOptions& o, bool gpu, GlSplat splat, cons
   g.surface_normals = o.config.shading != ShadingMode::kPerNode;
   g.resolve = o.config.resolve;
   g.point_cap = o.config.point_cap;
+  g.close_ups = o.config.close_ups;
   g.specular = static_cast<float>(o.config.lighting.specular_q8) / 256.f;
   g.shininess = o.config.lighting.shininess;
   g.point_size = o.config.point_size;

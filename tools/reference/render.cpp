@@ -7,6 +7,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "raster/close_up.h"
 #include "tools/reference/sampler.h"
 
 namespace stipple {
@@ -116,25 +117,20 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
   std::vector<uint32_t> color_buf(static_cast<size_t>(w) * h, config.clear_rgb);
   const Vec3 grey(((config.grey_rgb >> 16) & 255), ((config.grey_rgb >> 8) & 255), (config.grey_rgb & 255));
   const int s = config.point_size;
+  const bool close_ups = config.close_ups && config.point_cap == 0;
+  const auto plot = [&](int px, int py, double z, uint32_t rgb) {
+    const size_t i = static_cast<size_t>(py) * w + px;
+    if (z < depth[i]) {
+      depth[i] = z;
+      color_buf[i] = rgb;
+    }
+  };
   for (uint32_t id : cut) {
     const DecodedNode& node = model.nodes[id];
     const Vec3 mean = (node.position.mean - model.bbox_min) * to_mu;
     const Mat3 axes = node.position.frame * node.position.sigma.asDiagonal() * to_mu;  // columns: sigma-scaled axes, MU
     const Vec3 c = R * (mean - eye);
-    if (c.z() <= near || std::abs(c.x()) > 8 * c.z() || std::abs(c.y()) > 8 * c.z()) continue;
     const Mat3 A = R * axes;  // camera-space axes (columns)
-    // Jacobian of the projection at the mean, px per MU; M = J A, px per sigma.
-    Eigen::Matrix<double, 2, 3> J;
-    J << focal / c.z(), 0, -focal * c.x() / (c.z() * c.z()), 0, focal / c.z(), -focal * c.y() / (c.z() * c.z());
-    const Eigen::Matrix<double, 2, 3> M = J * A;
-    const double sx0 = cx + focal * c.x() / c.z(), sy0 = cy + focal * c.y() / c.z();
-    const double ex = 3.5 * M.row(0).cwiseAbs().sum(), ey = 3.5 * M.row(1).cwiseAbs().sum();
-    if (sx0 + ex < 0 || sx0 - ex >= w || sy0 + ey < 0 || sy0 - ey >= h) continue;
-    const Eigen::Matrix2d S = M * M.transpose() * 256.0;  // 1/256 px^2
-    // Saturated to +-2^40, NaN to +2^40 (the index saturates far below):
-    // llround of a value beyond 2^63 has no defined result.
-    const auto q = [](double v) { return std::llround(v < -0x1p40 ? -0x1p40 : v < 0x1p40 ? v : 0x1p40); };
-    const uint32_t count = points_per_node(table, ppn_index(q(S(0, 0)), q(S(0, 1)), q(S(1, 1))), config.quality_q8, config.samples);
     const Vec3 base = color ? Vec3(node.color.mean * 255.0) : grey;
     const Vec3 n0 = node.normal_frame.col(2);
     // kSurface: the sample's offset along each tangent of the normal frame,
@@ -146,19 +142,17 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
         const Eigen::RowVector3d along = node.normal_frame.col(k).transpose() * axes;
         if (along.norm() > 0) surface.row(k) = along / along.norm();
       }
-    for (uint32_t j = 0; j < count; ++j) {
-      const Vec3 p = c + A * g3(j, 0);
-      if (p.z() < near) continue;
-      if (std::abs(p.x()) > 8 * p.z() || std::abs(p.y()) > 8 * p.z()) continue;
-      const double x = cx + focal * p.x() / p.z(), y = cy + focal * p.y() / p.z();
+    // The colour of position sample g (sigmas along the frame's axes; j
+    // indexes the normal and colour samples, -1: the node's mean colour).
+    const auto shaded = [&](const Vec3& g, int64_t j) {
       Vec3 col = base;
-      if (color_points)
-        col = (node.color.mean + node.color.frame * node.color.sigma.cwiseProduct(g3(j, kColorSobolDim))).cwiseMax(0.0).cwiseMin(1.0) * 255.0;
+      if (color_points && j >= 0)
+        col = (node.color.mean + node.color.frame * node.color.sigma.cwiseProduct(g3(static_cast<uint32_t>(j), kColorSobolDim))).cwiseMax(0.0).cwiseMin(1.0) * 255.0;
       double intensity = 1, highlight = 0;
       if (normals) {
         Vec3 n = n0;
-        if (per_point_normals || surface_normals) {
-          const Vec2 t = surface_normals ? Vec2(surface * g3(j, 0)) : g2(j);
+        if ((per_point_normals && j >= 0) || surface_normals) {
+          const Vec2 t = surface_normals ? Vec2(surface * g) : g2(static_cast<uint32_t>(j));
           const double a = node.sigma_n[0] * t.x(), b = node.sigma_n[1] * t.y();
           const double theta = std::hypot(a, b), phi = std::atan2(b, a);
           n = node.normal_frame * Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
@@ -169,15 +163,68 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
       col = (col * intensity).array() + highlight;
       uint32_t rgb = 0;
       for (int k = 0; k < 3; ++k) rgb = (rgb << 8) | static_cast<uint32_t>(std::clamp(std::lround(col[k]), 0L, 255L));
+      return rgb;
+    };
+    // A close-up's disc (raster/close_up.h): every pixel's ray cast at the
+    // plane of the two larger axes, within 3 sigma; shaded per pixel by
+    // the place it hits.
+    const auto disc = [&] {
+      const Vec3 sg = node.position.sigma * to_mu;
+      const int kn = sg[2] <= sg[1] ? (sg[2] <= sg[0] ? 2 : 0) : (sg[1] <= sg[0] ? 1 : 0);
+      const int k1 = kn == 0 ? 1 : 0, k2 = kn == 2 ? 1 : 2;
+      const Mat3 F = R * node.position.frame;
+      Vec3 n = F.col(kn);
+      double nc = n.dot(c);
+      if (nc == 0 || !(sg[k1] > 0) || !(sg[k2] > 0)) return;
+      if (nc < 0) n = -n, nc = -nc;
+      for (int py = 0; py < h; ++py)
+        for (int px = 0; px < w; ++px) {
+          const Vec3 d(px + 0.5 - cx, py + 0.5 - cy, focal);
+          const double wd = n.dot(d);
+          if (wd <= 0) continue;
+          const Vec3 p = d * (nc / wd);
+          if (p.z() < near) continue;
+          Vec3 g = Vec3::Zero();
+          g[k1] = F.col(k1).dot(p - c) / sg[k1];
+          g[k2] = F.col(k2).dot(p - c) / sg[k2];
+          if (g[k1] * g[k1] + g[k2] * g[k2] > 9) continue;
+          plot(px, py, p.z(), shaded(g, -1));
+        }
+    };
+    if (c.z() <= near || std::abs(c.x()) > 8 * c.z() || std::abs(c.y()) > 8 * c.z()) {
+      const double r = 3 * node.position.sigma.maxCoeff() * to_mu, z = c.z() + r;
+      if (close_ups && z > near && std::abs(c.x()) - r <= 8 * z && std::abs(c.y()) - r <= 8 * z) disc();
+      continue;
+    }
+    // Jacobian of the projection at the mean, px per MU; M = J A, px per sigma.
+    Eigen::Matrix<double, 2, 3> J;
+    J << focal / c.z(), 0, -focal * c.x() / (c.z() * c.z()), 0, focal / c.z(), -focal * c.y() / (c.z() * c.z());
+    const Eigen::Matrix<double, 2, 3> M = J * A;
+    const double sx0 = cx + focal * c.x() / c.z(), sy0 = cy + focal * c.y() / c.z();
+    const double ex = 3.5 * M.row(0).cwiseAbs().sum(), ey = 3.5 * M.row(1).cwiseAbs().sum();
+    const Eigen::Matrix2d S = M * M.transpose() * 256.0;  // 1/256 px^2
+    // sigma1 sigma2 on screen, px^2: past 64 a disc, past 1 twice the points.
+    const double area = std::sqrt(std::max(0.0, S.determinant())) / 256.0;
+    if (close_ups && area > kCloseUpSigmaPx * kCloseUpSigmaPx) {
+      disc();
+      continue;
+    }
+    if (sx0 + ex < 0 || sx0 - ex >= w || sy0 + ey < 0 || sy0 - ey >= h) continue;
+    // Saturated to +-2^40, NaN to +2^40 (the index saturates far below):
+    // llround of a value beyond 2^63 has no defined result.
+    const auto q = [](double v) { return std::llround(v < -0x1p40 ? -0x1p40 : v < 0x1p40 ? v : 0x1p40); };
+    uint32_t count = points_per_node(table, ppn_index(q(S(0, 0)), q(S(0, 1)), q(S(1, 1))), config.quality_q8, config.samples);
+    if (close_ups && area > double(1 << (2 * kCloseUpPointsLog2)))
+      count = std::min<uint32_t>(count * kCloseUpPointsScale_q8 >> 8, config.samples);
+    for (uint32_t j = 0; j < count; ++j) {
+      const Vec3 p = c + A * g3(j, 0);
+      if (p.z() < near) continue;
+      if (std::abs(p.x()) > 8 * p.z() || std::abs(p.y()) > 8 * p.z()) continue;
+      const double x = cx + focal * p.x() / p.z(), y = cy + focal * p.y() / p.z();
+      const uint32_t rgb = shaded(g3(j, 0), j);
       const int x0 = static_cast<int>(std::floor(x - (s - 1) / 2.0)), y0 = static_cast<int>(std::floor(y - (s - 1) / 2.0));
       for (int py = std::max(y0, 0); py < std::min(y0 + s, h); ++py)
-        for (int px = std::max(x0, 0); px < std::min(x0 + s, w); ++px) {
-          const size_t i = static_cast<size_t>(py) * w + px;
-          if (p.z() < depth[i]) {
-            depth[i] = p.z();
-            color_buf[i] = rgb;
-          }
-        }
+        for (int px = std::max(x0, 0); px < std::min(x0 + s, w); ++px) plot(px, py, p.z(), rgb);
     }
   }
   return image_of(color_buf, config);
