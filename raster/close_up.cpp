@@ -76,32 +76,43 @@ bool set_up_close_up(const CloseUpFrame& f, const int32_t c[3], const int16_t fr
   if (kz < -100 || kz > 100) return false;
   s.kz = static_cast<int8_t>(kz);
   s.near_word = int64_t{f.near} * (int64_t{1} << f.depth_shift);
-  // The bounding box: the projections of the 3 sigma square's corners in
-  // the plane, when each is beyond the near plane and inside the cone;
-  // otherwise the screen (each pixel's test decides).
-  int64_t lo[2] = {INT64_MAX, INT64_MAX}, hi[2] = {INT64_MIN, INT64_MIN};
-  bool whole = false;
-  for (int corner = 0; corner < 4 && !whole; ++corner) {
-    int64_t p[3];
+  // The bounding box: the projection of the 3 sigma square in the plane
+  // (the disc lies in it), clipped to the space beyond the near plane —
+  // what of the disc can be drawn at all. Corners are 3 sigma (< 2^26.6)
+  // from the mean; each clipped edge's point one division, each vertex two.
+  int64_t square[4][3];
+  for (int corner = 0; corner < 4; ++corner)
     for (int i = 0; i < 3; ++i) {
       const int64_t e1 = int64_t{frame[k1][i]} * sigma[k1] * kCloseUpCut, e2 = int64_t{frame[k2][i]} * sigma[k2] * kCloseUpCut;
-      p[i] = c[i] + (((corner & 1) ? e1 : -e1) + ((corner & 2) ? e2 : -e2)) / (1 << 14);
+      const bool plus1 = corner == 1 || corner == 2, plus2 = corner >= 2;  // around the square
+      square[corner][i] = c[i] + ((plus1 ? e1 : -e1) + (plus2 ? e2 : -e2)) / (1 << 14);
     }
-    if (p[2] <= f.near || abs64(p[0]) > 8 * p[2] || abs64(p[1]) > 8 * p[2]) {
-      whole = true;
-      break;
-    }
+  const int64_t z_min = int64_t{f.near} + 1;
+  int64_t lo[2] = {INT64_MAX, INT64_MAX}, hi[2] = {INT64_MIN, INT64_MIN};
+  const auto project = [&](const int64_t p[3]) {
     const int64_t x = f.cx_q4 + floor_div(int64_t{f.focal_q4} * p[0], p[2]), y = f.cy_q4 + floor_div(int64_t{f.focal_q4} * p[1], p[2]);
     lo[0] = x < lo[0] ? x : lo[0], hi[0] = x > hi[0] ? x : hi[0];
     lo[1] = y < lo[1] ? y : lo[1], hi[1] = y > hi[1] ? y : hi[1];
+  };
+  int vertices = 0;
+  for (int edge = 0; edge < 4; ++edge) {
+    const int64_t* from = square[edge];
+    const int64_t* to = square[(edge + 1) & 3];
+    const bool from_in = from[2] >= z_min, to_in = to[2] >= z_min;
+    if (from_in) project(from), ++vertices;
+    if (from_in != to_in) {  // the edge crosses the near plane: its point there
+      int64_t p[3];
+      for (int i = 0; i < 2; ++i) p[i] = from[i] + floor_div((to[i] - from[i]) * (z_min - from[2]), to[2] - from[2]);
+      p[2] = z_min;
+      project(p), ++vertices;
+    }
   }
-  int64_t box[4] = {0, f.width - 1, 0, f.height - 1};
-  if (!whole) {
-    box[0] = (lo[0] >> 4) - 1 > 0 ? (lo[0] >> 4) - 1 : 0;
-    box[1] = (hi[0] >> 4) + 1 < f.width - 1 ? (hi[0] >> 4) + 1 : f.width - 1;
-    box[2] = (lo[1] >> 4) - 1 > 0 ? (lo[1] >> 4) - 1 : 0;
-    box[3] = (hi[1] >> 4) + 1 < f.height - 1 ? (hi[1] >> 4) + 1 : f.height - 1;
-  }
+  if (vertices == 0) return false;  // wholly behind the near plane
+  int64_t box[4];
+  box[0] = (lo[0] >> 4) - 1 > 0 ? (lo[0] >> 4) - 1 : 0;
+  box[1] = (hi[0] >> 4) + 1 < f.width - 1 ? (hi[0] >> 4) + 1 : f.width - 1;
+  box[2] = (lo[1] >> 4) - 1 > 0 ? (lo[1] >> 4) - 1 : 0;
+  box[3] = (hi[1] >> 4) + 1 < f.height - 1 ? (hi[1] >> 4) + 1 : f.height - 1;
   if (box[0] > box[1] || box[2] > box[3]) return false;  // off screen
   for (int i = 0; i < 4; ++i) s.box[i] = static_cast<int16_t>(box[i]);
   return true;

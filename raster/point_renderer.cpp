@@ -105,7 +105,7 @@ struct Span {
 // `reach` = sum_k |m_k| G_k, G_k the largest |g_k| of the node's samples
 // (Q12): how far its points' offsets m . g (1/2^20 px) reach. For the tile
 // pass's nodes |m_k| < 2^15 and G_k <= kGaussianClip < 2^14: int32.
-inline Span pixel_span(int32_t p0_q4, int32_t reach, int size) {
+[[gnu::always_inline]] inline Span pixel_span(int32_t p0_q4, int32_t reach, int size) {
   const int32_t d = reach >> 16;
   const int32_t lo = p0_q4 - d - 1 - (size - 1) * 8, hi = p0_q4 + d - (size - 1) * 8;
   return Span{lo >> 4, (hi >> 4) + size - 1};
@@ -316,6 +316,7 @@ struct PointRenderer::FrameSetup {
   bool lit;  // the model has normals and the shading uses them
   bool close_ups;  // nodes may be drawn as discs (RendererConfig::close_ups, without the point cap)
   int close_up_log2;  // close-ups are measured in screen pixels: log2 of the supersampling
+  int64_t close_up_gate;  // a or c (1/256 px^2) from which a node may be one: (16 2^(kCloseUpPointsLog2 + close_up_log2))^2
   CloseUpFrame close_up;
 };
 
@@ -441,7 +442,7 @@ template <PointNormals kNormals, bool kColorPoints>
     // farther than sample_reach_ says (for a few points, little more
     // than half kGaussianClip) — fewer nodes across tile edges.
     const int32_t* g = sample_reach_[sample_reach_bucket(s.count)];
-    const auto offsets = [g](const int32_t m[3]) { return abs32(m[0]) * g[0] + abs32(m[1]) * g[1] + abs32(m[2]) * g[2]; };
+    const auto offsets = [g](const int32_t m[3]) __attribute__((always_inline)) { return abs32(m[0]) * g[0] + abs32(m[1]) * g[1] + abs32(m[2]) * g[2]; };
     const Span spx = pixel_span(proj.x0_q4, offsets(proj.mx), s.size), spy = pixel_span(proj.y0_q4, offsets(proj.my), s.size);
     const int sh_t = internal_.tile_log2;
     const int32_t tx0 = (spx.lo < 0 ? 0 : spx.lo) >> sh_t, ty0 = (spy.lo < 0 ? 0 : spy.lo) >> sh_t;
@@ -472,7 +473,7 @@ template <PointNormals kNormals, bool kColorPoints>
 // points would be (with sampled normals: by its mean normal), while the
 // frame has room for it; false — drawn as points, or culled — otherwise.
 template <PointNormals kNormals, bool kSpecular>
-bool PointRenderer::take_close_up(const FrameSetup& f, const NodeFields& fields, const int32_t c[3],
+[[gnu::noinline, gnu::cold]] bool PointRenderer::take_close_up(const FrameSetup& f, const NodeFields& fields, const int32_t c[3],
                                   const int16_t frame[3][3], const int32_t sk[3], FrameStats& stats) {
   if (close_up_count_ >= close_up_capacity_) return false;
   CloseUp& disc = close_ups_[close_up_count_];
@@ -486,9 +487,25 @@ bool PointRenderer::take_close_up(const FrameSetup& f, const NodeFields& fields,
   return true;
 }
 
+// A node whose mean is outside the view (in_view) as its disc, where its 3
+// sigma ball reaches into the view: its frame and sigmas formed here, off
+// the set-up's path.
+template <PointNormals kNormals, bool kSpecular>
+[[gnu::noinline, gnu::cold]] bool PointRenderer::close_up_outside(const FrameSetup& f, const NodeFields& fields,
+                                                                  const int32_t c[3], FrameStats& stats) {
+  const NodeDecoder& decoder = *f.decoder;
+  int16_t frame[3][3];
+  angles_.position_frame(decoder.euler(FrameField::kPosition), fields, frame);
+  const int32_t* sigma = decoder.sigma_p_mu(ClassId{fields[Field::kSigmaP]});
+  int32_t sk[3];
+  for (int k = 0; k < 3; ++k) sk[k] = sigma[k] < kMaxSigmaP ? sigma[k] : kMaxSigmaP;
+  const int32_t largest = sk[0] > sk[1] ? (sk[0] > sk[2] ? sk[0] : sk[2]) : (sk[1] > sk[2] ? sk[1] : sk[2]);
+  return close_up_reaches(f.camera, c, largest) && take_close_up<kNormals, kSpecular>(f, fields, c, frame, sk, stats);
+}
+
 // The frame's discs over one tile's words, after its points.
 template <PointNormals kNormals, bool kSpecular, class Word>
-void PointRenderer::draw_close_ups(int px0, int py0, Word* words) {
+[[gnu::noinline]] void PointRenderer::draw_close_ups(int px0, int py0, Word* words) {
   const int tile = 1 << internal_.tile_log2;
   const int pw = px0 + tile > internal_.width ? internal_.width - px0 : tile;
   const int ph = py0 + tile > internal_.height ? internal_.height - py0 : tile;
@@ -509,9 +526,10 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   } else {
     camera_mean(f.camera, decoder, fields, c);
   }
-  const bool in_view = NodeProjection::in_view(f.camera, c);
-  if (!in_view && !f.close_ups) {
-    ++stats.nodes_culled;
+  constexpr PointNormals kDisc = kNormals == PointNormals::kSurface ? kNormals : PointNormals::kNode;
+  if (!NodeProjection::in_view(f.camera, c)) {
+    // A close-up whose mean lies outside the view: its disc where it reaches into it.
+    if (!f.close_ups || !close_up_outside<kDisc, kSpecular>(f, fields, c, stats)) ++stats.nodes_culled;
     return;
   }
   // The axes in camera space (node_setup.h): the frame in Q14 times sigma
@@ -525,18 +543,10 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
     sk[k] = sigma[k] < kMaxSigmaP ? sigma[k] : kMaxSigmaP;
     for (int i = 0; i < 3; ++i) axes[k][i] = mul_q14_fast(frame[k][i], sk[k]);
   }
-  // A close-up whose mean lies outside the view, or too near for the
-  // projection: its disc where it reaches into the view.
-  constexpr PointNormals kDisc = kNormals == PointNormals::kSurface ? kNormals : PointNormals::kNode;
-  if (!in_view) {
-    const int32_t largest = sk[0] > sk[1] ? (sk[0] > sk[2] ? sk[0] : sk[2]) : (sk[1] > sk[2] ? sk[1] : sk[2]);
-    if (!close_up_reaches(f.camera, c, largest) || !take_close_up<kDisc, kSpecular>(f, fields, c, frame, sk, stats))
-      ++stats.nodes_culled;
-    return;
-  }
   PointSetup s;
   NodeProjection& proj = s.proj;
   if (!proj.template setup<P != Projection::kAffine>(f.camera, c, axes)) {
+    // Too near for the projection: a close-up's disc.
     if (!f.close_ups || !take_close_up<kDisc, kSpecular>(f, fields, c, frame, sk, stats)) ++stats.nodes_culled;
     return;
   }
@@ -556,7 +566,15 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   }
   ex = (ex * 7) >> 1;
   ey = (ey * 7) >> 1;
-  if (f.close_ups && screen_sigma_beyond(a, b, cc, f.close_up_log2 + kCloseUpSigmaLog2) && take_close_up<kDisc, kSpecular>(f, fields, c, frame, sk, stats)) return;
+  // Close-ups: one test of the covariance's diagonal (a node's sigma past
+  // 1 px on an axis) gates both rules, so other nodes pay an OR and a compare.
+  bool more_points = false;
+  if (f.close_ups && (a | cc) >= f.close_up_gate) [[unlikely]] {
+    if (screen_sigma_beyond(a, b, cc, f.close_up_log2 + kCloseUpSigmaLog2) &&
+        take_close_up<kDisc, kSpecular>(f, fields, c, frame, sk, stats))
+      return;
+    more_points = screen_sigma_beyond(a, b, cc, f.close_up_log2 + kCloseUpPointsLog2);
+  }
   if (proj.x0_q4 + ex < 0 || proj.x0_q4 - ex >= f.width_q4 || proj.y0_q4 + ey < 0 || proj.y0_q4 - ey >= f.height_q4) {
     ++stats.nodes_culled;
     return;
@@ -565,7 +583,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   s.count = points_per_node(*ppn_, ppn_index(a, b, cc), config_.quality_q8, config_.samples);
   // Close-ups' points: a node past 2^kCloseUpPointsLog2 px (beyond the cut's
   // size: a leaf seen close) draws kCloseUpPointsScale_q8 / 256 times its count.
-  if (f.close_ups && screen_sigma_beyond(a, b, cc, f.close_up_log2 + kCloseUpPointsLog2)) {
+  if (more_points) [[unlikely]] {
     const uint32_t more = s.count * kCloseUpPointsScale_q8 >> 8;
     s.count = more < config_.samples ? more : config_.samples;
   }
@@ -809,6 +827,7 @@ RenderStatus PointRenderer::set_up_frame(const NodeCache& cache, const Camera& c
   f.lit = header.has_normals() && config_.shading != ShadingMode::kNone;
   f.close_ups = close_up_capacity_ > 0 && config_.point_cap == 0;
   f.close_up_log2 = config_.supersample == 4 ? 2 : config_.supersample == 2 ? 1 : 0;
+  f.close_up_gate = int64_t{1} << (2 * (4 + kCloseUpPointsLog2 + f.close_up_log2));
   f.close_up = CloseUpFrame{f.camera.focal_q4, f.camera.center_q4[0], f.camera.center_q4[1], f.camera.near_mu,
                             internal_.width, internal_.height, f.depth_shift};
   tables_.uniform_base = !f.model_color;

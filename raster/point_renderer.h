@@ -180,6 +180,8 @@ class PointRenderer {
   template <PointNormals kNormals, bool kSpecular>
   bool take_close_up(const FrameSetup& f, const NodeFields& fields, const int32_t c[3], const int16_t frame[3][3],
                      const int32_t sk[3], FrameStats& stats);
+  template <PointNormals kNormals, bool kSpecular>
+  bool close_up_outside(const FrameSetup& f, const NodeFields& fields, const int32_t c[3], FrameStats& stats);
   template <PointNormals kNormals, bool kSpecular, class Word>
   void draw_close_ups(int px0, int py0, Word* words);
   template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
