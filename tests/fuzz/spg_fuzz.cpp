@@ -52,6 +52,13 @@ void check_client(const uint8_t* data, size_t size) {
   stipple::Camera camera;
   if (!stipple::orbit_camera(orbit, 64, 48, &camera)) __builtin_trap();
   if (f.client.render(camera, f.frame.data(), 128) != stipple::ClientStatus::kOk) __builtin_trap();
+  // And from inside the model, turned by the input: hostile nodes as
+  // close-ups' discs (raster/close_up.h), their means around and behind the eye.
+  orbit.distance_mu = 1 << 14;
+  orbit.yaw = static_cast<uint32_t>(size * 2654435761u);
+  orbit.pitch = static_cast<uint32_t>(size * 40503u) % 0x38000000u;
+  if (!stipple::orbit_camera(orbit, 64, 48, &camera)) __builtin_trap();
+  if (f.client.render(camera, f.frame.data(), 128) != stipple::ClientStatus::kOk) __builtin_trap();
 }
 
 void check(const uint8_t* data, size_t size) {
