@@ -13,17 +13,12 @@
 namespace stipple {
 namespace {
 
-// A flat square of 64 x 64 points, one unit apart, facing +z.
+// The grid plane of 64 x 64 points (tools/scan/point_cloud.h), encoded.
 std::vector<uint8_t> grid_plane() {
-  PointCloud plane;
-  for (int y = 0; y < 64; ++y)
-    for (int x = 0; x < 64; ++x) {
-      plane.positions.push_back(Vec3(x, y, 0));
-      plane.normals.push_back(Vec3(0, 0, 1));
-    }
   std::vector<uint8_t> spg;
   EncodeReport report;
   std::string error;
+  PointCloud plane = stipple::grid_plane(64);
   EXPECT_TRUE(encode_cloud(plane, EncodeOptions{}, spg, report, error)) << error;
   return spg;
 }

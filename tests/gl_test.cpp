@@ -205,15 +205,10 @@ TEST(Gl, DefaultAndEwaPicturesAgainstTheScan) {
 TEST(Gl, ACloseUpStaysClosed) {
   Gl gl;
   ASSERT_TRUE(gl.ok) << gl.error;
-  PointCloud plane;
-  for (int y = 0; y < 64; ++y)
-    for (int x = 0; x < 64; ++x) {
-      plane.positions.push_back(Vec3(x, y, 0));
-      plane.normals.push_back(Vec3(0, 0, 1));
-    }
   std::vector<uint8_t> spg;
   EncodeReport report;
   std::string error;
+  PointCloud plane = grid_plane(64);
   ASSERT_TRUE(encode_cloud(plane, EncodeOptions{}, spg, report, error)) << error;
   // Face on (the plane's normal is its thinnest axis, the view's up), from
   // a tenth of a spacing: distance 0.1 / 63 of the extent from the centre.

@@ -390,15 +390,10 @@ BENCHMARK(BM_ClientFrame)
 // the discs and the points of the frame.
 void BM_CloseUpFrame(benchmark::State& state) {
   static const std::vector<uint8_t> spg = [] {
-    PointCloud plane;
-    for (int y = 0; y < 64; ++y)
-      for (int x = 0; x < 64; ++x) {
-        plane.positions.push_back(Vec3(x, y, 0));
-        plane.normals.push_back(Vec3(0, 0, 1));
-      }
     std::vector<uint8_t> bytes;
     EncodeReport r;
     std::string error;
+    PointCloud plane = grid_plane(64);
     if (!encode_cloud(plane, EncodeOptions{}, bytes, r, error)) std::abort();
     return bytes;
   }();
