@@ -2,12 +2,17 @@
 #include "raster/close_up.h"
 
 #include "core/divide.h"
+#include "raster/projection.h"
 
 namespace stipple {
 namespace {
 
 int bit_length64(uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); }
-int64_t abs64(int64_t v) { return v < 0 ? -v : v; }
+// The bits of v past its top `bits` (0 when it fits).
+int excess_bits(int64_t v, int bits) {
+  const int n = bit_length64(static_cast<uint64_t>(v));
+  return n > bits ? n - bits : 0;
+}
 
 // v >> s for s >= 0, v << -s otherwise (|v| << -s within 63 bits: the callers' bounds).
 int64_t shift_right(int64_t v, int s) { return s >= 0 ? v >> s : v * (int64_t{1} << -s); }
@@ -67,10 +72,9 @@ bool set_up_close_up(const CloseUpFrame& f, const int32_t c[3], const int16_t fr
   s.kv = static_cast<int8_t>(17 - sb);
   // Depth: z = (n.c) f_q4 / (16 W) MU (W = 2^14 n.d, n.c in Q14 MU), the
   // word z << depth_shift; (n.c) f_q4 kept as its top 31 bits zm 2^sz.
-  const int64_t ncf_hi = nc >> (bit_length64(static_cast<uint64_t>(nc)) > 24 ? bit_length64(static_cast<uint64_t>(nc)) - 24 : 0);
-  const int sn = bit_length64(static_cast<uint64_t>(nc)) > 24 ? bit_length64(static_cast<uint64_t>(nc)) - 24 : 0;
-  const int64_t k = ncf_hi * f.focal_q4;  // below 2^44
-  const int sk = bit_length64(static_cast<uint64_t>(k)) > 31 ? bit_length64(static_cast<uint64_t>(k)) - 31 : 0;
+  const int sn = excess_bits(nc, 24);
+  const int64_t k = (nc >> sn) * f.focal_q4;  // below 2^44
+  const int sk = excess_bits(k, 31);
   s.zm = static_cast<int32_t>(k >> sk);
   const int kz = sn + sk + f.depth_shift - 19;
   if (kz < -100 || kz > 100) return false;

@@ -46,6 +46,11 @@ namespace stipple {
 inline constexpr int kCloseUpSigmaLog2 = 3;
 inline constexpr int kCloseUpSigmaPx = 1 << kCloseUpSigmaLog2;
 inline constexpr int kCloseUpCut = 3;  // the disc's radius, sigmas
+// How a disc is shaded: with surface normals as its points; otherwise
+// (sampled or per-node normals) by its mean normal.
+constexpr PointNormals close_up_normals(PointNormals n) {
+  return n == PointNormals::kSurface ? n : PointNormals::kNode;
+}
 // Below the discs, a node whose screen sigmas' geometric mean passes 1 px
 // — past the cut's size, so a leaf seen close — draws this many times the
 // points its table count says (Q8, capped at the samples): the table's 95 %

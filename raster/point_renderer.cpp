@@ -509,9 +509,8 @@ template <PointNormals kNormals, bool kSpecular, class Word>
   const int tile = 1 << internal_.tile_log2;
   const int pw = px0 + tile > internal_.width ? internal_.width - px0 : tile;
   const int ph = py0 + tile > internal_.height ? internal_.height - py0 : tile;
-  constexpr PointNormals kDisc = kNormals == PointNormals::kSurface ? kNormals : PointNormals::kNode;
   for (uint32_t i = 0; i < close_up_count_; ++i)
-    draw_close_up<kDisc, kSpecular>(close_ups_[i], tables_, reciprocal_, px0, py0, pw, ph, internal_.tile_log2, words);
+    draw_close_up<close_up_normals(kNormals), kSpecular>(close_ups_[i], tables_, reciprocal_, px0, py0, pw, ph, internal_.tile_log2, words);
 }
 
 template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
@@ -526,7 +525,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   } else {
     camera_mean(f.camera, decoder, fields, c);
   }
-  constexpr PointNormals kDisc = kNormals == PointNormals::kSurface ? kNormals : PointNormals::kNode;
+  constexpr PointNormals kDisc = close_up_normals(kNormals);
   if (!NodeProjection::in_view(f.camera, c)) {
     // A close-up whose mean lies outside the view: its disc where it reaches into it.
     if (!f.close_ups || !close_up_outside<kDisc, kSpecular>(f, fields, c, stats)) ++stats.nodes_culled;
@@ -627,13 +626,12 @@ void PointRenderer::tile_nodes_of(void* context, uint32_t tile, int px0, int py0
   PointRenderer& r = *static_cast<PointRenderer*>(context);
   // With discs every tile is called, with nodes or none.
   const bool nodes = r.raster_.items() != 0 && r.raster_.first_link(tile) != PointRaster::kNoLink;
-  if (r.internal_.format == PixelFormat::kRgb565) {
-    if (nodes) r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint32_t*>(words));
-    if (r.close_up_count_ != 0) r.draw_close_ups<kNormals, kSpecular>(px0, py0, static_cast<uint32_t*>(words));
-  } else {
-    if (nodes) r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, static_cast<uint64_t*>(words));
-    if (r.close_up_count_ != 0) r.draw_close_ups<kNormals, kSpecular>(px0, py0, static_cast<uint64_t*>(words));
-  }
+  const auto draw = [&](auto* tile_words) {
+    if (nodes) r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, tile_words);
+    if (r.close_up_count_ != 0) r.draw_close_ups<kNormals, kSpecular>(px0, py0, tile_words);
+  };
+  if (r.internal_.format == PixelFormat::kRgb565) draw(static_cast<uint32_t*>(words));
+  else draw(static_cast<uint64_t*>(words));
 }
 
 // The per-point path through the bins: its own function, never inlined,
@@ -750,7 +748,7 @@ NodeLaneFrame PointRenderer::lane_frame(const FrameSetup& f, const NodeCache& ca
   lf.sample_reach = &sample_reach_[0][0];
   lf.lit = f.lit;
   lf.close_ups = f.close_ups;
-  lf.close_up_wide = 1 << (2 * (4 + f.close_up_log2 + kCloseUpPointsLog2) + 1);
+  lf.close_up_wide = static_cast<int32_t>(2 * f.close_up_gate);  // a + c, where a or c past the gate may be one
   lf.shading = shading_;
   lf.base_rgb = config_.grey_rgb & 0xFFFFFFu;
   return lf;
