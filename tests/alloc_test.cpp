@@ -135,12 +135,13 @@ int main(int argc, char** argv) {
   before = g_heap_calls.load();
   bool client_ok = true;
   stipple::FrameStats stats;
+  uint32_t discs = 0;  // the third round's close cameras draw close-ups' discs (raster/close_up.h)
   for (int reload = 0; reload < 3; ++reload) {
     client_ok &= client.load_startup(spg.data(), startup_bytes) == stipple::ClientStatus::kOk;
     for (int frame = 0; frame < 30; ++frame) {
       stipple::OrbitView orbit;
       for (int a = 0; a < 3; ++a) orbit.target_mu[a] = decoder.extent_mu()[a] / 2;
-      orbit.distance_mu = 3 << 24;
+      orbit.distance_mu = reload == 2 ? 1 << 22 : 3 << 24;
       orbit.yaw = static_cast<uint32_t>(frame) * 0x08000000u;
       orbit.pitch = static_cast<uint32_t>(reload) * 0x04000000u;
       stipple::Camera camera;
@@ -157,10 +158,12 @@ int main(int argc, char** argv) {
                                      view.record_bytes) == stipple::ClientStatus::kOk;
       client_ok &= client.render(camera, frame_pixels.data(), 240 * 2, &stats) == stipple::ClientStatus::kOk;
       checksum += frame_pixels[1000 + frame] + stats.points;
+      discs += stats.nodes_close_up;
     }
   }
-  check(client_ok && g_heap_calls.load() - before == 0,
-        "client: 3 startups, 90 frames with cuts, puts, drops after init", g_heap_calls.load() - before);
+  check(client_ok && discs > 0 && g_heap_calls.load() - before == 0,
+        "client: 3 startups, 90 frames with cuts, puts, drops (close-ups' discs among them) after init",
+        g_heap_calls.load() - before);
 
   // The display path: the null display converts and keeps every frame in
   // storage sized when it was made.
