@@ -169,7 +169,12 @@ void build_class_models(const SpgView& view, const SpgHeader& header, bool first
   for (int t = 0; t < tokens_for_bits(index_bits); ++t) gaps[t] = t < 4 ? 64 : 1;
   normalise(gaps, tokens_for_bits(index_bits), &out->class_model[0]);
   const uint8_t* tables[3] = {view.sigma_p, view.sigma_n, view.sigma_c};
+  // A client without the curvature sign reads sigma_n's magnitudes.
+  const bool strip_sign = view.header.has_curvature_sign() && !header.has_curvature_sign();
   for (int t = 0; t < 3; ++t) {
+    const auto value_at = [&](const uint8_t* v) -> uint32_t {
+      return t == 1 && strip_sign ? spg_sigma_n_magnitude(load_u16le(v), true) : load_u16le(v);
+    };
     out->class_count[t] = header.class_count[t];
     if (header.class_count[t] == 0) continue;
     const uint32_t k = spg_class_values(t);
@@ -181,11 +186,11 @@ void build_class_models(const SpgView& view, const SpgHeader& header, bool first
       for (uint32_t stride = 1; stride <= 3; stride += 2)
         for (uint32_t c = 0; c < header.class_count[t]; c += stride) {
           const uint8_t* v = tables[t] + 2 * (k * c + j);
-          const uint32_t value = load_u16le(v);
+          const uint32_t value = value_at(v);
           const Hybrid a = hybrid(value);
           ++plain[a.token];
           plain_extra += static_cast<uint64_t>(a.extra_bits);
-          const uint32_t base = j > 0 ? load_u16le(v - 2) : c >= stride ? load_u16le(v - 2 * k * stride) : 0;
+          const uint32_t base = j > 0 ? value_at(v - 2) : c >= stride ? value_at(v - 2 * k * stride) : 0;
           const Hybrid d = hybrid(zigzag_delta(value, base, 16));
           ++delta[d.token];
           delta_extra += static_cast<uint64_t>(d.extra_bits);

@@ -179,8 +179,11 @@ bool NodeDecoder::set_classes(int table, uint32_t first, uint32_t count, const u
       out[i] = floats ? static_cast<int32_t>(ratio(dyadic_of(load_u32le(values + 4 * i)), largest, kModelUnitBits, limit))
                       : static_cast<int32_t>(spg_sigma_p_code_units(load_u16le(values + 2 * i), kModelUnitBits));
   } else {
+    // sigma_n's codes are signed with the curvature sign (concave turns).
+    const bool sign = table == 1 && header_.has_curvature_sign();
     for (uint32_t i = 0; i < per_class * count; ++i)
-      out[i] = floats ? f32_bits_to_fixed(load_u32le(values + 4 * i), 12, nullptr) : load_u16le(values + 2 * i);
+      out[i] = floats ? f32_bits_to_fixed(load_u32le(values + 4 * i), 12, nullptr)
+                      : spg_sigma_n_q12(load_u16le(values + 2 * i), sign);
   }
   return true;
 }

@@ -36,7 +36,7 @@ struct FixedNode {
   int32_t mean[3];        // MU
   int32_t axis[3][3];     // axis[k] = f_(k+1) * sigma_(k+1), (x, y, z) in MU
   int16_t normal_frame[3][3];  // Q14; normal_frame[2] is the mean normal (zero without normals)
-  int32_t sigma_n[2];     // radians, Q12 (zero without normals)
+  int32_t sigma_n[2];     // radians, Q12 (zero without normals); negative: a concave turn
   uint8_t color[3];       // 8-bit RGB expanded from the record's 5-6-5 (zero without colour)
   int32_t color_axis[3][3];  // colour frame * sigma_c, RGB in Q12 (4096 = full range)
 };

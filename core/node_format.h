@@ -45,7 +45,11 @@ inline constexpr int kMaxRecordBytes = 32;
 // Attribute bits of the startup header's `flags`.
 inline constexpr uint16_t kAttrNormals = 1u << 0;
 inline constexpr uint16_t kAttrColor = 1u << 1;
-inline constexpr uint16_t kAttrKnownMask = kAttrNormals | kAttrColor;
+// The sigma_n classes are signed (format version 2 on, with normals): a
+// negative sigma_n_k is a concave turn along the normal frame's tangent k
+// (docs/format.md §2, docs/encoder.md "Curvature sign").
+inline constexpr uint16_t kAttrCurvatureSign = 1u << 2;
+inline constexpr uint16_t kAttrKnownMask = kAttrNormals | kAttrColor | kAttrCurvatureSign;
 
 // The unpacked integer fields of one record, indexed by `Field`.
 struct NodeFields {

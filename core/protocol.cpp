@@ -178,9 +178,10 @@ bool parse_hello(const uint8_t* p, size_t size, Hello* out) {
   h.pixel_format = p[6];
   h.attributes = p[7];
   h.cache_capacity = load_u32le(p + 8);
-  // Version 2 knows neither a token nor a resume; before 5 no batch is coded.
+  // Version 2 knows neither a token nor a resume; before 5 no batch is
+  // coded, before 7 no class is signed.
   const uint8_t known = static_cast<uint8_t>(kWantNormals | kWantColor | (h.version >= 3 ? kResuming : 0) |
-                                             (h.version >= 5 ? kWantCoded : 0));
+                                             (h.version >= 5 ? kWantCoded : 0) | (h.version >= 7 ? kWantCurvatureSign : 0));
   if (h.width == 0 || h.width > 4096 || h.height == 0 || h.height > 4096 || h.pixel_format > 1 ||
       (h.attributes & ~known) != 0 || h.cache_capacity == 0 || h.cache_capacity > (1u << 24) ||
       (h.version < 3 && size != kHelloBytes))

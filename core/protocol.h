@@ -33,8 +33,10 @@ namespace stipple {
 // coded nodes; core/node_coding.h). 6: the code tables may code the normal
 // frame's angles against the node's own position frame and a class piece's
 // first values against the previous class's (version 5 clients get tables
-// without either).
-inline constexpr uint16_t kProtocolVersion = 6;
+// without either). 7: a client may ask for the curvature sign
+// (kWantCurvatureSign); a model's signed sigma_n classes go to older
+// clients, and to those that do not ask, as their magnitudes.
+inline constexpr uint16_t kProtocolVersion = 7;
 inline constexpr uint16_t kOldestProtocolVersion = 2;
 inline constexpr size_t kFrameHeaderBytes = 8;
 inline constexpr size_t kFrameTrailerBytes = 4;
@@ -139,13 +141,16 @@ inline constexpr uint8_t kWantNormals = 1, kWantColor = 2;
 inline constexpr uint8_t kResuming = 0x80;
 // (5) In the attributes: node batches entropy-coded (kCode, then kCodedNodes).
 inline constexpr uint8_t kWantCoded = 4;
+// (7) In the attributes: the sigma_n classes with their curvature sign, when
+// the model has one (kAttrCurvatureSign in the startup's flags).
+inline constexpr uint8_t kWantCurvatureSign = 8;
 inline constexpr size_t kMaxTokenBytes = 64;
 
 struct Hello {
   uint16_t version = kProtocolVersion;
   uint16_t width = 240, height = 320;
   uint8_t pixel_format = 0;     // 0 RGB565, 1 RGB888
-  uint8_t attributes = kWantNormals | kWantColor;  // what the client will use (and kResuming)
+  uint8_t attributes = kWantNormals | kWantColor | kWantCurvatureSign;  // what the client will use (and kResuming)
   uint32_t cache_capacity = 30000;                 // nodes the client can hold
   // (3) A pre-shared token, after the fields above (a server started with
   // --token refuses a hello without its token).

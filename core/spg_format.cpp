@@ -56,7 +56,7 @@ const char* spg_error_text(SpgError e) {
     case SpgError::kTruncated: return "file is truncated";
     case SpgError::kBadMagic: return "not a .spg file (bad magic)";
     case SpgError::kBadVersion: return "unsupported format version";
-    case SpgError::kBadFlags: return "unknown attribute flags";
+    case SpgError::kBadFlags: return "unknown attribute flags (or a curvature sign without normals or before version 2)";
     case SpgError::kBadArity: return "tree arity must be 2 or 8";
     case SpgError::kBadLayout: return "invalid record bit layout";
     case SpgError::kBadCounts: return "node, leaf or point counts are inconsistent or too large for the file";
@@ -178,6 +178,9 @@ SpgResult parse_startup(const uint8_t* data, size_t size, bool whole_file, SpgVi
   if (size < header_bytes) return truncated(size, header_bytes);
   h.flags = load_u16le(data + kFlags);
   if ((h.flags & ~kAttrKnownMask) != 0) return fail(SpgError::kBadFlags, kFlags);
+  // A curvature sign needs normals and the 16-bit class codes.
+  if ((h.flags & kAttrCurvatureSign) && (!(h.flags & kAttrNormals) || h.version == 1))
+    return fail(SpgError::kBadFlags, kFlags);
   h.tree_arity = data[kArity];
   if (h.tree_arity != 2 && h.tree_arity != 8) return fail(SpgError::kBadArity, kArity);
   if (data[spg_offset::kFieldCount] != stipple::kFieldCount) return fail(SpgError::kBadLayout, spg_offset::kFieldCount);

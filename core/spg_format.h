@@ -107,7 +107,9 @@ inline size_t spg_startup_bytes(uint16_t version, const uint16_t class_count[3])
 // extent E: exponent e = code >> 11, mantissa m = code & 2047, value
 // E (2048 + m) 2^(e - 42) for e >= 1 and E m 2^-41 for e = 0 (so E 2^-41
 // steps near zero, 12 significant bits above, at most about 2 E).
-// sigma_n (radians) and sigma_c (colour, 0..1) are Q12: value = code / 4096.
+// sigma_n (radians) and sigma_c (colour, 0..1) are Q12: value = code / 4096;
+// with kAttrCurvatureSign the sigma_n codes are two's complement (a negative
+// value a concave turn, its magnitude the spread), read by spg_sigma_n_q12.
 // The sigma_p value in units of E / 2^unit_bits, rounded half up (unit_bits
 // <= 30, so the result stays below 2^32).
 inline uint32_t spg_sigma_p_code_units(uint16_t code, int unit_bits) {
@@ -117,6 +119,16 @@ inline uint32_t spg_sigma_p_code_units(uint16_t code, int unit_bits) {
   if (shift <= 0) return mant << -shift;
   if (shift > 31) return 0;
   return static_cast<uint32_t>((uint64_t{mant} + (uint64_t{1} << (shift - 1))) >> shift);
+}
+
+// A sigma_n code as Q12 radians: unsigned, or with the header's curvature
+// sign two's complement. spg_sigma_n_magnitude: its spread, whatever the sign.
+inline int32_t spg_sigma_n_q12(uint16_t code, bool curvature_sign) {
+  return curvature_sign && code >= 0x8000u ? static_cast<int32_t>(code) - 0x10000 : static_cast<int32_t>(code);
+}
+inline uint16_t spg_sigma_n_magnitude(uint16_t code, bool curvature_sign) {
+  const int32_t v = spg_sigma_n_q12(code, curvature_sign);
+  return static_cast<uint16_t>(v < 0 ? -v : v);
 }
 
 enum class SpgError : uint8_t {
@@ -146,7 +158,7 @@ const char* spg_error_text(SpgError e);
 
 struct SpgHeader {
   uint16_t version = 0;
-  uint16_t flags = 0;        // kAttrNormals | kAttrColor
+  uint16_t flags = 0;        // kAttrNormals | kAttrColor | kAttrCurvatureSign
   uint8_t tree_arity = 0;    // 2: binary 2-means tree, 8: octree
   RecordLayout layout;
   uint32_t node_count = 0;
@@ -160,6 +172,7 @@ struct SpgHeader {
 
   bool has_normals() const { return (flags & kAttrNormals) != 0; }
   bool has_color() const { return (flags & kAttrColor) != 0; }
+  bool has_curvature_sign() const { return (flags & kAttrCurvatureSign) != 0; }
 };
 
 // A class's bit where a bit set holds every class of a header's tables, one

@@ -14,13 +14,26 @@ namespace {
 bool is_normal_field(int f) { return f >= static_cast<int>(Field::kFnTheta) && f <= static_cast<int>(Field::kSigmaN); }
 bool is_color_field(int f) { return f >= static_cast<int>(Field::kColorR); }
 
+// Class `index` of `table` as the client with `reduced` reads it (.spg §2
+// values): sigma_n's magnitudes where the model is signed and the client
+// did not ask for the sign.
+void copy_class_values(const SpgView& view, const SpgHeader& reduced, int table, uint32_t index, uint8_t* out) {
+  const uint8_t* tables[3] = {view.sigma_p, view.sigma_n, view.sigma_c};
+  const size_t per = spg_class_values(table) * spg_class_value_bytes(view.header.version);
+  const uint8_t* in = tables[table] + per * index;
+  for (size_t b = 0; b < per; ++b) out[b] = in[b];
+  if (table == 1 && view.header.has_curvature_sign() && !reduced.has_curvature_sign())
+    for (size_t b = 0; b < per; b += 2) store_u16le(out + b, spg_sigma_n_magnitude(load_u16le(out + b), true));
+}
+
 }  // namespace
 
 SpgHeader reduced_header(const SpgHeader& full, uint8_t attributes) {
   SpgHeader h = full;
   const bool normals = full.has_normals() && (attributes & kWantNormals);
   const bool color = full.has_color() && (attributes & kWantColor);
-  h.flags = static_cast<uint16_t>((normals ? kAttrNormals : 0) | (color ? kAttrColor : 0));
+  const bool sign = normals && full.has_curvature_sign() && (attributes & kWantCurvatureSign);
+  h.flags = static_cast<uint16_t>((normals ? kAttrNormals : 0) | (color ? kAttrColor : 0) | (sign ? kAttrCurvatureSign : 0));
   for (int f = 0; f < kFieldCount; ++f)
     if ((!normals && is_normal_field(f)) || (!color && is_color_field(f))) h.layout.bits[f] = 0;
   if (!normals) h.class_count[1] = 0;
@@ -56,6 +69,11 @@ size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* o
   if (spg_write_startup_le(h, view.sigma_p, h.class_count[1] ? view.sigma_n : nullptr,
                            h.class_count[2] ? view.sigma_c : nullptr, out, capacity, &written) != SpgWriteStatus::kOk)
     return 0;
+  if (h.class_count[1] > 0 && view.header.has_curvature_sign() && !h.has_curvature_sign()) {
+    // A client without the sign: the sigma_n classes' magnitudes.
+    uint8_t* sigma_n = out + spg_fixed_header_bytes(h.version) + 6 * size_t{h.class_count[0]};
+    for (uint32_t c = 0; c < h.class_count[1]; ++c) copy_class_values(view, h, 1, c, sigma_n + 4 * size_t{c});
+  }
   return written;
 }
 
@@ -202,10 +220,10 @@ const CodeTables& StreamSender::code_tables() {
   }
   // A version 5 client reads tables without the frame fields and without
   // a class piece's first values as differences: built apart.
-  const int k = (reduced_.flags & (kAttrNormals | kAttrColor)) | (protocol_ < kFrameFieldsProtocol ? 4 : 0);
+  const int k = (reduced_.flags & (kAttrNormals | kAttrColor | kAttrCurvatureSign)) | (protocol_ < kFrameFieldsProtocol ? 8 : 0);
   if (!(c.built & (1u << k))) {
     build_code_tables(*view_, cut_, reduced_, kSample, &c.tables[k], protocol_);
-    c.built = static_cast<uint8_t>(c.built | (1u << k));
+    c.built = static_cast<uint16_t>(c.built | (1u << k));
   }
   return c.tables[k];
 }
@@ -325,7 +343,6 @@ bool StreamSender::send_classes(const uint64_t* order, uint32_t count, FrameSink
     for (int t = 0; t < 3; ++t)
       if (reduced_.class_count[t] > 0 && take_class(t, f[kClassField[t]])) fresh[t][n[t]++] = static_cast<uint16_t>(f[kClassField[t]]);
   }
-  const uint8_t* tables[3] = {view_->sigma_p, view_->sigma_n, view_->sigma_c};
   uint8_t* payload = scratch_->payload;
   // Once the code tables went (protocol 5, format version 2 on), classes go coded.
   const CodeTables* code = tables_sent_ && reduced_.version >= 2 ? &code_tables() : nullptr;
@@ -337,7 +354,7 @@ bool StreamSender::send_classes(const uint64_t* order, uint32_t count, FrameSink
       const size_t per = 2 * spg_class_values(t);
       uint8_t* values = scratch_->frame;
       for (uint32_t k = 0; k < n[t]; ++k)
-        for (size_t b = 0; b < per; ++b) values[per * k + b] = tables[t][per * fresh[t][k] + b];
+        copy_class_values(*view_, reduced_, t, fresh[t][k], values + per * k);
       const size_t bytes = encode_coded_classes(*code, t, fresh[t], values, n[t], payload, kMaxPayload);
       if (bytes == 0 || !send(MessageType::kCodedClasses, payload, bytes, sink, context)) return false;
       continue;
@@ -348,7 +365,7 @@ bool StreamSender::send_classes(const uint64_t* order, uint32_t count, FrameSink
     for (uint32_t k = 0; k < n[t]; ++k) {
       at += store_leb128(payload + at, fresh[t][k] - previous);  // the first from -1
       previous = fresh[t][k];
-      for (size_t b = 0; b < per; ++b) payload[at + b] = tables[t][per * fresh[t][k] + b];
+      copy_class_values(*view_, reduced_, t, fresh[t][k], payload + at);
       at += per;
     }
     write_classes_header(static_cast<uint8_t>(t), static_cast<uint16_t>(n[t]), payload);

@@ -46,8 +46,10 @@ using FrameSink = bool (*)(void* context, const uint8_t* frame, size_t size);
 // scratch keeps them, so each worker counts them once.
 struct CodeTableCache {
   const SpgView* view = nullptr;
-  uint8_t built = 0;  // bit k: tables[k] built: attribute set k & 3 (kWantNormals | kWantColor), protocol 5 at k & 4
-  CodeTables tables[8];
+  // Bit k: tables[k] built: attribute set k & 7 (kAttrNormals | kAttrColor |
+  // kAttrCurvatureSign of the client's header), protocol 5 at k & 8.
+  uint16_t built = 0;
+  CodeTables tables[16];
 };
 
 // What a sender works in during one update or send, beside its cut's

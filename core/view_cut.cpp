@@ -73,10 +73,12 @@ struct Cone {
   int32_t sin, cos;
 };
 
-// The cone of half-angle gamma * sigma_n1 (sigma_n1 in Q12 radians, gamma
+// The cone of half-angle gamma * |sigma_n1| (sigma_n1 in Q12 radians, its
+// sign the curvature's, which the spread does not depend on; gamma
 // Q8), as a binary angle: 2^32 / (2 pi) = 683565275.6 per radian.
 Cone statistical_cone(int32_t sigma_n1_q12, uint16_t gamma_q8) {
-  const int64_t sigma = sigma_n1_q12 < 0 ? 0 : sigma_n1_q12 > 0xFFFF ? 0xFFFF : sigma_n1_q12;
+  const int64_t spread = sigma_n1_q12 < 0 ? -int64_t{sigma_n1_q12} : sigma_n1_q12;
+  const int64_t sigma = spread > 0xFFFF ? 0xFFFF : spread;
   const int64_t binary = ((sigma * gamma_q8 >> 8) * 683565276) >> 12;
   if (binary >= (int64_t{1} << 30)) return Cone{kNoCone, 0};
   const SinCosQ14 sc = sincos_q14(static_cast<uint32_t>(binary));

@@ -348,9 +348,10 @@ template <PointNormals kNormals, bool kSpecular, class FieldOf>
     terms(wl, f.light_z, &lt, &l2);
     terms(wh, f.half_z, &ht, &h2);
     const V sn2 = _mm256_slli_epi32(field(Field::kSigmaN), 1);
-    const auto clamp_sn = [&](V v) { return _mm256_min_epi32(_mm256_max_epi32(v, zero), set1(4 << 12)); };
+    // Signed (the curvature's sign) for the surface's turn, its magnitude for sn.
+    const auto clamp_sn = [&](V v) { return _mm256_min_epi32(_mm256_max_epi32(v, set1(-(4 << 12))), set1(4 << 12)); };
     const V sigma_n[2] = {clamp_sn(gather(f.sigma_n, sn2)), clamp_sn(gather(f.sigma_n, add(sn2, set1(1))))};
-    sn = pair(sigma_n[0], sigma_n[1]);
+    sn = pair(_mm256_abs_epi32(sigma_n[0]), _mm256_abs_epi32(sigma_n[1]));
     l0h0 = pair(_mm256_srai_epi32(add(l2, set1(2)), 2), _mm256_srai_epi32(add(h2, set1(2)), 2));
     intensity = gather16(f.shading->diffuse, intensity_index8(l2));
     if (kSpecular) specular = gather(f.shading->specular, intensity_index8(h2));

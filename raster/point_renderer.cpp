@@ -364,9 +364,13 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
   if (f.lit) {
     int32_t l[3], h[3];
     angles_.light_terms(decoder.euler(FrameField::kNormal), fields, l, h);
+    // sigma_n's sign is the curvature's (negative: concave along t_k): the
+    // surface turns with it, sampled normals take the spread.
     const int32_t* sn = decoder.sigma_n_q12(ClassId{fields[Field::kSigmaN]});
+    int32_t turn_n[2];
     for (int k = 0; k < 2; ++k) {
-      sh.sn[k] = static_cast<int16_t>(sn[k] < 0 ? 0 : sn[k] > kMaxSigmaN ? kMaxSigmaN : sn[k]);
+      turn_n[k] = sn[k] < -kMaxSigmaN ? -kMaxSigmaN : sn[k] > kMaxSigmaN ? kMaxSigmaN : sn[k];
+      sh.sn[k] = static_cast<int16_t>(turn_n[k] < 0 ? -turn_n[k] : turn_n[k]);
       sh.lt[k] = static_cast<int16_t>(l[k]);
       sh.ht[k] = static_cast<int16_t>(h[k]);
     }
@@ -379,7 +383,7 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
       // sigma_i a_i; its offset along the normal frame's tangent t_k, over
       // the node's positional spread along t_k, is how many sigma_n the
       // normal turns there (a convex patch, its curvature sigma_n /
-      // sigma_p). Only the direction of w_k = (sigma_i a_i . t_k)_i
+      // sigma_p; a concave one turns the other way). Only the direction of w_k = (sigma_i a_i . t_k)_i
       // matters, so sigma is scaled to 15 bits first: every term is int32.
       // Per point the angle is then surface_k . g (point_kernel.h).
       int16_t tangent[2][3];
@@ -401,7 +405,7 @@ template <PointNormals kNormals, bool kColorPoints, bool kSpecular>
           // The turn along axis i in Q14 (|.| <= 2^14 (1 + 1/512)), times sigma_n (Q12, <= 2^14).
           const int32_t n = (w[i] * static_cast<int32_t>(r.mul)) >> r.shift;
           const int32_t turn = n > 16416 ? 16416 : n < -16416 ? -16416 : n;
-          sh.surface[k][i] = static_cast<int16_t>((sh.sn[k] * turn + (1 << 13)) >> 14);
+          sh.surface[k][i] = static_cast<int16_t>((turn_n[k] * turn + (1 << 13)) >> 14);
         }
       }
     }

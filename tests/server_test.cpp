@@ -1281,7 +1281,7 @@ TEST(Server, AVersion2ClientIsServedAsBefore) {
   TcpTransport t(connect_to(s.server.port()), "old");
   Hello h = hello_for(device());
   h.version = 2;
-  h.attributes = static_cast<uint8_t>(h.attributes & ~kWantCoded);  // a version 2 hello knows no coding
+  h.attributes = static_cast<uint8_t>(h.attributes & ~(kWantCoded | kWantCurvatureSign));  // a version 2 hello knows neither
   uint8_t payload[kCameraUpdateBytes], frame[kCameraUpdateBytes + 16];
   size_t n = write_hello(h, payload), moved = 0;
   ASSERT_EQ(n, kHelloBytes);

@@ -183,7 +183,8 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
       {4, {0, 0}, SpgError::kBadVersion},
       {4, {3, 0}, SpgError::kCodedRecords},  // version 3: expanded first (core/spg_coded.h)
       {4, {4, 0}, SpgError::kBadVersion},
-      {6, {4, 0}, SpgError::kBadFlags},
+      {6, {4, 0}, SpgError::kBadFlags},                   // a curvature sign without normals
+      {6, {9, 0}, SpgError::kBadFlags},                   // an unknown attribute
       {8, {3}, SpgError::kBadArity},
       {9, {17}, SpgError::kBadLayout},
       {10, {17}, SpgError::kBadLayout},                   // a field of 17 bits
@@ -218,6 +219,7 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
       {76, {0, 0, 0xC0, 0xFF}, SpgError::kBadFloat},  // NaN sigma
       {80, {0, 0, 0x80, 0x7F}, SpgError::kBadFloat},  // +inf
       {84, {0, 0, 0x80, 0xBF}, SpgError::kBadFloat},  // negative sigma
+      {6, {5, 0}, SpgError::kBadFlags},               // a curvature sign needs version 2's codes
   };
   for (const Case& c : float_cases) {
     std::vector<uint8_t> g = f1;
@@ -232,6 +234,18 @@ TEST(SpgFormat, HostileHeadersAreRefusedByField) {
   for (size_t i = spg_fixed_header_bytes(2); i < spg_fixed_header_bytes(2) + 6; ++i) g[i] = 0xFF;  // the largest sigma_p code, thrice
   fix_crc(g);
   EXPECT_EQ(parse_error(g), SpgError::kOk);
+}
+
+// sigma_n's codes with the curvature's sign are two's complement; without
+// it, unsigned as before (docs/format.md §2).
+TEST(SpgFormat, SignedSigmaNCodes) {
+  EXPECT_EQ(spg_sigma_n_q12(0x0400, true), 1024);
+  EXPECT_EQ(spg_sigma_n_q12(0xFC00, true), -1024);
+  EXPECT_EQ(spg_sigma_n_q12(0x8001, true), -32767);
+  EXPECT_EQ(spg_sigma_n_q12(0xFC00, false), 0xFC00);
+  EXPECT_EQ(spg_sigma_n_magnitude(0xFC00, true), 1024);
+  EXPECT_EQ(spg_sigma_n_magnitude(0x8000, true), 32768);
+  EXPECT_EQ(spg_sigma_n_magnitude(0xFC00, false), 0xFC00);
 }
 
 // Version 2's sigma_p code: a 16-bit float relative to the box (docs/format.md

@@ -159,6 +159,12 @@ TEST(Protocol, MessagesParseOnlyInRange) {
   buf[0] = 5;
   EXPECT_TRUE(parse_hello(buf, kHelloBytes, &back));
   EXPECT_EQ(back.attributes, kWantNormals | kWantCoded);
+  buf[7] = kWantNormals | kWantCurvatureSign;  // version 7's curvature sign
+  buf[0] = 6;
+  EXPECT_FALSE(parse_hello(buf, kHelloBytes, &back));
+  buf[0] = 7;
+  EXPECT_TRUE(parse_hello(buf, kHelloBytes, &back));
+  EXPECT_EQ(back.attributes, kWantNormals | kWantCurvatureSign);
 
   CameraUpdate c;
   c.sequence = 9;

@@ -17,7 +17,8 @@ Hello hello_for(const ClientConfig& config) {
   h.width = config.raster.width;
   h.height = config.raster.height;
   h.pixel_format = config.raster.format == PixelFormat::kRgb888 ? 1 : 0;
-  h.attributes = static_cast<uint8_t>((config.normals && config.shading != ShadingMode::kNone ? kWantNormals : 0) |
+  const bool normals = config.normals && config.shading != ShadingMode::kNone;
+  h.attributes = static_cast<uint8_t>((normals ? kWantNormals | kWantCurvatureSign : 0) |
                                       (config.color && !config.grey ? kWantColor : 0) | kWantCoded);
   h.cache_capacity = config.node_capacity;
   return h;

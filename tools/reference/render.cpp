@@ -153,7 +153,9 @@ Image render_reference(const DecodedModel& model, const std::vector<uint32_t>& c
         Vec3 n = n0;
         if ((per_point_normals && j >= 0) || surface_normals) {
           const Vec2 t = surface_normals ? Vec2(surface * g) : g2(static_cast<uint32_t>(j));
-          const double a = node.sigma_n[0] * t.x(), b = node.sigma_n[1] * t.y();
+          // Signed sigma_n (the curvature's sign) turns the surface; a sampled normal takes the spread.
+          const Vec2 sn = surface_normals ? node.sigma_n : Vec2(node.sigma_n.cwiseAbs());
+          const double a = sn[0] * t.x(), b = sn[1] * t.y();
           const double theta = std::hypot(a, b), phi = std::atan2(b, a);
           n = node.normal_frame * Vec3(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
         }

@@ -53,7 +53,7 @@ PointCloud sample_cut(const DecodedModel& model, const std::vector<uint32_t>& cu
       out.positions.push_back(node.position.mean + node.position.frame * node.position.sigma.cwiseProduct(g));
       if (normals) {
         const Vec2 t = reference_gaussian2(index);
-        const double a = node.sigma_n[0] * t.x(), b = node.sigma_n[1] * t.y();
+        const double a = std::abs(node.sigma_n[0]) * t.x(), b = std::abs(node.sigma_n[1]) * t.y();  // the spread
         const double theta = std::hypot(a, b), phi = std::atan2(b, a);
         const Vec3 local(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
         out.normals.push_back((node.normal_frame * local).normalized());

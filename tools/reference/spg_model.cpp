@@ -111,7 +111,8 @@ double spg_class_value(const SpgView& view, int table, size_t index) {
   const uint8_t* t = table == 0 ? view.sigma_p : table == 1 ? view.sigma_n : view.sigma_c;
   if (spg_class_value_bytes(view.header.version) == 4) return f32_of(load_u32le(t + 4 * index));
   const uint16_t code = load_u16le(t + 2 * index);
-  return table == 0 ? sigma_p_of_code(code, spg_largest_extent(view.header)) : code / 4096.0;
+  if (table == 0) return sigma_p_of_code(code, spg_largest_extent(view.header));
+  return (table == 1 ? spg_sigma_n_q12(code, view.header.has_curvature_sign()) : code) / 4096.0;
 }
 
 std::vector<uint32_t> spg_point_counts(const SpgView& view) {
