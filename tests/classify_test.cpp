@@ -41,6 +41,43 @@ TEST(Classify, RecoversSeparatedClustersInLogSpace) {
   EXPECT_NEAR(c.rms_log_error, 0.01 * std::sqrt(3.0), 0.002);
 }
 
+// sigma_n with the curvature's sign: a class never crosses a sign, each
+// pattern's classes are its magnitudes' (positive tuples alone: exactly
+// SigmaClasses'), the budget is shared by the patterns' counts, and a tuple
+// of a pattern the sample lacked takes the nearest pattern's class.
+TEST(Classify, SignedClassesNeverCrossASign) {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> mag(-6.0, 0.0), coin(0.0, 1.0);
+  std::vector<Vec3> t, positive;
+  for (int i = 0; i < 20000; ++i) {
+    Vec3 v(std::exp(mag(rng)), std::exp(mag(rng)), 0);
+    positive.push_back(v);
+    const double c = coin(rng);  // patterns ++ 50 %, -+ 25 %, +- 15 %, -- 10 %
+    if ((c >= 0.5 && c < 0.75) || c >= 0.9) v[0] = -v[0];
+    if (c >= 0.75) v[1] = -v[1];
+    t.push_back(v);
+  }
+  const SignedSigmaClasses classes(t, 2, 100);
+  ASSERT_EQ(classes.centers().size(), 100u);
+  int per[4] = {};
+  for (const Vec3& c : classes.centers()) ++per[(c[0] < 0 ? 1 : 0) | (c[1] < 0 ? 2 : 0)];
+  EXPECT_EQ(per[0], 50);
+  EXPECT_EQ(per[1], 25);
+  EXPECT_EQ(per[2], 15);
+  EXPECT_EQ(per[3], 10);
+  for (const Vec3& v : t) {
+    const Vec3& c = classes.centers()[classes.assign(v)];
+    ASSERT_EQ(c[0] < 0, v[0] < 0);
+    ASSERT_EQ(c[1] < 0, v[1] < 0);
+  }
+  const SignedSigmaClasses plain(positive, 2, 64);
+  const SigmaClasses unsigned_classes(positive, 2, 64);
+  ASSERT_EQ(plain.centers(), unsigned_classes.centers());
+  for (size_t i = 0; i < 1000; ++i) ASSERT_EQ(plain.assign(positive[i]), unsigned_classes.assign(positive[i]));
+  // Positive classes only: a concave tuple keeps its magnitude's class.
+  EXPECT_EQ(plain.assign(Vec3(-0.1, 0.05, 0)), plain.assign(Vec3(0.1, 0.05, 0)));
+}
+
 TEST(Classify, ScalesAndIsDeterministic) {
   // 300 K two-dimensional tuples into 4096 classes: the kd-tree keeps this fast
   // (n x k brute force would be 1.2e9 distance evaluations per iteration).

@@ -378,8 +378,9 @@ TEST(Golden, BundledBunnyBitstream) {
 }
 
 // Automatic class counts fitted to what the picture needs (docs/encoder.md
-// "Classes"), numbered by size: σ1 (σn1) never falls along the table, so a
-// view's class pieces go as small steps (docs/protocol.md "Coded batches").
+// "Classes"), numbered by size: σ1 (|σn1|) never falls along the table (σn's
+// within each of its sign patterns, ++, -+, +-, -- in turn), so a view's
+// class pieces go as small steps (docs/protocol.md "Coded batches").
 TEST(Encoder, ClassesAreCountedForTheSceneAndNumberedBySize) {
   std::vector<uint8_t> spg;
   std::string error;
@@ -389,12 +390,17 @@ TEST(Encoder, ClassesAreCountedForTheSceneAndNumberedBySize) {
   const uint32_t nodes = v.header.node_count;
   EXPECT_EQ(v.header.class_count[0], std::clamp(nodes / 16, 64u, 2048u));  // 432
   EXPECT_EQ(v.header.class_count[1], std::clamp(nodes / 64, 64u, 1024u));  // 108
-  for (int t = 0; t < 2; ++t) {
-    const uint8_t* table = t == 0 ? v.sigma_p : v.sigma_n;
-    const uint32_t k = spg_class_values(t);
-    for (uint32_t c = 1; c < v.header.class_count[t]; ++c)
-      ASSERT_LE(load_u16le(table + 2 * k * (c - 1)), load_u16le(table + 2 * k * c)) << "table " << t << " class " << c;
-  }
+  ASSERT_TRUE(v.header.has_curvature_sign());
+  for (uint32_t c = 1; c < v.header.class_count[0]; ++c)
+    ASSERT_LE(load_u16le(v.sigma_p + 6 * (c - 1)), load_u16le(v.sigma_p + 6 * c)) << "sigma_p class " << c;
+  // sigma_n: (pattern, |sigma_n1|) ascending, and every pattern there.
+  const auto key = [&](uint32_t c) {
+    const int32_t a = spg_sigma_n_q12(load_u16le(v.sigma_n + 4 * c), true), b = spg_sigma_n_q12(load_u16le(v.sigma_n + 4 * c + 2), true);
+    return std::make_pair((a < 0 ? 1 : 0) | (b < 0 ? 2 : 0), a < 0 ? -a : a);
+  };
+  for (uint32_t c = 1; c < v.header.class_count[1]; ++c) ASSERT_LE(key(c - 1), key(c)) << "sigma_n class " << c;
+  EXPECT_EQ(key(0).first, 0);
+  EXPECT_EQ(key(v.header.class_count[1] - 1u).first, 3);
 }
 
 TEST(RealScans, SharedBunnyAndDragonEncode) {

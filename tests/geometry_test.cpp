@@ -143,6 +143,33 @@ TEST(Pca, NormalSpreadIsExactEitherSideOfTheSeries) {
   }
 }
 
+// The curvature's sign (docs/encoder.md "Curvature sign"): along each
+// tangent of the normal frame, positive where the patch is convex seen from
+// its normals, negative where concave — a dome, a bowl, and saddles either
+// way round; the same 1e7 from the origin, and the turn's size near the
+// shallow patch's curvature times the positions' variance (k / 3 on [-1, 1]).
+TEST(Curvature, TheTurnsSignIsTheSurfacesSeenFromItsNormals) {
+  const struct {
+    double kx, ky;
+    int sign0, sign1;  // along the major (|kx| > |ky|: x) and minor axes
+  } patches[] = {{-0.4, -0.2, 1, 1}, {0.4, 0.2, -1, -1}, {0.4, -0.2, -1, 1}, {-0.4, 0.2, 1, -1}};
+  for (const auto& p : patches)
+    for (const double offset : {0.0, 1e7}) {
+      PointCloud c = quadric_patch(41, p.kx, p.ky);
+      for (Vec3& v : c.positions) v += Vec3(offset, -offset, offset);
+      const auto ids = iota_ids(c.size());
+      const NodeStats s = node_stats(c, ids.data(), ids.size(), StatsOptions{});
+      EXPECT_LT(line_angle(s.normal_frame.col(0), Vec3::UnitX()), 1e-6) << p.kx << " " << p.ky;
+      EXPECT_EQ(s.turn[0] > 0 ? 1 : -1, p.sign0) << p.kx << " " << p.ky << " " << offset;
+      EXPECT_EQ(s.turn[1] > 0 ? 1 : -1, p.sign1) << p.kx << " " << p.ky << " " << offset;
+      EXPECT_NEAR(std::abs(s.turn[0]), std::abs(p.kx) / 3, 0.1 * std::abs(p.kx) / 3);
+      EXPECT_NEAR(std::abs(s.turn[1]), std::abs(p.ky) / 3, 0.1 * std::abs(p.ky) / 3);
+      const Vec2 signed_n = signed_sigma_n(s);
+      EXPECT_EQ(signed_n[0], p.sign0 * s.sigma_n[0]);
+      EXPECT_EQ(signed_n[1], p.sign1 * s.sigma_n[1]);
+    }
+}
+
 TEST(Pca, CurvatureShrinkFollowsTheFormula) {
   PointCloud c = test::sphere_cloud(400);
   const auto ids = iota_ids(40);  // a cap near the pole

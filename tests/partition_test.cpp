@@ -208,6 +208,30 @@ std::vector<Vec3> normals_about(const Vec3& axis, double spread, size_t n, uint6
   return out;
 }
 
+// An upper node's turn from its children's (their own and their means'
+// offsets) keeps the sign a whole bowl or dome has, near its size.
+TEST(Partition, UpperNodesKeepTheCurvaturesSign) {
+  for (const double k : {0.4, -0.4}) {
+    const PointCloud patch = quadric_patch(41, k, 0.5 * k);
+    std::vector<uint32_t> left, right, all(patch.size());
+    for (uint32_t i = 0; i < patch.size(); ++i) {
+      (patch.positions[i].x() < 0 ? left : right).push_back(i);
+      all[i] = i;
+    }
+    NodeStats children[2] = {node_stats(patch, left.data(), left.size(), StatsOptions{}),
+                             node_stats(patch, right.data(), right.size(), StatsOptions{})};
+    const NodeStats whole = node_stats(patch, all.data(), all.size(), StatsOptions{});
+    Vec3 sum = Vec3::Zero();
+    for (const Vec3& n : patch.normals) sum += n;
+    const double counts[2] = {static_cast<double>(left.size()), static_cast<double>(right.size())};
+    const NormalSpread merged = combine_normal_spreads(children, counts, 2, sum, Vec3::UnitZ());
+    for (int a = 0; a < 2; ++a) {
+      EXPECT_EQ(merged.turn[a] > 0, k < 0) << k << " axis " << a;  // a dome (k < 0) is convex
+      EXPECT_NEAR(merged.turn[a], whole.turn[a], 0.25 * std::abs(whole.turn[a])) << k << " axis " << a;
+    }
+  }
+}
+
 TEST(Partition, UpperNodesNeverUnderstateTheirNormalSpread) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

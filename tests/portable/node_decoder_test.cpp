@@ -54,7 +54,7 @@ TEST(NodeDecoder, DecodesToTheSameBytesOnEveryPlatform) {
     const char* file;
     uint32_t crc;
   } cases[] = {{"tests/golden/bunny_v1.spg", 0x22ef00d6u},
-               {"tests/golden/bunny_v2.spg", 0xc23d7896u},
+               {"tests/golden/bunny_v2.spg", 0x19e173b3u},
                {"tests/data/sphere600_colour.spg", 0x8e56c137u}};
   for (const auto& c : cases) {
     const uint32_t crc = decoded_crc(test::fixture(c.file));
@@ -63,11 +63,38 @@ TEST(NodeDecoder, DecodesToTheSameBytesOnEveryPlatform) {
   }
 }
 
-// The same scan written both ways: version 2's 16-bit codes decode to
-// version 1's sigma_n and sigma_c exactly (both are Q12 in the client) and to
-// its sigma_p within 2^-12 of the value, plus the rounding to a model unit.
+// The bunny's default file has the curvature's sign: its concave nodes
+// decode with a negative sigma_n, their class code's two's complement.
+TEST(NodeDecoder, ConcaveNodesDecodeWithANegativeSigmaN) {
+  const test::ParsedModel m("tests/golden/bunny_v2.spg");
+  ASSERT_TRUE(m.view.header.has_curvature_sign());
+  uint32_t concave[2] = {}, convex[2] = {};
+  for (uint32_t i = 0; i < m.view.header.node_count; ++i) {
+    FixedNode n;
+    ASSERT_EQ(m.decoder.decode(m.view.records + size_t{i} * m.view.record_bytes, &n), DecodeStatus::kOk);
+    const NodeFields f = unpack_record(m.view.header.layout, m.view.records + size_t{i} * m.view.record_bytes);
+    for (int j = 0; j < 2; ++j) {
+      const uint16_t code = load_u16le(m.view.sigma_n + 4 * size_t{f[Field::kSigmaN]} + 2 * j);
+      ASSERT_EQ(n.sigma_n[j], code >= 0x8000 ? int32_t{code} - 0x10000 : int32_t{code}) << "node " << i;
+      (n.sigma_n[j] < 0 ? concave : convex)[j]++;
+    }
+  }
+  std::printf("bunny: concave along the major tangent %u, the minor %u; convex %u, %u of %u nodes\n", concave[0],
+              concave[1], convex[0], convex[1], m.view.header.node_count);
+  // A scan is convex and concave in about equal shares at its finest scales.
+  for (int j = 0; j < 2; ++j) {
+    EXPECT_GT(concave[j], m.view.header.node_count / 5) << j;
+    EXPECT_GT(convex[j], m.view.header.node_count / 5) << j;
+  }
+}
+
+// The same scan written both ways (version 2 without the curvature's sign,
+// which version 1 cannot carry): version 2's 16-bit codes decode to version
+// 1's sigma_n and sigma_c exactly (both are Q12 in the client) and to its
+// sigma_p within 2^-12 of the value, plus the rounding to a model unit.
 TEST(NodeDecoder, SixteenBitTablesDecodeAsTheFloatTablesDo) {
-  const std::vector<uint8_t> f1 = test::fixture("tests/golden/bunny_v1.spg"), f2 = test::fixture("tests/golden/bunny_v2.spg");
+  const std::vector<uint8_t> f1 = test::fixture("tests/golden/bunny_v1.spg"),
+                             f2 = test::fixture("tests/golden/bunny_v2_unsigned.spg");
   SpgView v1, v2;
   ASSERT_TRUE(spg_parse(f1.data(), f1.size(), &v1).ok());
   ASSERT_TRUE(spg_parse(f2.data(), f2.size(), &v2).ok());

@@ -166,6 +166,60 @@ TEST(Stream, AVersionFiveClientGetsTablesItReads) {
   EXPECT_LT(six.cold, five.cold);
 }
 
+// A model with the curvature's sign (the bunny's default encoding) streams
+// it to the clients that ask (protocol 7, kWantCurvatureSign): their sigma_n
+// classes are the file's, concave ones negative. Every other client — one
+// that does not ask, a version 6 one — gets no sign flag and the classes'
+// magnitudes, coded or not, so it shades as before the sign.
+TEST(Stream, TheCurvatureSignGoesToTheClientsThatAskForIt) {
+  const test::ParsedModel m("tests/golden/bunny_v2.spg");
+  ASSERT_TRUE(m.view.header.has_curvature_sign());
+  std::vector<uint64_t> bounds_storage(CutBounds::bytes(m.view.header) / 8 + 1);
+  CutBounds bounds;
+  ASSERT_EQ(bounds.init(m.view, m.decoder, bounds_storage.data(), bounds_storage.size() * 8), CutStatus::kOk);
+  const struct {
+    uint16_t version;
+    bool ask, coded;
+  } clients[] = {{kProtocolVersion, true, true}, {kProtocolVersion, true, false}, {kProtocolVersion, false, true},
+                 {6, false, true}, {6, false, false}};
+  for (const auto& c : clients) {
+    std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
+    StreamSender sender;
+    ASSERT_TRUE(sender.init(m.view, bounds, sender_storage.data(), sender_storage.size() * 8));
+    Device client(8000, ShadingMode::kSurface);
+    std::vector<uint8_t> reader_storage(kMaxFrameBytes);
+    StreamReceiver receiver;
+    receiver.init(&client.cache, reader_storage.data(), reader_storage.size());
+    std::vector<uint32_t> part_storage(8000);
+    receiver.use_part_storage(part_storage.data(), 8000);
+    Link link;
+    Hello hello;
+    hello.version = c.version;
+    hello.cache_capacity = 8000;
+    hello.attributes = static_cast<uint8_t>(kWantNormals | (c.coded ? kWantCoded : 0) | (c.ask ? kWantCurvatureSign : 0));
+    ASSERT_TRUE(sender.start(hello, Link::sink, &link));
+    CameraUpdate u;
+    u.camera = camera(30, 20, 2.0);
+    ASSERT_TRUE(sender.update(u, true, Link::sink, &link));
+    ASSERT_EQ(receiver.receive(link.bytes.data(), link.bytes.size()), ReceiveStatus::kOk);
+    EXPECT_EQ(client.cache.header().has_curvature_sign(), c.ask) << c.version << " " << c.ask << " " << c.coded;
+    uint32_t sent = 0, concave = 0;
+    for (uint32_t k = 0; k < m.view.header.class_count[1]; ++k) {
+      const int32_t* got = client.cache.decoder().sigma_n_q12(ClassId{static_cast<uint16_t>(k)});
+      if (got[0] == 0 && got[1] == 0) continue;  // not sent
+      ++sent;
+      for (int j = 0; j < 2; ++j) {
+        const int32_t file = spg_sigma_n_q12(load_u16le(m.view.sigma_n + 4 * k + 2 * j), true);
+        ASSERT_EQ(got[j], c.ask ? file : file < 0 ? -file : file) << "class " << k;
+        concave += got[j] < 0;
+      }
+    }
+    EXPECT_GT(sent, 40u);
+    EXPECT_EQ(concave > 0, c.ask);
+    client.draw(u.camera);
+  }
+}
+
 // A coded stream's receiver needs the tables before a coded batch, and its
 // part storage, and refuses a stream that lacks either.
 TEST(Stream, CodedBatchesNeedTheirTablesAndTheirStorage) {

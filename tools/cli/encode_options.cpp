@@ -117,6 +117,7 @@ bool parse_encode_options(cli::Args& args, EncodeOptions& o, bool& quiet, bool& 
     o.format_version = o.coded_file ? kSpgVersion : static_cast<int>(u);
   }
   if (args.flag("--no-shrink")) o.tree.stats.shrink_eta0 = 1.0;
+  o.curvature_sign = !args.flag("--no-curvature-sign");
   o.tree.octree = args.flag("--octree");
   o.normals = !args.flag("--no-normals");
   o.colors = !args.flag("--no-color");

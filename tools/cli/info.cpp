@@ -108,6 +108,7 @@ int cmd_info(int argc, char** argv) {
         .integer("version", coded ? kSpgCodedVersion : h.version)
         .str("tree", h.tree_arity == 2 ? "binary" : "octree")
         .boolean("normals", h.has_normals())
+        .boolean("curvature_sign", h.has_curvature_sign())
         .boolean("colors", h.has_color())
         .integer("points", h.point_count)
         .integer("nodes", h.node_count)
@@ -134,7 +135,8 @@ int cmd_info(int argc, char** argv) {
   }
   std::printf("%s: stipple .spg version %u%s, %s tree, %s%s\n", files[0].c_str(), coded ? kSpgCodedVersion : h.version,
               coded ? " (coded records)" : "",
-              h.tree_arity == 2 ? "binary 2-means" : "octree", h.has_normals() ? "normals" : "no normals",
+              h.tree_arity == 2 ? "binary 2-means" : "octree",
+              h.has_curvature_sign() ? "normals with the curvature's sign" : h.has_normals() ? "normals" : "no normals",
               h.has_color() ? ", colour" : ", no colour");
   std::printf("  points       %s (original)\n", cli::with_commas(h.point_count).c_str());
   std::printf("  nodes        %s (%s leaves), depth %u\n", cli::with_commas(h.node_count).c_str(),

@@ -127,6 +127,69 @@ uint16_t SigmaClasses::assign(const Vec3& tuple, double* log_error2) const {
   return static_cast<uint16_t>(c);
 }
 
+SignedSigmaClasses::SignedSigmaClasses(const std::vector<Vec3>& sample, int dims, int max_classes, int max_iterations,
+                                       int threads)
+    : dims_(dims) {
+  std::vector<Vec3> by[kPatterns];
+  for (const Vec3& t : sample) by[pattern(t)].push_back(t.cwiseAbs());
+  // Each pattern's share of the budget: its count's, at least one class.
+  const size_t n = sample.size();
+  const int budget = std::max(1, max_classes);
+  int k[kPatterns] = {}, total = 0;
+  double share[kPatterns] = {};
+  for (int p = 0; p < kPatterns; ++p) {
+    if (by[p].empty()) continue;
+    share[p] = static_cast<double>(budget) * static_cast<double>(by[p].size()) / static_cast<double>(n);
+    k[p] = std::max(1, static_cast<int>(share[p]));
+    total += k[p];
+  }
+  while (total < budget) {  // the rest to the largest remainders (ties: the lower pattern)
+    int most = -1;
+    for (int p = 0; p < kPatterns; ++p)
+      if (!by[p].empty() && (most < 0 || share[p] - k[p] > share[most] - k[most])) most = p;
+    ++k[most];
+    ++total;
+  }
+  while (total > budget) {  // the largest share gives one back (ties: the lower pattern)
+    int largest = 0;
+    for (int p = 1; p < kPatterns; ++p)
+      if (k[p] > k[largest]) largest = p;
+    --k[largest];
+    --total;
+  }
+  for (int p = 0; p < kPatterns; ++p) {
+    if (k[p] == 0) continue;
+    parts_[p] = std::make_unique<SigmaClasses>(by[p], dims, k[p], max_iterations, threads);
+    first_[p] = static_cast<uint16_t>(centers_.size());
+    for (Vec3 c : parts_[p]->centers()) {
+      for (int d = 0; d < dims; ++d)
+        if (p & (1 << d)) c[d] = -c[d];
+      centers_.push_back(c);
+    }
+  }
+}
+
+int SignedSigmaClasses::pattern(const Vec3& tuple) const {
+  int p = 0;
+  for (int d = 0; d < dims_; ++d)
+    if (tuple[d] < 0) p |= 1 << d;
+  return p;
+}
+
+uint16_t SignedSigmaClasses::assign(const Vec3& tuple, double* log_error2) const {
+  // Its own pattern's classes, or the pattern with classes whose signs differ
+  // from its in the fewest components (ties: the lower pattern).
+  const int own = pattern(tuple);
+  int best = -1;
+  for (int p = 0; p < kPatterns; ++p) {
+    if (!parts_[p]) continue;
+    if (best < 0 || __builtin_popcount(static_cast<unsigned>(p ^ own)) < __builtin_popcount(static_cast<unsigned>(best ^ own)))
+      best = p;
+  }
+  if (best < 0) return 0;  // fitted to nothing
+  return static_cast<uint16_t>(first_[best] + parts_[best]->assign(tuple.cwiseAbs(), log_error2));
+}
+
 Classification classify_sigmas(const std::vector<Vec3>& tuples, int dims, int max_classes, int max_iterations,
                                int threads) {
   Classification out;

@@ -47,6 +47,28 @@ class SigmaClasses {
   std::unique_ptr<KdTree> tree_;  // of log_centers_
 };
 
+// Classes of tuples whose components may be negative (sigma_n with the
+// curvature's sign): each sign pattern gets classes of its own, fitted in log
+// space to the magnitudes, so no class crosses a sign. The patterns share
+// max_classes by their counts in the sample (one at least each while the
+// budget lasts; a pattern left without classes, or absent from the sample,
+// takes the nearest pattern's, its sign lost). Positive tuples alone give
+// SigmaClasses' classes exactly.
+class SignedSigmaClasses {
+ public:
+  SignedSigmaClasses(const std::vector<Vec3>& sample, int dims, int max_classes, int max_iterations = 20, int threads = 2);
+  const std::vector<Vec3>& centers() const { return centers_; }  // signed, linear units
+  uint16_t assign(const Vec3& tuple, double* log_error2 = nullptr) const;
+
+ private:
+  static constexpr int kPatterns = 8;
+  int pattern(const Vec3& tuple) const;
+  int dims_;
+  std::unique_ptr<SigmaClasses> parts_[kPatterns];
+  uint16_t first_[kPatterns] = {};
+  std::vector<Vec3> centers_;
+};
+
 // `tuples`: positive values, `dims` (2 or 3) leading components used.
 Classification classify_sigmas(const std::vector<Vec3>& tuples, int dims, int max_classes, int max_iterations = 20,
                                int threads = 2);

@@ -30,6 +30,9 @@ struct EncodeOptions {
   bool tolerance_relative = false;
   bool normals = true;  // store normals (computed when the scan has none)
   bool colors = true;   // store colours when the scan has them
+  // sigma_n with the curvature's sign (kAttrCurvatureSign; docs/encoder.md
+  // "Curvature sign"): concave patches shade as such. Version 2 on.
+  bool curvature_sign = true;
   bool cut_table = true;  // stipple encode: write MODEL.spg.cut beside the model (tools/embedded/model_file.h)
   int normal_neighbours = 12;
   // The .spg version written: kSpgVersion (16-bit class tables) or 1

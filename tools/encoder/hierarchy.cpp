@@ -94,9 +94,11 @@ Gaussian3 node_pca(const Vec3* p, size_t n, int threads) {
   return gaussian_from_covariance(mean, m2 / static_cast<double>(n));
 }
 
-// normal_spread of nrm[0..n), chunked like node_pca.
-NormalSpread node_normal_spread(const Vec3* nrm, size_t n, const Vec3& fallback_z, int threads) {
-  if (n <= kChunk) return normal_spread(nrm, n, fallback_z);  // one chunk: the plain loops
+// normal_spread of nrm[0..n) (its turn against p[0..n) about `mean`),
+// chunked like node_pca.
+NormalSpread node_normal_spread(const Vec3* nrm, const Vec3* p, const Vec3& mean, size_t n, const Vec3& fallback_z,
+                                int threads) {
+  if (n <= kChunk) return normal_spread(nrm, n, fallback_z, p, mean);  // one chunk: the plain loops
   std::vector<Vec3> sums(chunk_count(n), Vec3::Zero());
   for_chunks(n, threads, [&](size_t lo, size_t hi, size_t c) {
     for (size_t i = lo; i < hi; ++i) sums[c] += nrm[i];
@@ -104,16 +106,12 @@ NormalSpread node_normal_spread(const Vec3* nrm, size_t n, const Vec3& fallback_
   Vec3 sum = Vec3::Zero();
   for (const Vec3& v : sums) sum += v;
   const LogMapFrame frame = log_map_frame(sum, n, fallback_z);
-  std::vector<Eigen::Matrix2d> covs(sums.size(), Eigen::Matrix2d::Zero());
-  std::vector<size_t> used(sums.size(), 0);
-  for_chunks(n, threads, [&](size_t lo, size_t hi, size_t c) { accumulate_log_map(frame, nrm + lo, hi - lo, covs[c], used[c]); });
-  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-  size_t all = 0;
-  for (size_t c = 0; c < covs.size(); ++c) {
-    cov += covs[c];
-    all += used[c];
-  }
-  return finish_log_map(frame, cov, all);
+  std::vector<LogMapSums> parts(sums.size());
+  for_chunks(n, threads,
+             [&](size_t lo, size_t hi, size_t c) { accumulate_log_map(frame, nrm + lo, hi - lo, parts[c], p + lo, mean); });
+  LogMapSums all;
+  for (const LogMapSums& part : parts) all.add(part);
+  return finish_log_map(frame, all);
 }
 
 // 2-means on the node's points p[0..n). Fills `labels` (0/1). Returns the
@@ -276,7 +274,7 @@ Tree build(std::vector<Vec3> positions, std::vector<Vec3> normals, const PointCl
         // The statistics but colours (those come from the leaves up).
         const Gaussian3 position = node_pca(p, count, threads);
         NormalSpread spread;
-        if (nrm) spread = node_normal_spread(nrm, count, position.frame.col(2), threads);
+        if (nrm) spread = node_normal_spread(nrm, p, position.mean, count, position.frame.col(2), threads);
         node.stats = finish_stats(count, position, nrm ? &spread : nullptr, o.stats);
         if (count < o.leaf_size || node.stats.position.sigma[0] <= o.stats.sigma_floor ||
             node.stats.position.sigma[0] <= o.leaf_sigma || node.depth >= o.max_depth)

@@ -99,37 +99,51 @@ ByteSink sink_into(AtomicFileWriter& file) {
 NormalSpread combine_normal_spreads(const NodeStats* children, const double* counts, size_t n, const Vec3& normal_sum,
                                     const Vec3& fallback_z) {
   double total = 0;
-  for (size_t i = 0; i < n; ++i) total += counts[i];
+  Vec3 mean = Vec3::Zero();
+  for (size_t i = 0; i < n; ++i) {
+    total += counts[i];
+    mean += counts[i] * children[i].position.mean;
+  }
+  if (total > 0) mean /= total;
   const LogMapFrame f = log_map_frame(normal_sum, static_cast<size_t>(total), fallback_z);
   Eigen::Matrix<double, 2, 3> tangent;
   tangent.row(0) = f.t1.transpose();
   tangent.row(1) = f.t2.transpose();
-  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  LogMapSums sums;
   double bound = 0;
   for (size_t i = 0; i < n; ++i) {
     const NodeStats& c = children[i];
     const Vec3 m = c.normal_frame.col(2);
-    Eigen::Matrix2d offset = Eigen::Matrix2d::Zero();
-    size_t used = 0;
-    accumulate_log_map(f, &m, 1, offset, used);  // a a^T, a the child's mean in the parent's log map
-    const Mat3 own = c.sigma_n[0] * c.sigma_n[0] * c.normal_frame.col(0) * c.normal_frame.col(0).transpose() +
-                     c.sigma_n[1] * c.sigma_n[1] * c.normal_frame.col(1) * c.normal_frame.col(1).transpose();
-    cov += counts[i] * (tangent * own * tangent.transpose() + offset);
-    const double a = std::sqrt(offset.trace()), s = c.sigma_n.norm();
+    // a a^T and a (mean_c - mean)^T, a the child's mean in the parent's log map.
+    LogMapSums offset;
+    accumulate_log_map(f, &m, 1, offset, &c.position.mean, mean);
+    const Vec3 x0 = c.normal_frame.col(0), x1 = c.normal_frame.col(1);
+    const Mat3 own = c.sigma_n[0] * c.sigma_n[0] * x0 * x0.transpose() + c.sigma_n[1] * c.sigma_n[1] * x1 * x1.transpose();
+    const Mat3 own_turn = c.turn[0] * x0 * x0.transpose() + c.turn[1] * x1 * x1.transpose();
+    sums.cov += counts[i] * (tangent * own * tangent.transpose() + offset.cov);
+    sums.turn += counts[i] * (tangent * own_turn + offset.turn);
+    const double a = std::sqrt(offset.cov.trace()), s = c.sigma_n.norm();
     bound += counts[i] * (a + s) * (a + s);
   }
   if (total > 0) {
-    cov /= total;
+    sums.cov /= total;
+    sums.turn /= total;
     bound /= total;
   }
-  if (cov.trace() > 0) cov *= bound / cov.trace();
-  return finish_log_map(f, cov, 1);
+  if (sums.cov.trace() > 0) sums.cov *= bound / sums.cov.trace();
+  sums.used = 1;
+  return finish_log_map(f, sums);
 }
 
 bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNodes>>& parts, int threads,
                  const ByteSink& sink, EncodeReport& report, std::string& error, ProgressBar* progress) {
   const StatsOptions& so = plan.tree.stats;
   const bool normals = plan.normals, colors = plan.colors;
+  // sigma_n as its classes take it: with the curvature's sign, or the spread.
+  const auto sigma_n_tuple = [&plan](const NodeStats& s) {
+    const Vec2 v = plan.curvature_sign ? signed_sigma_n(s) : s.sigma_n;
+    return Vec3(v[0], v[1], 0);
+  };
   double stage_start = monotonic_seconds();
 
   // The top nodes, from the partitions up.
@@ -225,7 +239,7 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
         for (uint64_t i = 0; i < count; ++i) {
           if (nodes > class_sample && mix64(at + i) >= threshold) continue;
           sp.push_back(stats[i].position.sigma);
-          if (normals) sn.push_back(Vec3(stats[i].sigma_n[0], stats[i].sigma_n[1], 0));
+          if (normals) sn.push_back(sigma_n_tuple(stats[i]));
           if (colors) sc.push_back(stats[i].color.sigma);
         }
         return true;
@@ -236,7 +250,7 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
   const int auto_p = static_cast<int>(std::clamp<uint64_t>(nodes / 16, 64, 2048));
   const int auto_n = static_cast<int>(std::clamp<uint64_t>(nodes / 64, 64, 1024));
   const SigmaClasses cp(sp, 3, plan.classes[0] ? plan.classes[0] : auto_p, 20, threads);
-  const SigmaClasses cn(sn, 2, plan.classes[1] ? plan.classes[1] : auto_n, 20, threads);
+  const SignedSigmaClasses cn(sn, 2, plan.classes[1] ? plan.classes[1] : auto_n, 20, threads);
   const SigmaClasses cc(sc, 3, plan.classes[2] ? plan.classes[2] : 64, 20, threads);
   sp = {}, sn = {}, sc = {};
   report.classes[0] = static_cast<int>(cp.centers().size());
@@ -257,7 +271,8 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
     if (plan.position_bits[a] != 0) layout.bits[a] = plan.position_bits[a];
   SpgHeader header;
   header.version = static_cast<uint16_t>(plan.version);
-  header.flags = static_cast<uint16_t>((normals ? kAttrNormals : 0) | (colors ? kAttrColor : 0));
+  header.flags = static_cast<uint16_t>((normals ? kAttrNormals : 0) | (colors ? kAttrColor : 0) |
+                                       (normals && plan.curvature_sign ? kAttrCurvatureSign : 0));
   header.tree_arity = plan.tree.octree ? 8 : 2;
   header.layout = layout;
   header.node_count = static_cast<uint32_t>(nodes);
@@ -281,7 +296,8 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
   for (const Vec3& c : cp.centers())
     for (int d = 0; d < 3; ++d) sigma_p.push_back(float_tables ? f32_bits(static_cast<float>(c[d])) : sigma_p_code(c[d], largest));
   for (const Vec3& c : cn.centers())
-    for (int d = 0; d < 2; ++d) sigma_n.push_back(float_tables ? f32_bits(static_cast<float>(c[d])) : q12_code(c[d]));
+    for (int d = 0; d < 2; ++d)
+      sigma_n.push_back(float_tables ? f32_bits(static_cast<float>(c[d])) : plan.curvature_sign ? q12_signed_code(c[d]) : q12_code(c[d]));
   for (const Vec3& c : cc.centers())
     for (int d = 0; d < 3; ++d) sigma_c.push_back(float_tables ? f32_bits(static_cast<float>(c[d])) : q12_code(c[d]));
   std::vector<uint8_t> bytes(spg_startup_bytes(header.version, header.class_count));
@@ -359,7 +375,7 @@ bool merge_parts(const PartitionPlan& plan, std::vector<std::unique_ptr<PartNode
             f[Field::kFnTheta] = fn.theta;
             f[Field::kFnPhi] = fn.phi;
             f[Field::kFnPsi] = fn.psi;
-            f[Field::kSigmaN] = cn.assign(Vec3(s.sigma_n[0], s.sigma_n[1], 0), &err2[3 * i + 1]);
+            f[Field::kSigmaN] = cn.assign(sigma_n_tuple(s), &err2[3 * i + 1]);
           }
           if (colors) {
             f[Field::kColorR] = quantize_unit(s.color.mean[0], layout.width(Field::kColorR));

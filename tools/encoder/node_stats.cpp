@@ -104,7 +104,14 @@ LogMapFrame log_map_frame(const Vec3& normal_sum, size_t n, const Vec3& fallback
   return f;
 }
 
-void accumulate_log_map(const LogMapFrame& f, const Vec3* normals, size_t n, Eigen::Matrix2d& cov, size_t& used) {
+void LogMapSums::add(const LogMapSums& other) {
+  cov += other.cov;
+  turn += other.turn;
+  used += other.used;
+}
+
+void accumulate_log_map(const LogMapFrame& f, const Vec3* normals, size_t n, LogMapSums& sums, const Vec3* positions,
+                        const Vec3& mean) {
   for (size_t i = 0; i < n; ++i) {
     const Vec3& nv = normals[i];
     if (nv.squaredNorm() == 0) continue;
@@ -126,14 +133,15 @@ void accumulate_log_map(const LogMapFrame& f, const Vec3* normals, size_t n, Eig
       const double theta = std::atan2(r, z);  // accurate near 0 and pi, unlike acos
       uv = Vec2(theta * x / r, theta * y / r);
     }
-    cov.noalias() += uv * uv.transpose();
-    ++used;
+    sums.cov.noalias() += uv * uv.transpose();
+    if (positions) sums.turn.noalias() += uv * (positions[i] - mean).transpose();
+    ++sums.used;
   }
 }
 
-NormalSpread finish_log_map(const LogMapFrame& f, Eigen::Matrix2d cov, size_t used) {
-  if (used > 0) cov /= static_cast<double>(used);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+NormalSpread finish_log_map(const LogMapFrame& f, const LogMapSums& sums) {
+  const double scale = sums.used > 0 ? 1.0 / static_cast<double>(sums.used) : 1.0;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(sums.cov * scale);
   NormalSpread s;
   s.sigma = Vec2(std::sqrt(std::max(0.0, eig.eigenvalues()[1])), std::sqrt(std::max(0.0, eig.eigenvalues()[0])));
   const Eigen::Vector2d major = eig.eigenvectors().col(1);
@@ -141,26 +149,35 @@ NormalSpread finish_log_map(const LogMapFrame& f, Eigen::Matrix2d cov, size_t us
   s.frame.col(0) = x;
   s.frame.col(1) = f.m.cross(x);
   s.frame.col(2) = f.m;
+  // The turn along each tangent: its log-map direction (the eigenvector)
+  // against the positions' offset along it.
+  const Eigen::Vector2d minor(-major[1], major[0]);
+  s.turn = Vec2(major.dot(sums.turn * s.frame.col(0)), minor.dot(sums.turn * s.frame.col(1))) * scale;
   return s;
 }
 
-NormalSpread normal_spread(const Vec3* normals, size_t n, const Vec3& fallback_z) {
+NormalSpread normal_spread(const Vec3* normals, size_t n, const Vec3& fallback_z, const Vec3* positions, const Vec3& mean) {
   Vec3 sum = Vec3::Zero();
   for (size_t i = 0; i < n; ++i) sum += normals[i];
   const LogMapFrame f = log_map_frame(sum, n, fallback_z);
-  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
-  size_t used = 0;
-  accumulate_log_map(f, normals, n, cov, used);
-  return finish_log_map(f, cov, used);
+  LogMapSums sums;
+  accumulate_log_map(f, normals, n, sums, positions, mean);
+  return finish_log_map(f, sums);
 }
 
 void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3& fallback_z, Mat3& frame,
-                  Vec2& sigma_n) {
-  std::vector<Vec3> gathered(n);
+                  Vec2& sigma_n, const Vec3* positions, const Vec3& mean, Vec2* turn) {
+  std::vector<Vec3> gathered(n), at(positions ? n : 0);
   for (size_t i = 0; i < n; ++i) gathered[i] = normals[ids[i]];
-  const NormalSpread s = normal_spread(gathered.data(), n, fallback_z);
+  for (size_t i = 0; i < at.size(); ++i) at[i] = positions[ids[i]];
+  const NormalSpread s = normal_spread(gathered.data(), n, fallback_z, positions ? at.data() : nullptr, mean);
   frame = s.frame;
   sigma_n = s.sigma;
+  if (turn) *turn = s.turn;
+}
+
+Vec2 signed_sigma_n(const NodeStats& s) {
+  return Vec2(s.turn[0] < 0 ? -s.sigma_n[0] : s.sigma_n[0], s.turn[1] < 0 ? -s.sigma_n[1] : s.sigma_n[1]);
 }
 
 NodeStats finish_stats(size_t n, const Gaussian3& position, const NormalSpread* normals, const StatsOptions& o) {
@@ -171,6 +188,7 @@ NodeStats finish_stats(size_t n, const Gaussian3& position, const NormalSpread* 
   if (normals) {
     s.normal_frame = normals->frame;
     s.sigma_n = normals->sigma;
+    s.turn = normals->turn;
   }
   const Vec3 normal = normals ? Vec3(s.normal_frame.col(2)) : Vec3::UnitZ();
 
@@ -210,7 +228,9 @@ NodeStats node_stats(const PointCloud& cloud, const uint32_t* ids, size_t n, con
   const Gaussian3 position = pca3(cloud.positions.data(), ids, n);
   NormalSpread spread;
   const bool normals = o.normals && cloud.has_normals();
-  if (normals) normal_stats(cloud.normals.data(), ids, n, position.frame.col(2), spread.frame, spread.sigma);
+  if (normals)
+    normal_stats(cloud.normals.data(), ids, n, position.frame.col(2), spread.frame, spread.sigma, cloud.positions.data(),
+                 position.mean, &spread.turn);
   NodeStats s = finish_stats(n, position, normals ? &spread : nullptr, o);
   set_color_stats(s, color_moments(cloud, ids, n, o), o);
   return s;

@@ -33,6 +33,13 @@
 // sum of outer products merge exactly from children (Chan, Golub and
 // LeVeque), so a parent never reads its points' colours.
 
+// The curvature's sign (docs/encoder.md "Curvature sign"): along each
+// tangent x_k of the normal frame, turn_k = mean of ((p - mean) . x_k)
+// (u . x_k), u the normal's log map lifted to 3-D — positive where the normal
+// turns the way the surface moves (convex, seen from the normals' side),
+// negative where it turns back (concave). Its sign is sigma_n_k's in the
+// file (signed_sigma_n); sigma_n stays the spread.
+//
 // Curvature-aware shrink (docs/encoder.md): sigma3 *= beta with
 // beta = eta0 + (1 - eta0) * max(0, 1 - eta1 * sqrt(sigma_n1)).
 #pragma once
@@ -60,8 +67,11 @@ struct NodeStats {
   Gaussian3 position;
   Mat3 normal_frame = Mat3::Identity();  // column 2 is the mean normal
   Vec2 sigma_n = Vec2::Zero();
+  Vec2 turn = Vec2::Zero();  // along the normal frame's tangents: the curvature's sign (above)
   Gaussian3 color;
 };
+// sigma_n with the curvature's sign: negative along a tangent whose turn is.
+Vec2 signed_sigma_n(const NodeStats& s);
 
 struct StatsOptions {
   double sigma_floor = 1e-15;   // positions: a length
@@ -96,25 +106,39 @@ Moments color_moments(const PointCloud& cloud, const uint32_t* ids, size_t n, co
 
 // Mean-normal frame and sigma_n of `normals[ids[0..n)]`. `fallback_z` is used
 // when the normals cancel out (or are all zero).
+// With positions (about `mean`), the turn too.
 void normal_stats(const Vec3* normals, const uint32_t* ids, size_t n, const Vec3& fallback_z, Mat3& frame,
-                  Vec2& sigma_n);
+                  Vec2& sigma_n, const Vec3* positions = nullptr, const Vec3& mean = Vec3::Zero(),
+                  Vec2* turn = nullptr);
 
-// A node's normal frame (column 2 the mean normal) and sigma_n.
+// A node's normal frame (column 2 the mean normal), sigma_n and turn.
 struct NormalSpread {
   Mat3 frame = Mat3::Identity();
   Vec2 sigma = Vec2::Zero();
+  Vec2 turn = Vec2::Zero();
 };
-// Of normals[0..n): normal_stats on contiguous normals.
-NormalSpread normal_spread(const Vec3* normals, size_t n, const Vec3& fallback_z);
+// Of normals[0..n) (and, for the turn, positions[0..n) about `mean`;
+// nullptr: no turn): normal_stats on contiguous normals.
+NormalSpread normal_spread(const Vec3* normals, size_t n, const Vec3& fallback_z, const Vec3* positions = nullptr,
+                           const Vec3& mean = Vec3::Zero());
 // The same in parts, for sums taken in chunks (tools/encoder/hierarchy.cpp):
 // the tangent frame from the normals' sum, the log map's second moments
-// added up over any range, then the spread.
+// and its products with the positions added up over any range, then the
+// spread and the turn.
 struct LogMapFrame {
   Vec3 m, t1, t2;
 };
+struct LogMapSums {
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();  // sum of u u^T, u in (t1, t2)
+  Eigen::Matrix<double, 2, 3> turn = Eigen::Matrix<double, 2, 3>::Zero();  // sum of u (p - mean)^T
+  size_t used = 0;
+  void add(const LogMapSums& other);
+};
 LogMapFrame log_map_frame(const Vec3& normal_sum, size_t n, const Vec3& fallback_z);
-void accumulate_log_map(const LogMapFrame& frame, const Vec3* normals, size_t n, Eigen::Matrix2d& cov, size_t& used);
-NormalSpread finish_log_map(const LogMapFrame& frame, Eigen::Matrix2d cov, size_t used);
+// positions: nullptr leaves the turn alone.
+void accumulate_log_map(const LogMapFrame& frame, const Vec3* normals, size_t n, LogMapSums& sums,
+                        const Vec3* positions = nullptr, const Vec3& mean = Vec3::Zero());
+NormalSpread finish_log_map(const LogMapFrame& frame, const LogMapSums& sums);
 
 // The statistics of a node of n points but its colours: from its positions'
 // PCA and its normals' spread (nullptr: none), with the degenerate-node rules

@@ -30,8 +30,8 @@ constexpr uint64_t kSampleSize = uint64_t{1} << 20;
 constexpr uint32_t kMaxPartitions = 4096;
 // 2: the variance stop and the position widths (a tolerance).
 constexpr char kPlanMagic[8] = {'S', 'P', 'G', 'P', 'L', 'A', 'N', '2'};
-constexpr char kNodesMagic[8] = {'S', 'P', 'G', 'N', 'O', 'D', 'E', '1'};
-constexpr size_t kStatsDoubles = 41;
+constexpr char kNodesMagic[8] = {'S', 'P', 'G', 'N', 'O', 'D', 'E', '2'};  // 2: the turn (curvature sign) in the statistics
+constexpr size_t kStatsDoubles = 43;
 
 // Little binary records: plain values in the host's (little-endian) order.
 class Out {
@@ -102,6 +102,8 @@ void put_stats(Out& out, const NodeStats& s) {
   out.mat(s.normal_frame);
   out.put(s.sigma_n[0]);
   out.put(s.sigma_n[1]);
+  out.put(s.turn[0]);
+  out.put(s.turn[1]);
   out.vec(s.color.mean);
   out.mat(s.color.frame);
   out.vec(s.color.sigma);
@@ -113,9 +115,10 @@ void get_stats(const double* d, NodeStats& s) {
   std::memcpy(s.position.sigma.data(), d + 12, 3 * 8);
   std::memcpy(s.normal_frame.data(), d + 15, 9 * 8);
   std::memcpy(s.sigma_n.data(), d + 24, 2 * 8);
-  std::memcpy(s.color.mean.data(), d + 26, 3 * 8);
-  std::memcpy(s.color.frame.data(), d + 29, 9 * 8);
-  std::memcpy(s.color.sigma.data(), d + 38, 3 * 8);
+  std::memcpy(s.turn.data(), d + 26, 2 * 8);
+  std::memcpy(s.color.mean.data(), d + 28, 3 * 8);
+  std::memcpy(s.color.frame.data(), d + 31, 9 * 8);
+  std::memcpy(s.color.sigma.data(), d + 40, 3 * 8);
 }
 
 std::string errno_text() { return std::strerror(errno); }
@@ -305,6 +308,7 @@ bool finish_plan(PlanSampler& sampler, const ScanFacts& facts, const EncodeOptio
   plan.points = n;
   plan.version = o.format_version;
   plan.normals = o.normals;
+  plan.curvature_sign = o.normals && o.curvature_sign && o.format_version >= 2;
   plan.colors = o.colors && facts.colors;
   plan.estimate = o.normals && !facts.normals;
   plan.count_duplicates = facts.count_duplicates;
@@ -401,7 +405,8 @@ bool write_plan(const PartitionPlan& p, const std::string& dir, std::string& err
   out.bytes.assign(kPlanMagic, kPlanMagic + 8);
   out.put(p.points);
   out.put(static_cast<int32_t>(p.version));
-  out.put(static_cast<uint8_t>(p.normals | p.colors << 1 | p.estimate << 2 | p.count_duplicates << 3));
+  out.put(static_cast<uint8_t>(p.normals | p.colors << 1 | p.estimate << 2 | p.count_duplicates << 3 |
+                               p.curvature_sign << 4));
   out.put(static_cast<int32_t>(p.normal_neighbours));
   out.str(p.normals_source);
   for (int c = 0; c < 3; ++c) out.put(static_cast<int32_t>(p.classes[c]));
@@ -481,6 +486,7 @@ bool read_plan(const std::string& dir, PartitionPlan& p, std::string& error) {
   p.colors = flags & 2;
   p.estimate = flags & 4;
   p.count_duplicates = flags & 8;
+  p.curvature_sign = flags & 16;
   p.normal_neighbours = in.get<int32_t>();
   p.normals_source = in.str();
   for (int c = 0; c < 3; ++c) p.classes[c] = in.get<int32_t>();
@@ -726,7 +732,7 @@ std::unique_ptr<PartNodes> run_part(PointCloud& cloud, size_t own, const Partiti
 namespace {
 
 // The node file: magic, header, the child counts (u8), the point counts
-// (u32), the statistics (41 doubles) of every node, then CRC-32.
+// (u32), the statistics (43 doubles) of every node, then CRC-32.
 size_t nodes_header_bytes(size_t levels) { return 8 + 4 + 8 * 3 + 4 + 8 * levels + 8 * (3 + 9 + 3 + 1 + 3 + 9) + 5 * 8 + 2 * 8 + 2 * 8 + 8; }
 
 bool read_points_file(const std::string& path, uint64_t expected, const PartitionPlan& plan, PointCloud& cloud,
@@ -888,7 +894,7 @@ std::unique_ptr<PartNodes> open_part_file(const std::string& dir, const Partitio
     error = f->path_ + ": " + what;
     return nullptr;
   };
-  if (size < 64 || std::memcmp(head.data(), kNodesMagic, 8) != 0) return bad("not a stipple part (no SPGNODE1 at byte 0)");
+  if (size < 64 || std::memcmp(head.data(), kNodesMagic, 8) != 0) return bad("not a stipple part of this version (no SPGNODE2 at byte 0)");
   if (load_u32le(tail) != crc) return bad("CRC-32 mismatch: the part is corrupt or was cut short; run its job again");
   In in(head.data() + 8, head.size() - 8);
   PartSummary& s = f->summary_;

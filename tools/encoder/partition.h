@@ -63,6 +63,7 @@ struct PartitionPlan {
   bool colors = false;         // ... and colours
   bool estimate = false;       // jobs estimate normals (k-NN) with a halo
   bool count_duplicates = false;  // jobs count repeated positions (the scan was read in chunks)
+  bool curvature_sign = true;  // sigma_n classes signed (EncodeOptions::curvature_sign)
   int normal_neighbours = 12;
   std::string normals_source;  // "file", "faces", "k-NN", "none"
   int classes[3] = {0, 0, 0};  // options: 0 automatic

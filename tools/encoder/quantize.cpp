@@ -110,4 +110,11 @@ uint16_t q12_code(double value) {
   return static_cast<uint16_t>(std::min(65535.0, std::floor(v + 0.5)));
 }
 
+uint16_t q12_signed_code(double value) {
+  const double v = static_cast<float>(value) * 4096.0;
+  if (!(v == v)) return 0;
+  const double rounded = std::clamp(v < 0 ? -std::floor(-v + 0.5) : std::floor(v + 0.5), -32767.0, 32767.0);
+  return static_cast<uint16_t>(static_cast<int32_t>(rounded) & 0xFFFF);
+}
+
 }  // namespace stipple

@@ -55,5 +55,8 @@ double sigma_p_of_code(uint16_t code, double largest_extent);
 // sigma_n (radians) and sigma_c (0..1): Q12, the value the client's integer
 // conversion of the float32 gives (round half away from zero), saturated.
 uint16_t q12_code(double value);
+// The same of either sign as two's complement (kAttrCurvatureSign's sigma_n),
+// within +-32767.
+uint16_t q12_signed_code(double value);
 
 }  // namespace stipple

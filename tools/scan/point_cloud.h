@@ -77,4 +77,19 @@ inline PointCloud grid_plane(int side) {
   return plane;
 }
 
+// A patch of side x side points over [-1, 1]^2 on z = (kx x^2 + ky y^2) / 2,
+// with its normals on the +z side: seen from above (from its normals' side)
+// a dome for kx, ky < 0, a bowl for kx, ky > 0, a saddle for opposite signs.
+// The curvature sign's tests and figures (docs/encoder.md "Curvature sign").
+inline PointCloud quadric_patch(int side, double kx, double ky) {
+  PointCloud patch;
+  for (int j = 0; j < side; ++j)
+    for (int i = 0; i < side; ++i) {
+      const double x = -1.0 + 2.0 * i / (side - 1), y = -1.0 + 2.0 * j / (side - 1);
+      patch.positions.push_back(Vec3(x, y, 0.5 * (kx * x * x + ky * y * y)));
+      patch.normals.push_back(Vec3(-kx * x, -ky * y, 1.0).normalized());
+    }
+  return patch;
+}
+
 }  // namespace stipple
