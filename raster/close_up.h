@@ -103,16 +103,19 @@ inline bool close_up_reaches(const Camera& camera, const int32_t c[3], int32_t l
   return z > camera.near_mu && abs(c[0]) - r <= 8 * z && abs(c[1]) - r <= 8 * z;
 }
 
-// Draws disc `s` into a tile's words (the tile's first pixel px0, py0; pw x
-// ph of its pixels on screen; 2^tile_log2 words a row).
-template <PointNormals kNormals, bool kSpecular, class Word>
-void draw_close_up(const CloseUp& s, const PointTables& t, const uint16_t* reciprocal, int px0, int py0, int pw,
-                   int ph, int tile_log2, Word* words) {
+// Calls fn(at, u, v, depth) for each pixel of a tile (the tile's first
+// pixel px0, py0; pw x ph of its pixels on screen; 2^tile_log2 a row) whose
+// ray meets the plane of `s` within kCut (Q12 sigmas) of its mean, beyond
+// the near plane: `at` the pixel's place in the tile, u, v the hit's place
+// in sigmas (Q12), depth its depth word.
+template <int32_t kCut, class Fn>
+[[gnu::always_inline]] inline void for_each_close_up_pixel(const CloseUp& s, const uint16_t* reciprocal, int px0, int py0,
+                                                           int pw, int ph, int tile_log2, const Fn& fn) {
   const int x0 = s.box[0] > px0 ? s.box[0] : px0, x1 = s.box[1] < px0 + pw - 1 ? s.box[1] : px0 + pw - 1;
   const int y0 = s.box[2] > py0 ? s.box[2] : py0, y1 = s.box[3] < py0 + ph - 1 ? s.box[3] : py0 + ph - 1;
   if (x0 > x1 || y0 > y1) return;
   constexpr int64_t kRow = int64_t{1} << 30;  // U, V, W stay int32 along a row
-  constexpr int32_t kCut = kCloseUpCut << 12, kCut2 = kCut * kCut;
+  constexpr int32_t kCut2 = kCut * kCut;
   for (int y = y0; y <= y1; ++y) {
     const int64_t u_first = s.u00 + int64_t{s.ay} * y + int64_t{s.ax} * x0, v_first = s.v00 + int64_t{s.by} * y + int64_t{s.bx} * x0;
     const int64_t w_first = s.w00 + int64_t{s.ny} * y + int64_t{s.nx} * x0;
@@ -123,7 +126,7 @@ void draw_close_up(const CloseUp& s, const PointTables& t, const uint16_t* recip
     };
     if (beyond(u_first, s.ax) || beyond(v_first, s.bx) || beyond(w_first, s.nx)) continue;  // a hostile camera's centre
     int32_t U = static_cast<int32_t>(u_first), V = static_cast<int32_t>(v_first), W = static_cast<int32_t>(w_first);
-    Word* row = words + ((y - py0) << tile_log2) - px0;
+    const int row = ((y - py0) << tile_log2) - px0;
     for (int x = x0; x <= x1; ++x, U += s.ax, V += s.bx, W += s.nx) {
       if (W <= 0) continue;  // the ray leaves the plane behind
       const int e = 32 - __builtin_clz(static_cast<uint32_t>(W));
@@ -148,16 +151,26 @@ void draw_close_up(const CloseUp& s, const PointTables& t, const uint16_t* recip
       else d = sh <= -63 ? 0 : p >> -sh;
       if (d != INT64_MAX) d -= s.near_word;
       if (d < 0) continue;  // nearer than the near plane
-      const uint32_t depth = d > 0xFFFFFFFE ? 0xFFFFFFFEu : static_cast<uint32_t>(d);
-      uint32_t color;
-      if constexpr (kNormals == PointNormals::kSurface)
-        color = point_color<kNormals, false, kSpecular, sizeof(Word) == 4>(s.shade, t, 0, int16_pair(uu, vv), 0);
-      else
-        color = sizeof(Word) == 4 ? uint32_t{rgb565(s.shade.node_rgb)} : s.shade.node_rgb;
-      const Word w = pack_word<Word>(depth, color);
-      if (w < row[x]) row[x] = w;
+      fn(row + x, uu, vv, d > 0xFFFFFFFE ? 0xFFFFFFFEu : static_cast<uint32_t>(d));
     }
   }
+}
+
+// Draws disc `s` into a tile's words (the tile's first pixel px0, py0; pw x
+// ph of its pixels on screen; 2^tile_log2 words a row).
+template <PointNormals kNormals, bool kSpecular, class Word>
+void draw_close_up(const CloseUp& s, const PointTables& t, const uint16_t* reciprocal, int px0, int py0, int pw,
+                   int ph, int tile_log2, Word* words) {
+  for_each_close_up_pixel<(kCloseUpCut << 12)>(s, reciprocal, px0, py0, pw, ph, tile_log2,
+                          [&](int at, int32_t uu, int32_t vv, uint32_t depth) __attribute__((always_inline)) {
+                            uint32_t color;
+                            if constexpr (kNormals == PointNormals::kSurface)
+                              color = point_color<kNormals, false, kSpecular, sizeof(Word) == 4>(s.shade, t, 0, int16_pair(uu, vv), 0);
+                            else
+                              color = sizeof(Word) == 4 ? uint32_t{rgb565(s.shade.node_rgb)} : s.shade.node_rgb;
+                            const Word w = pack_word<Word>(depth, color);
+                            if (w < words[at]) words[at] = w;
+                          });
 }
 
 }  // namespace stipple
