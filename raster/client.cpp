@@ -52,6 +52,7 @@ NodeCacheLimits cache_limits(const ClientConfig& c) {
 RendererConfig renderer_config(const ClientConfig& c) {
   RendererConfig r = c;
   if (r.tile_nodes > c.node_capacity) r.tile_nodes = c.node_capacity;  // never more drawn than held
+  if (c.ewa) r.splats = c.node_capacity;
   return r;
 }
 

@@ -33,6 +33,7 @@ struct ClientConfig : RendererConfig {
                                            // packed records: no per-frame decode, ~7x the cache memory
   uint16_t max_classes[3] = {4096, 4096, 64};  // sigma_p, sigma_n, sigma_c tables
   uint8_t max_record_bytes = 0;            // widest record held packed; 0: the paper's layout
+  bool ewa = false;                        // EWA splats (`--splat ewa`): RendererConfig::splats for every node held
 };
 
 // The handheld's tile pass: rows for 2,048 nodes (RendererConfig::

@@ -37,7 +37,7 @@ constexpr uint32_t kTileMinPoints = avx2::kBuilt ? 1 : 4;
 
 struct Layout {
   size_t raster, internal_frame, coverage, screen_coverage, resolve, g_position, g_normal, g_color, shading, reciprocal,
-      lanes, grey, angles, tile_list, mean_terms, ppn, close_ups, total;
+      lanes, grey, angles, tile_list, mean_terms, ppn, close_ups, splats, ewa_sums, total;
 };
 
 // The raster's configuration: the screen, times the supersampling, in
@@ -82,6 +82,8 @@ Layout layout_of(const RendererConfig& c) {
   l.mean_terms = take(sizeof(int32_t) * 3 * 3 * (size_t{1} << kMeanTermBits));
   l.ppn = take(node_lanes ? sizeof(PpnTable) + 4 : 0);
   l.close_ups = take(c.close_ups ? sizeof(CloseUp) * close_up_capacity(r.width, r.height) : 0);
+  l.splats = take(sizeof(Splat) * c.splats);
+  l.ewa_sums = take(c.splats ? ewa_tile_bytes(r.tile_log2) : 0);
   l.total = arena.total();
   return l;
 }
@@ -198,7 +200,7 @@ const char* render_status_text(RenderStatus s) {
 bool renderer_config_valid(const RendererConfig& c) {
   if (c.supersample != 1 && c.supersample != 2 && c.supersample != 4) return false;
   if (uint32_t{c.raster.width} * c.supersample > 8192 || uint32_t{c.raster.height} * c.supersample > 8192) return false;
-  return point_raster_bytes(internal_raster(c)) > 0 && point_raster_bytes(c.raster) > 0 && c.samples >= 1 && c.samples <= 8192 && c.point_size >= 1 &&
+  return point_raster_bytes(internal_raster(c)) > 0 && point_raster_bytes(c.raster) > 0 && c.samples >= 1 && c.samples <= 8192 && c.splats <= (1u << 24) && c.point_size >= 1 &&
          c.point_size <= 3 && c.max_angle_bits >= 1 && c.max_angle_bits <= kMaxAngleBits && c.quality_q8 >= 1 && c.lighting.shininess >= 1 && c.lighting.shininess <= 64 &&
          (c.lighting.light_q14[0] | c.lighting.light_q14[1] | c.lighting.light_q14[2]) != 0;
 }
@@ -251,6 +253,9 @@ RenderStatus PointRenderer::init(const RendererConfig& config, void* storage, si
   lane_ppn_ = l.ppn != l.close_ups ? reinterpret_cast<uint16_t*>(base + l.ppn) : nullptr;
   close_ups_ = config.close_ups ? reinterpret_cast<CloseUp*>(base + l.close_ups) : nullptr;
   close_up_capacity_ = config.close_ups ? close_up_capacity(internal_.width, internal_.height) : 0;
+  splats_ = config.splats ? reinterpret_cast<Splat*>(base + l.splats) : nullptr;
+  splat_capacity_ = config.splats;
+  ewa_sums_ = config.splats ? reinterpret_cast<uint32_t*>(base + l.ewa_sums) : nullptr;
   lanes_ = config.lanes == PointLanes::kScalar ? PointLanes::kScalar
            : config.lanes == PointLanes::kBest && avx2::supported() ? PointLanes::kBest
                                                                      : PointLanes::kBaseline;
@@ -315,6 +320,7 @@ struct PointRenderer::FrameSetup {
   bool elevation_down;  // the axis points down: the ramp reversed
   bool lit;  // the model has normals and the shading uses them
   bool close_ups;  // nodes may be drawn as discs (RendererConfig::close_ups, without the point cap)
+  bool splats;     // drawn nodes are also EWA splats (RendererConfig::splats)
   int close_up_log2;  // close-ups are measured in screen pixels: log2 of the supersampling
   int64_t close_up_gate;  // a or c (1/256 px^2) from which a node may be one: (16 2^(kCloseUpPointsLog2 + close_up_log2))^2
   CloseUpFrame close_up;
@@ -485,6 +491,7 @@ template <PointNormals kNormals, bool kSpecular>
   PointShade sh;
   set_up_shade<kNormals, false, kSpecular>(f, fields, frame, sk, sh);
   disc.shade = PackedShade(sh);
+  if (f.splats) take_splat(f, fields, c, frame, sk, sh, stats);  // its colour with its neighbours'
   ++close_up_count_;
   ++stats.nodes_drawn;
   ++stats.nodes_close_up;
@@ -515,6 +522,41 @@ template <PointNormals kNormals, bool kSpecular, class Word>
   const int ph = py0 + tile > internal_.height ? internal_.height - py0 : tile;
   for (uint32_t i = 0; i < close_up_count_; ++i)
     draw_close_up<close_up_normals(kNormals), kSpecular>(close_ups_[i], tables_, reciprocal_, px0, py0, pw, ph, internal_.tile_log2, words);
+}
+
+// EWA (ewa.h): the node also a splat, shaded as its points, while the
+// frame has room for it — unless its mean normal faces away: its surface's
+// front is another splat's, and its back's shading would bleed through
+// within the visibility pass's depth (the GL client drops it too).
+[[gnu::noinline]] void PointRenderer::take_splat(const FrameSetup& f, const NodeFields& fields, const int32_t c[3],
+                                                 const int16_t frame[3][3], const int32_t sk[3], const PointShade& shade,
+                                                 FrameStats& stats) {
+  if (splat_count_ >= splat_capacity_) return;
+  if (f.lit) {
+    int16_t t[2][3];
+    angles_.normal_tangents(f.decoder->euler(FrameField::kNormal), fields, t);
+    int64_t facing = 0;  // (t1 x t2) . c, Q28 MU: the mean normal against the eye's ray to the mean
+    for (int i = 0; i < 3; ++i) {
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      facing += (int64_t{t[0][j]} * t[1][k] - int64_t{t[0][k]} * t[1][j]) * c[i];
+    }
+    if (facing > 0) return;
+  }
+  Splat& s = splats_[splat_count_];
+  if (!set_up_splat(f.close_up, c, frame, sk, &s)) return;
+  s.disc.shade = PackedShade(shade);
+  ++splat_count_;
+  ++stats.splats;
+}
+
+// The frame's splats over one tile's words, after its points and discs.
+template <PointNormals kNormals, bool kSpecular, class Word>
+[[gnu::noinline]] void PointRenderer::draw_splats(int px0, int py0, Word* words) {
+  const int tile = 1 << internal_.tile_log2;
+  const int pw = px0 + tile > internal_.width ? internal_.width - px0 : tile;
+  const int ph = py0 + tile > internal_.height ? internal_.height - py0 : tile;
+  stipple::draw_splats<close_up_normals(kNormals), kSpecular>(splats_, splat_count_, tables_, reciprocal_, px0, py0, pw, ph,
+                                                              internal_.tile_log2, words, ewa_sums_);
 }
 
 template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
@@ -597,6 +639,7 @@ void PointRenderer::draw_node(const FrameSetup& f, const NodeFields& fields, uin
   set_up_depth(f, c, axes, s);
   set_up_shade<kNormals, kColorPoints, kSpecular>(f, fields, frame, sk, s.shade);
   ++stats.nodes_drawn;
+  if (f.splats) [[unlikely]] take_splat(f, fields, c, frame, sk, s.shade, stats);
   if constexpr (P == Projection::kAffine) {
     if (wait_in_tiles<kNormals, kColorPoints>(s, stats)) return;
   }
@@ -633,6 +676,7 @@ void PointRenderer::tile_nodes_of(void* context, uint32_t tile, int px0, int py0
   const auto draw = [&](auto* tile_words) {
     if (nodes) r.draw_tile_nodes<kNormals, kColorPoints, kSpecular>(tile, px0, py0, tile_words);
     if (r.close_up_count_ != 0) r.draw_close_ups<kNormals, kSpecular>(px0, py0, tile_words);
+    if (r.splat_count_ != 0) r.draw_splats<kNormals, kSpecular>(px0, py0, tile_words);
   };
   if (r.internal_.format == PixelFormat::kRgb565) draw(static_cast<uint32_t*>(words));
   else draw(static_cast<uint64_t*>(words));
@@ -828,6 +872,7 @@ RenderStatus PointRenderer::set_up_frame(const NodeCache& cache, const Camera& c
   f.decoder = &cache.decoder();
   f.lit = header.has_normals() && config_.shading != ShadingMode::kNone;
   f.close_ups = close_up_capacity_ > 0 && config_.point_cap == 0;
+  f.splats = splat_capacity_ > 0;
   f.close_up_log2 = config_.supersample == 4 ? 2 : config_.supersample == 2 ? 1 : 0;
   f.close_up_gate = int64_t{1} << (2 * (4 + kCloseUpPointsLog2 + f.close_up_log2));
   f.close_up = CloseUpFrame{f.camera.focal_q4, f.camera.center_q4[0], f.camera.center_q4[1], f.camera.near_mu,
@@ -968,7 +1013,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   const bool mean_fits = header.layout.bits[0] <= kMeanTermBits && header.layout.bits[1] <= kMeanTermBits &&
                          header.layout.bits[2] <= kMeanTermBits;
   const bool node_lanes = k.lanes != nullptr && lane_ppn_ != nullptr && lanes_ == PointLanes::kBest &&
-                          !f.model_color && config_.point_cap == 0 && mean_fits && count >= 64;
+                          !f.model_color && config_.point_cap == 0 && !f.splats && mean_fits && count >= 64;
   const uint32_t mean_cells = (1u << header.layout.bits[0]) + (1u << header.layout.bits[1]) + (1u << header.layout.bits[2]);
   f.mean[0] = f.mean[1] = f.mean[2] = nullptr;
   FrameStats stats;
@@ -978,6 +1023,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
 
   raster_.begin_frame();
   close_up_count_ = 0;
+  splat_count_ = 0;
   // The point cap: a node draws at most point_cap times the original points
   // under it (times the supersampling's n^2, so it means the same on screen).
   const int32_t n = config_.supersample;
@@ -997,7 +1043,7 @@ RenderStatus PointRenderer::render(const NodeCache& cache, const Camera& camera,
   const uint32_t first = node_lanes ? set_up_in_lanes(f, cache, k, stats, draw_slot) : 0;
   for (uint32_t s = first; s < count; ++s) draw_slot(s);
   raster_.draw(config_.clear_rgb, n == 1 ? frame : internal_frame_, n == 1 ? stride : size_t{internal_.width} * 3,
-               coverage_, k.tile, this, close_up_count_ != 0);
+               coverage_, k.tile, this, close_up_count_ != 0 || splat_count_ != 0);
   if (n > 1) finish_supersampled(frame, stride);
   if (screen_coverage_ != nullptr)
     resolve_frame(frame, stride, config_.raster.format, config_.raster.width, config_.raster.height, screen_coverage_,

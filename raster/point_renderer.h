@@ -27,6 +27,7 @@
 #include "core/gaussian_table.h"
 #include "core/node_cache.h"
 #include "raster/close_up.h"
+#include "raster/ewa.h"
 #include "raster/node_lanes.h"
 #include "raster/node_setup.h"
 #include "raster/point_kernel.h"
@@ -87,6 +88,12 @@ struct RendererConfig {
   // (raster/close_up.h) — not with the point cap, which keeps sparse scans
   // sparse. Up to close_up_capacity discs a frame; more are drawn as points.
   bool close_ups = true;
+  // EWA splatting (raster/ewa.h; `--splat ewa`, TOG05 §8.4's quality mode):
+  // up to this many of a frame's drawn nodes are also elliptical Gaussian
+  // splats, which colour the pixels the points cover (visibility,
+  // accumulation, normalization per tile, in 20 bytes a tile pixel of the
+  // arena); 0: points only. A Client asks for its node capacity.
+  uint32_t splats = 0;
   // Which loops draw the tile pass's points: the widest this CPU has
   // (kBest: AVX2 on x86-64 where the CPU has it, else SSE2; NEON on ARMv7
   // and AArch64), the build's baseline lanes (SSE2 or NEON), or one point at
@@ -124,6 +131,7 @@ struct FrameStats {
   uint32_t points_dropped = 0;  // refused by a full frame budget
   uint32_t nodes_in_tiles = 0;  // of nodes_drawn: drawn inside the tile pass (RendererConfig::tile_nodes)
   uint32_t nodes_close_up = 0;  // of nodes_drawn: drawn as discs (RendererConfig::close_ups)
+  uint32_t splats = 0;          // of nodes_drawn: also EWA splats (RendererConfig::splats)
   uint32_t nodes_in_lanes = 0;  // of nodes: set up 8 at a time in AVX2 lanes, culled or drawn (raster/node_lanes.h)
   bool mean_table = false;      // the means' camera-space terms came from the frame's table (docs/fixed_point.md)
 };
@@ -184,6 +192,10 @@ class PointRenderer {
   bool close_up_outside(const FrameSetup& f, const NodeFields& fields, const int32_t c[3], FrameStats& stats);
   template <PointNormals kNormals, bool kSpecular, class Word>
   void draw_close_ups(int px0, int py0, Word* words);
+  void take_splat(const FrameSetup& f, const NodeFields& fields, const int32_t c[3], const int16_t frame[3][3],
+                  const int32_t sk[3], const PointShade& shade, FrameStats& stats);
+  template <PointNormals kNormals, bool kSpecular, class Word>
+  void draw_splats(int px0, int py0, Word* words);
   template <Projection P, PointNormals kNormals, bool kColorPoints, bool kSpecular>
   [[gnu::noinline]] uint32_t draw_points(const PointSetup& setup, FrameStats& stats);
   template <PointNormals kNormals, bool kColorPoints, bool kSpecular, class Word>
@@ -217,6 +229,9 @@ class PointRenderer {
   PointTables tables_;
   CloseUp* close_ups_ = nullptr;    // the frame's discs
   uint32_t close_up_capacity_ = 0, close_up_count_ = 0;
+  Splat* splats_ = nullptr;         // the frame's EWA splats
+  uint32_t splat_capacity_ = 0, splat_count_ = 0;
+  uint32_t* ewa_sums_ = nullptr;    // one tile's sums (ewa_tile_bytes)
   const uint32_t* grey_shades_ = nullptr;  // the grey shortcut's tables (PointTables::grey_shade), null when the grey is not one
   FrameAngles angles_;
   TileNodes tile_nodes_;            // the raster's items

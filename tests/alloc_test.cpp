@@ -165,6 +165,38 @@ int main(int argc, char** argv) {
         "client: 3 startups, 90 frames with cuts, puts, drops (close-ups' discs among them) after init",
         g_heap_calls.load() - before);
 
+  // EWA splats (raster/ewa.h): their records and a tile's sums in the
+  // arena, from near and far, with no heap call after init.
+  stipple::ClientConfig ewa_config = client_config;
+  ewa_config.ewa = true;
+  std::vector<uint64_t> ewa_arena(stipple::client_arena_bytes(ewa_config) / 8 + 1);
+  stipple::Client ewa;
+  if (ewa.init(ewa_config, ewa_arena.data(), ewa_arena.size() * 8) != stipple::ClientStatus::kOk) return 2;
+  before = g_heap_calls.load();
+  bool ewa_ok = ewa.load_startup(spg.data(), startup_bytes) == stipple::ClientStatus::kOk;
+  uint32_t splats = 0;
+  for (int frame = 0; frame < 20; ++frame) {
+    stipple::OrbitView orbit;
+    for (int a = 0; a < 3; ++a) orbit.target_mu[a] = decoder.extent_mu()[a] / 2;
+    orbit.distance_mu = frame % 2 ? 1 << 22 : 3 << 24;
+    orbit.yaw = static_cast<uint32_t>(frame) * 0x0C000000u;
+    stipple::Camera camera;
+    ewa_ok &= stipple::orbit_camera(orbit, 240, 320, &camera);
+    const stipple::CutRule rule{stipple::CutRule::kProjectedSize, 0, 32};
+    const uint32_t n = stipple::simple_cut(view, rule, &decoder, &camera, cut_scratch.data(), cut.data(),
+                                           static_cast<uint32_t>(cut.size()));
+    for (uint32_t i = 0; i < view.header.node_count; ++i)
+      if (ewa.has_node(stipple::NodeId{i})) ewa_ok &= ewa.drop_node(stipple::NodeId{i}) == stipple::ClientStatus::kOk;
+    for (uint32_t i = 0; i < n && i < ewa_config.node_capacity; ++i)
+      ewa_ok &= ewa.put_node(stipple::NodeId{cut[i]}, view.records + static_cast<size_t>(cut[i]) * view.record_bytes,
+                             view.record_bytes) == stipple::ClientStatus::kOk;
+    ewa_ok &= ewa.render(camera, frame_pixels.data(), 240 * 2, &stats) == stipple::ClientStatus::kOk;
+    checksum += frame_pixels[2000 + frame];
+    splats += stats.splats;
+  }
+  check(ewa_ok && splats > 0 && g_heap_calls.load() - before == 0, "EWA client: 20 frames near and far after init",
+        g_heap_calls.load() - before);
+
   // The display path: the null display converts and keeps every frame in
   // storage sized when it was made.
   stipple::NullDisplay display(240, 320, stipple::PixelFormat::kRgb565);

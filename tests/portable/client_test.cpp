@@ -221,6 +221,52 @@ TEST(Client, FrameDependsOnlyOnTheCachedSet) {
   EXPECT_GT(a.points, 10000u);
 }
 
+// EWA splats (raster/ewa.h) colour the pixels the points cover and no
+// other: the same background, pixel for pixel, as the points' frame, and
+// the same bytes on every target (integer throughout; the frames' CRC-32s
+// are the host's). A splat whose mean normal faces away is none.
+TEST(Client, EwaSplatsColourWhatThePointsCoverTheSameOnEveryTarget) {
+  const Model& m = bunny_v2();
+  const uint32_t n = m.view.header.node_count;
+  ClientConfig c = small_config(n);
+  c.raster.max_points = 1u << 21;
+  ClientConfig e = c;
+  e.ewa = true;
+  Harness points(c), splats(e);
+  ASSERT_EQ(points.client.load_startup(m.file.data(), m.startup_bytes), ClientStatus::kOk);
+  ASSERT_EQ(splats.client.load_startup(m.file.data(), m.startup_bytes), ClientStatus::kOk);
+  for (uint32_t id = 0; id < n; ++id) {
+    if (spg_child_count(m.view, id) != 0) continue;  // the leaves
+    const uint8_t* r = m.view.records + size_t{id} * m.view.record_bytes;
+    ASSERT_EQ(points.client.put_node(NodeId{id}, r, m.view.record_bytes), ClientStatus::kOk);
+    ASSERT_EQ(splats.client.put_node(NodeId{id}, r, m.view.record_bytes), ClientStatus::kOk);
+  }
+  const struct {
+    double yaw, pitch;
+    uint32_t crc;
+  } views[] = {{30, 20, 0xdb7e080fu}, {200, -10, 0xe6bbc435u}};
+  for (const auto& v : views) {
+    const Camera cam = camera_for(splats.client, v.yaw, v.pitch);
+    FrameStats ps, es;
+    const std::vector<uint8_t> p = draw(points.client, cam, &ps), f = draw(splats.client, cam, &es);
+    size_t covered = 0, recoloured = 0;
+    for (size_t i = 0; i < p.size(); i += 2) {
+      const bool p_bg = p[i] == 0 && p[i + 1] == 0, f_bg = f[i] == 0 && f[i + 1] == 0;
+      ASSERT_EQ(p_bg, f_bg) << "pixel " << i / 2;
+      covered += !p_bg;
+      recoloured += !p_bg && (p[i] != f[i] || p[i + 1] != f[i + 1]);
+    }
+    const uint32_t crc = crc32(f.data(), f.size());
+    std::printf("yaw %.0f: %u splats of %u nodes drawn, %zu of %zu covered pixels recoloured, frame crc32 %08x\n", v.yaw,
+                es.splats, es.nodes_drawn, recoloured, covered, crc);
+    EXPECT_EQ(ps.splats, 0u);
+    EXPECT_GT(es.splats, es.nodes_drawn / 3);  // about half the leaves face the eye
+    EXPECT_LT(es.splats, es.nodes_drawn);
+    EXPECT_GT(recoloured, covered / 2);
+    EXPECT_EQ(crc, v.crc);
+  }
+}
+
 TEST(Client, DrawsNothingBehindTheCameraAndCountsCulls) {
   const uint32_t n = bunny().view.header.node_count;
   Harness h(small_config(n));

@@ -388,6 +388,36 @@ BENCHMARK(BM_ClientFrame)
 // at arg 1's screen (0: the handheld's 240 x 320 RGB565, 1: 640 x 480
 // RGB888), the default client (surface normals, the resolve). Counters:
 // the discs and the points of the frame.
+// EWA splats (raster/ewa.h) against the default points: the same cut,
+// 640 x 480, the client's defaults (surface normals, the resolve).
+void BM_EwaFrame(benchmark::State& state) {
+  const std::vector<uint8_t>& spg = encoded_scan();
+  const SpgView view = parsed_scan();
+  ClientConfig c;
+  c.raster = RasterConfig{640, 480, kDefaultTileLog2, PixelFormat::kRgb888, 1u << 21};
+  c.node_capacity = view.header.node_count;
+  c.ewa = state.range(0) != 0;
+  const FrameScene scene(view);
+  std::vector<uint64_t> arena(client_arena_bytes(c) / 8 + 1);
+  Client client;
+  if (client.init(c, arena.data(), arena.size() * 8) != ClientStatus::kOk ||
+      client.load_startup(spg.data(), spg_startup_bytes(view.header.version, view.header.class_count)) != ClientStatus::kOk)
+    std::abort();
+  for (const uint32_t id : scene.cut)
+    if (client.put_node(NodeId{id}, view.records + size_t{id} * view.record_bytes, view.record_bytes) != ClientStatus::kOk)
+      std::abort();
+  std::vector<uint8_t> frame(640 * 480 * 3);
+  FrameStats stats;
+  for (auto _ : state) {
+    if (client.render(scene.camera, frame.data(), 640 * 3, &stats) != ClientStatus::kOk) std::abort();
+    benchmark::DoNotOptimize(frame.data());
+  }
+  state.counters["nodes"] = stats.nodes;
+  state.counters["splats"] = stats.splats;
+  state.counters["points"] = stats.points;
+}
+BENCHMARK(BM_EwaFrame)->ArgNames({"ewa"})->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
 void BM_CloseUpFrame(benchmark::State& state) {
   static const std::vector<uint8_t> spg = [] {
     std::vector<uint8_t> bytes;

@@ -171,6 +171,7 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
         .integer("points", fixed.stats.points)
         .integer("points_dropped", fixed.stats.points_dropped)
         .integer("nodes_close_up", fixed.stats.nodes_close_up)
+        .integer("splats", fixed.stats.splats)
         .integer("nodes_in_tiles", fixed.stats.nodes_in_tiles)
         .integer("nodes_in_lanes", fixed.stats.nodes_in_lanes)
         .integer("arena_bytes", static_cast<long long>(fixed.arena_bytes))
@@ -181,10 +182,11 @@ int render_to_png(const std::string& name, const std::vector<uint8_t>& file, con
     if (!output.empty()) j.str("output", output);
     std::printf("%s\n", j.done().c_str());
   } else {
-    std::printf("%s: %s nodes sent (%s culled in the cut), %s drawn%s, %s points%s, arena %s bytes%s%s\n", name.c_str(),
+    std::printf("%s: %s nodes sent (%s culled in the cut), %s drawn%s%s, %s points%s, arena %s bytes%s%s\n", name.c_str(),
                 cli::with_commas(fixed.cut.size()).c_str(), cli::with_commas(fixed.culled_nodes).c_str(),
                 cli::with_commas(fixed.stats.nodes_drawn).c_str(),
                 fixed.stats.nodes_close_up ? (" (" + cli::with_commas(fixed.stats.nodes_close_up) + " as close-up discs)").c_str() : "",
+                fixed.stats.splats ? (", " + cli::with_commas(fixed.stats.splats) + " EWA splats").c_str() : "",
                 cli::with_commas(fixed.stats.points).c_str(),
                 fixed.stats.points_dropped ? (" (" + cli::with_commas(fixed.stats.points_dropped) + " over budget)").c_str() : "",
                 cli::with_commas(fixed.arena_bytes).c_str(), output.empty() ? "" : (" -> " + output).c_str(),

@@ -138,6 +138,8 @@ std::vector<Setting> settings(bool color) {
   add("shading", "none", false, [](RenderOptions& o) { o.config.shading = ShadingMode::kNone; });
   for (int k : {0, 2, 4, 8})
     add("point-cap", std::to_string(k), k == 0, [k](RenderOptions& o) { o.config.point_cap = static_cast<uint8_t>(k); });
+  add("splat", "points", true, [](RenderOptions&) {});
+  add("splat", "ewa", false, [](RenderOptions& o) { o.config.ewa = true; });
   add("resolve", "on", true, [](RenderOptions&) {});
   add("resolve", "off", false, [](RenderOptions& o) { o.config.resolve = false; });
   for (int t : {4, 5, 6})

@@ -66,9 +66,10 @@ const char kRenderOptionsHelp[] =
     "  --resolve on|off       the screen-space resolve: fill pinholes, trim the\n"
     "                         points' fringe at silhouettes, blend 3x3\n"
     "                         (default on: docs/results.md)\n"
-    "  --splat points         how nodes are drawn: the fixed-point client's points (and\n"
-    "                         close-ups' discs); EWA splats are the GL client's\n"
-    "                         (stipple-gl --splat ewa; docs/fixed_point.md \"EWA\")\n"
+    "  --splat points|ewa     points (default), or EWA splats colouring what the\n"
+    "                         points cover (visibility, weighted accumulation,\n"
+    "                         normalization: TOG05's quality mode, docs/fixed_point.md\n"
+    "                         \"EWA\"; 20 bytes a tile pixel more, not the handheld's)\n"
     "  --close-ups on|off     draw a node larger on screen than its samples cover\n"
     "                         (8 px sigma: a leaf seen closer than its spacing) as\n"
     "                         its 3 sigma disc, so the surface stays closed\n"
@@ -153,10 +154,9 @@ bool parse_render_options(cli::Args& args, RenderOptions& o, std::string& error)
     else return error = "--resolve: expected on or off, got '" + v + "'", false;
   }
   if (args.value("--splat", v)) {
-    if (v == "ewa")
-      return error = "--splat ewa: the fixed-point client draws points (and close-ups' discs); EWA splats are the GL "
-                     "client's: stipple-gl --splat ewa (docs/fixed_point.md \"EWA\" says why)", false;
-    if (v != "points") return error = "--splat: expected points or ewa, got '" + v + "'", false;
+    if (v == "points") c.ewa = false;
+    else if (v == "ewa") c.ewa = true;
+    else return error = "--splat: expected points or ewa, got '" + v + "'", false;
   }
   if (args.value("--close-ups", v)) {
     if (v == "on") c.close_ups = true;

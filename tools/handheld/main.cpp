@@ -80,6 +80,16 @@ int run(int argc, char** argv) {
   if (!parse_render_options(args, o, error)) return fail(error);
   if (!o.tile_nodes_given) o.config.tile_nodes = kHandheldTileNodes;  // the PDA's arena (raster/client.h)
   if (!o.lanes_given) o.config.lanes = PointLanes::kBaseline;          // the PDA's lanes, and no x86 node tables
+  if (o.config.ewa) {
+    // EWA's splats and a tile's sums do not fit the device's 2 MiB arena.
+    ClientConfig points = o.config;
+    points.ewa = false;
+    const size_t with = client_arena_bytes(o.config), without = client_arena_bytes(points);
+    return fail("--splat ewa: the handheld draws points; EWA's splats (one for each of " +
+                cli::with_commas(o.config.node_capacity) + " nodes) and a tile's sums take " +
+                cli::with_commas(with - without) + " bytes of arena more, " + cli::with_commas(with) +
+                " in all against the device's 2 MiB (docs/fixed_point.md \"EWA\"; the emulator and stipple render draw it)");
+  }
   const bool crc = args.flag("--crc"), memory = args.flag("--memory");
   unsigned long long frames = 1;
   if (args.value("--frames", v) && (!cli::parse_uint(v, 100000, frames) || frames == 0))
