@@ -76,6 +76,10 @@ TEST(Classify, SignedClassesNeverCrossASign) {
   for (size_t i = 0; i < 1000; ++i) ASSERT_EQ(plain.assign(positive[i]), unsigned_classes.assign(positive[i]));
   // Positive classes only: a concave tuple keeps its magnitude's class.
   EXPECT_EQ(plain.assign(Vec3(-0.1, 0.05, 0)), plain.assign(Vec3(0.1, 0.05, 0)));
+  // No sample (a scan without normals): no class, every tuple class 0.
+  const SignedSigmaClasses none(std::vector<Vec3>{}, 2, 64);
+  EXPECT_TRUE(none.centers().empty());
+  EXPECT_EQ(none.assign(Vec3(-0.1, 0.05, 0)), 0);
 }
 
 TEST(Classify, ScalesAndIsDeterministic) {

@@ -143,7 +143,7 @@ SignedSigmaClasses::SignedSigmaClasses(const std::vector<Vec3>& sample, int dims
     k[p] = std::max(1, static_cast<int>(share[p]));
     total += k[p];
   }
-  while (total < budget) {  // the rest to the largest remainders (ties: the lower pattern)
+  while (n > 0 && total < budget) {  // the rest to the largest remainders (ties: the lower pattern)
     int most = -1;
     for (int p = 0; p < kPatterns; ++p)
       if (!by[p].empty() && (most < 0 || share[p] - k[p] > share[most] - k[most])) most = p;
