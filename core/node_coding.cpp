@@ -170,7 +170,7 @@ void build_class_models(const SpgView& view, const SpgHeader& header, bool first
   normalise(gaps, tokens_for_bits(index_bits), &out->class_model[0]);
   const uint8_t* tables[3] = {view.sigma_p, view.sigma_n, view.sigma_c};
   // A client without the curvature sign reads sigma_n's magnitudes.
-  const bool strip_sign = view.header.has_curvature_sign() && !header.has_curvature_sign();
+  const bool strip_sign = spg_sigma_n_unsigned_for(view.header, header);
   for (int t = 0; t < 3; ++t) {
     const auto value_at = [&](const uint8_t* v) -> uint32_t {
       return t == 1 && strip_sign ? spg_sigma_n_magnitude(load_u16le(v), true) : load_u16le(v);

@@ -175,6 +175,12 @@ struct SpgHeader {
   bool has_curvature_sign() const { return (flags & kAttrCurvatureSign) != 0; }
 };
 
+// Whether a reader with header `reader` (a stream's reduced header) gets a
+// file's sigma_n codes as their magnitudes: the file has the sign, it not.
+inline bool spg_sigma_n_unsigned_for(const SpgHeader& file, const SpgHeader& reader) {
+  return file.has_curvature_sign() && !reader.has_curvature_sign();
+}
+
 // A class's bit where a bit set holds every class of a header's tables, one
 // table after another (which classes a stream has sent, or a cache holds).
 inline size_t spg_class_bit(const SpgHeader& h, int table, uint32_t index) {

@@ -22,7 +22,7 @@ void copy_class_values(const SpgView& view, const SpgHeader& reduced, int table,
   const size_t per = spg_class_values(table) * spg_class_value_bytes(view.header.version);
   const uint8_t* in = tables[table] + per * index;
   for (size_t b = 0; b < per; ++b) out[b] = in[b];
-  if (table == 1 && view.header.has_curvature_sign() && !reduced.has_curvature_sign())
+  if (table == 1 && spg_sigma_n_unsigned_for(view.header, reduced))
     for (size_t b = 0; b < per; b += 2) store_u16le(out + b, spg_sigma_n_magnitude(load_u16le(out + b), true));
 }
 
@@ -69,7 +69,7 @@ size_t write_reduced_startup(const SpgView& view, uint8_t attributes, uint8_t* o
   if (spg_write_startup_le(h, view.sigma_p, h.class_count[1] ? view.sigma_n : nullptr,
                            h.class_count[2] ? view.sigma_c : nullptr, out, capacity, &written) != SpgWriteStatus::kOk)
     return 0;
-  if (h.class_count[1] > 0 && view.header.has_curvature_sign() && !h.has_curvature_sign()) {
+  if (h.class_count[1] > 0 && spg_sigma_n_unsigned_for(view.header, h)) {
     // A client without the sign: the sigma_n classes' magnitudes.
     uint8_t* sigma_n = out + spg_fixed_header_bytes(h.version) + 6 * size_t{h.class_count[0]};
     for (uint32_t c = 0; c < h.class_count[1]; ++c) copy_class_values(view, h, 1, c, sigma_n + 4 * size_t{c});

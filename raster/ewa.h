@@ -93,8 +93,6 @@ void draw_splats(const Splat* splats, uint32_t count, const PointTables& t, cons
   uint32_t* visible = sums;
   uint32_t* weight = sums + pixels;
   uint32_t* channel = sums + 2 * pixels;  // 3 a pixel
-  constexpr int kDepthShift = sizeof(Word) == 8 ? 32 : 16;
-  constexpr Word kFar = sizeof(Word) == 8 ? Word{0xFFFFFFFFu} : Word{0xFFFFu};
   for (int y = 0; y < ph; ++y)
     for (int x = 0; x < pw; ++x) {
       const size_t at = (size_t{static_cast<uint32_t>(y)} << tile_log2) + static_cast<uint32_t>(x);
@@ -132,12 +130,11 @@ void draw_splats(const Splat* splats, uint32_t count, const PointTables& t, cons
     for (int x = 0; x < pw; ++x) {
       const size_t at = (size_t{static_cast<uint32_t>(y)} << tile_log2) + static_cast<uint32_t>(x);
       const uint32_t w = weight[at];
-      if (w == 0 || (row[x] >> kDepthShift) == kFar) continue;  // no splat here, or no point covers it
+      if (w == 0 || !word_covered(row[x])) continue;  // no splat here, or no point covers it
       const uint32_t half = w / 2;
       const uint32_t rgb = ((channel[3 * at] + half) / w) << 16 | ((channel[3 * at + 1] + half) / w) << 8 |
                            ((channel[3 * at + 2] + half) / w);
-      const uint32_t depth = sizeof(Word) == 8 ? static_cast<uint32_t>(row[x] >> 32) : static_cast<uint32_t>(row[x]);
-      row[x] = pack_word<Word>(depth, sizeof(Word) == 4 ? uint32_t{rgb565(rgb)} : rgb);
+      row[x] = recolour_word(row[x], sizeof(Word) == 4 ? uint32_t{rgb565(rgb)} : rgb);
     }
   }
 }

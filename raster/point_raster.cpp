@@ -260,15 +260,13 @@ void PointRaster::draw_tiles(uint32_t clear_color, uint8_t* frame, size_t stride
         // Covered: the depth is not the clear word's (all ones). Tiles are
         // at least 8 px, so a tile's row starts on a whole byte.
         const size_t row_bytes = (size_t{config_.width} + 7) / 8;
-        constexpr int kDepthShift = sizeof(Word) == 8 ? 32 : 16;
-        constexpr Word kFar = sizeof(Word) == 8 ? Word{0xFFFFFFFFu} : Word{0xFFFFu};
         for (int y = 0; y < ph; ++y) {
           uint8_t* bits = coverage + static_cast<size_t>(py0 + y) * row_bytes + (px0 >> 3);
           const Word* row = words + (y << sh);
           for (int x = 0; x < pw; x += 8) {
             uint32_t b = 0;
             if (fill != 0 || items)  // a tile without points covers nothing
-              for (int k = 0; k < 8 && x + k < pw; ++k) b |= static_cast<uint32_t>((row[x + k] >> kDepthShift) != kFar) << k;
+              for (int k = 0; k < 8 && x + k < pw; ++k) b |= static_cast<uint32_t>(word_covered(row[x + k])) << k;
             bits[x >> 3] = static_cast<uint8_t>(b);
           }
         }

@@ -95,6 +95,16 @@ template <>
 constexpr uint64_t pack_word<uint64_t>(uint32_t depth, uint32_t color) {
   return (static_cast<uint64_t>(depth) << 32) | (color & 0xFFFFFFu);
 }
+// Whether a tile word was drawn: its depth is not the clear word's (all ones).
+template <class Word>
+constexpr bool word_covered(Word w) {
+  return sizeof(Word) == 8 ? (w >> 32) != 0xFFFFFFFFu : (w >> 16) != 0xFFFFu;
+}
+// The word with another colour (pack_word's), its depth kept.
+template <class Word>
+constexpr Word recolour_word(Word w, uint32_t color) {
+  return pack_word<Word>(sizeof(Word) == 8 ? static_cast<uint32_t>(w >> 32) : static_cast<uint32_t>(w), color);
+}
 
 // Depth-tests word `w` into the pixels from `at` in a tile of rows `tile`
 // words apart, `wh` = width | height << 4 (1..15 each): the one z-test the
