@@ -8,27 +8,19 @@
 #include <string>
 #include <vector>
 
-#include "tests/portable/test_files.h"
+#include "test_util.h"
 #include "tools/embedded/embedded.h"
-#include "tools/encoder/encoder.h"
 #include "tools/reference/image_metrics.h"
-#include "tools/reference/spg_model.h"
 #include "tools/reference/truth.h"
-#include "tools/scan/ply_io.h"
 
 namespace stipple {
 namespace {
 
 TEST(EwaView, TheBunnyAgainstItsScan) {
-  PointCloud scan;
+  const test::BunnyAndScan b("tests/golden/bunny_v2.spg");
+  ASSERT_TRUE(b.ok);
+  const SpgView& view = b.view;
   std::string error;
-  ASSERT_TRUE(read_point_cloud(test::source_path("data/bunny.ply"), scan, error)) << error;
-  prepare_scan(scan, EncodeOptions{});  // the encoder's normals (from the faces) and frame
-  const std::vector<uint8_t> file = test::fixture("tests/golden/bunny_v2.spg");
-  SpgView view;
-  ASSERT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
-  DecodedModel model;
-  ASSERT_TRUE(decode_spg("bunny", file.data(), file.size(), model, error)) << error;
   ClientConfig config;  // the software client's defaults
   config.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 22};
   const struct {
@@ -39,14 +31,14 @@ TEST(EwaView, TheBunnyAgainstItsScan) {
   for (const auto& v : views) {
     ViewSpec spec;
     ASSERT_TRUE(parse_view(v.camera, spec, error)) << error;
-    const Image truth = render_truth(scan, model.bbox_min, model.bbox_max, view.header, config, spec);
+    const Image truth = render_truth(b.scan, b.model.bbox_min, b.model.bbox_max, view.header, config, spec);
     ImageComparison m[2];
     FrameStats stats[2];
     for (int ewa = 0; ewa < 2; ++ewa) {
       ClientConfig c = config;
       c.ewa = ewa == 1;
       FixedRender r;
-      ASSERT_TRUE(render_fixed(view, file.data(), c, CutRule{CutRule::kProjectedSize, 0, 32}, spec, r, error)) << error;
+      ASSERT_TRUE(render_fixed(view, b.file.data(), c, CutRule{CutRule::kProjectedSize, 0, 32}, spec, r, error)) << error;
       m[ewa] = compare_images(truth, r.image);
       stats[ewa] = r.stats;
     }

@@ -17,6 +17,7 @@
 #include "platform/gl/gl_renderer.h"
 #include "platform/image.h"
 #include "tests/portable/test_files.h"
+#include "tests/test_util.h"
 #include "tools/embedded/embedded.h"
 #include "tools/encoder/encoder.h"
 #include "tools/reference/image_metrics.h"
@@ -162,14 +163,11 @@ TEST(Gl, MultisamplingResolvesToTheSamePicture) {
 TEST(Gl, DefaultAndEwaPicturesAgainstTheScan) {
   Gl gl;
   ASSERT_TRUE(gl.ok) << gl.error;
-  PointCloud scan;
-  std::string error;
-  ASSERT_TRUE(read_point_cloud(test::source_path("data/bunny.ply"), scan, error)) << error;
-  prepare_scan(scan, EncodeOptions{});  // the encoder's normals (from the faces) and frame
   // The encoder's default file: with the curvature's sign.
-  const std::vector<uint8_t> file = test::fixture("tests/golden/bunny_v2.spg");
-  DecodedModel model;
-  ASSERT_TRUE(decode_spg("bunny", file.data(), file.size(), model, error)) << error;
+  const test::BunnyAndScan b("tests/golden/bunny_v2.spg");
+  ASSERT_TRUE(b.ok);
+  const std::vector<uint8_t>& file = b.file;
+  std::string error;
   ClientConfig config;  // the software client's defaults
   config.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 22};
   double sum[3] = {};
@@ -177,7 +175,7 @@ TEST(Gl, DefaultAndEwaPicturesAgainstTheScan) {
     const Scene s(yaw, &config, &file);
     ViewSpec spec;
     ASSERT_TRUE(parse_view(std::to_string(yaw) + ",20", spec, error));
-    const Image truth = render_truth(scan, model.bbox_min, model.bbox_max, s.view.header, config, spec);
+    const Image truth = render_truth(b.scan, b.model.bbox_min, b.model.bbox_max, s.view.header, config, spec);
     GlRenderOptions ewa;
     ewa.splat = GlSplat::kEwa;
     const ImageComparison sw = compare_images(truth, s.software.image), points = compare_images(truth, gl_render(s, {})),

@@ -108,4 +108,28 @@ inline std::vector<uint8_t> widen_angles(const std::vector<uint8_t>& file) {
   return out;
 }
 
+// The bundled bunny's scan, prepared as the encoder prepares it (normals
+// from its faces, its frame), beside a golden file of it: what the
+// pictures of the model are measured against (render_truth of `scan` in
+// `model`'s box). `ok` once all of it read.
+struct BunnyAndScan {
+  PointCloud scan;
+  ScanFrame frame;  // prepare_scan's
+  std::vector<uint8_t> file;
+  SpgView view;
+  DecodedModel model;
+  bool ok = false;
+  explicit BunnyAndScan(const char* golden) : file(fixture(golden)) {
+    std::string error;
+    const bool read = read_point_cloud(source_path("data/bunny.ply"), scan, error);
+    EXPECT_TRUE(read) << error;
+    frame = prepare_scan(scan, EncodeOptions{});
+    const bool parsed = spg_parse(file.data(), file.size(), &view).ok();
+    EXPECT_TRUE(parsed) << golden;
+    const bool decoded = decode_spg("bunny", file.data(), file.size(), model, error);
+    EXPECT_TRUE(decoded) << error;
+    ok = read && parsed && decoded;
+  }
+};
+
 }  // namespace stipple::test

@@ -9,6 +9,7 @@
 #include <cstring>
 
 #include "tests/portable/test_files.h"
+#include "tests/test_util.h"
 #include "tools/embedded/embedded.h"
 #include "tools/encoder/encoder.h"
 #include "tools/reference/image_metrics.h"
@@ -133,15 +134,14 @@ TEST(Truth, BarePointsAreSquaresOfThePointSize) {
 // supersampling is worth what docs/results.md says (measured +2.3 dB at 2,
 // +3.8 dB at 4 on this view), and more samples never make it worse.
 TEST(Truth, SupersamplingBringsTheBunnyCloserToItsScan) {
-  PointCloud scan;
+  const test::BunnyAndScan b("tests/golden/bunny_v1.spg");
+  ASSERT_TRUE(b.ok);
+  const std::vector<uint8_t>& file = b.file;
+  const SpgView& view = b.view;
+  const PointCloud& scan = b.scan;
+  const DecodedModel& model = b.model;
+  ASSERT_TRUE(b.frame.hint.encode() == view.header.view_hint.encode());
   std::string error;
-  ASSERT_TRUE(read_point_cloud(test::source_path("data/bunny.ply"), scan, error)) << error;
-  const std::vector<uint8_t> file = test::fixture("tests/golden/bunny_v1.spg");
-  SpgView view;
-  ASSERT_TRUE(spg_parse(file.data(), file.size(), &view).ok());
-  ASSERT_TRUE(prepare_scan(scan, EncodeOptions{}).hint.encode() == view.header.view_hint.encode());
-  DecodedModel model;
-  ASSERT_TRUE(decode_spg("bunny", file.data(), file.size(), model, error)) << error;
   ClientConfig config;
   config.raster = RasterConfig{640, 480, 5, PixelFormat::kRgb888, 1u << 22};
   ViewSpec spec;

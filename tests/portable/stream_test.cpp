@@ -68,6 +68,24 @@ Camera camera(double yaw, double pitch, double distance) {
   return c;
 }
 
+// A server's sender for a model and a client's receiver over its cache,
+// each over storage of its own, and the link between them.
+struct Session {
+  std::vector<uint64_t> sender_storage;
+  StreamSender sender;
+  Device client;
+  std::vector<uint8_t> reader_storage = std::vector<uint8_t>(kMaxFrameBytes);
+  StreamReceiver receiver;
+  std::vector<uint32_t> part_storage = std::vector<uint32_t>(8000);
+  Link link;
+  Session(const SpgView& view, const CutBounds& bounds, ShadingMode shading = ShadingMode::kPerPoint)
+      : sender_storage(StreamSender::storage_bytes(view.header) / 8 + 1), client(8000, shading) {
+    EXPECT_TRUE(sender.init(view, bounds, sender_storage.data(), sender_storage.size() * 8));
+    receiver.init(&client.cache, reader_storage.data(), reader_storage.size());
+    receiver.use_part_storage(part_storage.data(), 8000);
+  }
+};
+
 // 24 cameras streamed to a client asking for coded batches or not; after
 // each, its frame equals a fresh local load's. The bytes: the cold start's
 // and the 23 updates'.
@@ -77,16 +95,11 @@ struct OrbitBytes {
 };
 void stream_an_orbit(bool coded, OrbitBytes& bytes, uint16_t version = kProtocolVersion) {
   const Model& m = bunny();
-  std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
-  StreamSender sender;
-  ASSERT_TRUE(sender.init(m.view, m.bounds, sender_storage.data(), sender_storage.size() * 8));
-  Device client;
-  std::vector<uint8_t> reader_storage(kMaxFrameBytes);
-  StreamReceiver receiver;
-  receiver.init(&client.cache, reader_storage.data(), reader_storage.size());
-  std::vector<uint32_t> part_storage(8000);
-  receiver.use_part_storage(part_storage.data(), 8000);
-  Link link;
+  Session session(m.view, m.bounds);
+  StreamSender& sender = session.sender;
+  Device& client = session.client;
+  StreamReceiver& receiver = session.receiver;
+  Link& link = session.link;
   Hello hello;
   hello.version = version;
   hello.cache_capacity = 8000;
@@ -183,16 +196,11 @@ TEST(Stream, TheCurvatureSignGoesToTheClientsThatAskForIt) {
   } clients[] = {{kProtocolVersion, true, true}, {kProtocolVersion, true, false}, {kProtocolVersion, false, true},
                  {6, false, true}, {6, false, false}};
   for (const auto& c : clients) {
-    std::vector<uint64_t> sender_storage(StreamSender::storage_bytes(m.view.header) / 8 + 1);
-    StreamSender sender;
-    ASSERT_TRUE(sender.init(m.view, bounds, sender_storage.data(), sender_storage.size() * 8));
-    Device client(8000, ShadingMode::kSurface);
-    std::vector<uint8_t> reader_storage(kMaxFrameBytes);
-    StreamReceiver receiver;
-    receiver.init(&client.cache, reader_storage.data(), reader_storage.size());
-    std::vector<uint32_t> part_storage(8000);
-    receiver.use_part_storage(part_storage.data(), 8000);
-    Link link;
+    Session session(m.view, bounds, ShadingMode::kSurface);
+    StreamSender& sender = session.sender;
+    Device& client = session.client;
+    StreamReceiver& receiver = session.receiver;
+    Link& link = session.link;
     Hello hello;
     hello.version = c.version;
     hello.cache_capacity = 8000;
